@@ -1,0 +1,15 @@
+// The envtrace subcommands. Each registers itself on the CLI11 app and runs when chosen.
+#pragma once
+#include <CLI/CLI.hpp>
+
+namespace et::cli {
+
+struct Globals {
+    int device = 0;
+};
+
+void add_devices_command(CLI::App& app, Globals& g);
+void add_sample_command(CLI::App& app, Globals& g);
+void add_render_command(CLI::App& app, Globals& g);
+
+} // namespace et::cli

@@ -1,0 +1,39 @@
+// envtrace: Monte Carlo rendering with natural illumination.
+#include "commands.h"
+#include "error.h"
+#include "opencl_runtime.h"
+
+#include <iostream>
+
+int main(int argc, char** argv) {
+    CLI::App app{"envtrace " ENVTRACE_VERSION
+                 ": renders scenes lit by HDR environment maps, importance-sampled as in\n"
+                 "'Monte Carlo Rendering with Natural Illumination', on OpenCL devices."};
+    app.require_subcommand(1);
+    et::cli::Globals globals;
+    app.add_option("--device", globals.device, "OpenCL device index (see 'envtrace devices')")
+        ->check(CLI::NonNegativeNumber);
+    app.set_version_flag("--version", ENVTRACE_VERSION);
+    et::cli::add_devices_command(app, globals);
+    et::cli::add_sample_command(app, globals);
+    et::cli::add_render_command(app, globals);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    } catch (const et::Error& e) {
+        std::cerr << "envtrace: error: " << e.what() << "\n";
+        return 1;
+    } catch (const cl::Error& e) {
+        std::cerr << "envtrace: error: OpenCL call " << e.what()
+                  << " failed: " << et::cl_error_name(e.err()) << "\n";
+        return 1;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "envtrace: error: out of memory\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "envtrace: error: " << e.what() << "\n";
+        return 1;
+    }
+    return 0;
+}

@@ -1,0 +1,35 @@
+// Reading images as linear RGB floats and writing images without ever leaving a half-written
+// file behind.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace et {
+
+struct RgbImage {
+    int width = 0, height = 0;
+    std::vector<float> rgb; // row-major, 3 floats per pixel, row 0 at the top
+    float* at(int x, int y) { return &rgb[3 * (static_cast<size_t>(y) * width + x)]; }
+    const float* at(int x, int y) const { return &rgb[3 * (static_cast<size_t>(y) * width + x)]; }
+};
+
+// Any format OpenImageIO reads (EXR of every compression, HDR, PFM, PNG, JPEG, ...). 8- and 16-bit
+// images are decoded from sRGB to linear. One channel is replicated to RGB; otherwise the R, G, B
+// channels are used (the first three when they are not named so). Throws et::Error naming the
+// file and the problem.
+RgbImage read_rgb_image(const std::string& path);
+
+// Writes `channels`-channel float pixels. .exr/.hdr/.pfm keep linear floats; .png/.jpg expect
+// display values in [0,1] and store 8 bits. Writes to a temporary file beside `path` and renames
+// it into place. `attributes` are name/value string metadata.
+void write_image(const std::string& path, int width, int height, int channels,
+                 const std::vector<float>& pixels,
+                 const std::vector<std::pair<std::string, std::string>>& attributes = {});
+
+// Linear radiance to display sRGB in [0,1]: exposure scale, then a clamped sRGB curve.
+float linear_to_srgb(float v);
+float srgb_to_linear(float v);
+
+bool is_float_image_extension(const std::string& path);
+
+} // namespace et

@@ -1,0 +1,137 @@
+// The common subset of OpenCL C and C++ that every shared header under kernels/ is written in.
+// In OpenCL C this is nearly empty; in C++ it supplies float2/float3, their operators and the
+// few built-ins the shared math uses, inside namespace etk so that the host sees the very same
+// functions the kernels run.
+#ifndef ETK_COMPAT_H
+#define ETK_COMPAT_H
+
+#ifdef __OPENCL_VERSION__
+
+#define ETK_BEGIN
+#define ETK_END
+#define ETK_FN static inline
+#define ETK_GLOBAL __global
+#define make_float2(a, b) ((float2)((a), (b)))
+#define make_float3(a, b, c) ((float3)((a), (b), (c)))
+#define ETK_UINT_MAX 0xffffffffu
+
+#else // C++ host
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#define ETK_BEGIN namespace etk {
+#define ETK_END }
+#define ETK_FN inline
+#define ETK_GLOBAL
+#define ETK_UINT_MAX 0xffffffffu
+
+namespace etk {
+using std::acos;
+using std::atan2;
+using std::cos;
+using std::exp;
+using std::fabs;
+using std::floor;
+using std::fmax;
+using std::fmin;
+using std::sin;
+using std::sqrt;
+typedef std::uint32_t uint;
+
+struct float2 {
+    float x, y;
+};
+struct float3 {
+    float x, y, z;
+};
+inline float2 make_float2(float a, float b) {
+    return float2{a, b};
+}
+inline float3 make_float3(float a, float b, float c) {
+    return float3{a, b, c};
+}
+
+inline float3 operator+(float3 a, float3 b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+inline float3 operator-(float3 a, float3 b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+inline float3 operator-(float3 a) {
+    return {-a.x, -a.y, -a.z};
+}
+inline float3 operator*(float3 a, float3 b) {
+    return {a.x * b.x, a.y * b.y, a.z * b.z};
+}
+inline float3 operator*(float3 a, float s) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+inline float3 operator*(float s, float3 a) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+inline float3 operator/(float3 a, float s) {
+    return {a.x / s, a.y / s, a.z / s};
+}
+inline float3& operator+=(float3& a, float3 b) {
+    return a = a + b;
+}
+inline float3& operator*=(float3& a, float3 b) {
+    return a = a * b;
+}
+inline float3& operator*=(float3& a, float s) {
+    return a = a * s;
+}
+
+inline float dot(float3 a, float3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+inline float3 cross(float3 a, float3 b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline float length(float3 a) {
+    return std::sqrt(dot(a, a));
+}
+inline float3 normalize(float3 a) {
+    return a / length(a);
+}
+inline float clamp(float x, float lo, float hi) {
+    return std::fmin(std::fmax(x, lo), hi);
+}
+inline int clamp(int x, int lo, int hi) {
+    return x < lo ? lo : (x > hi ? hi : x);
+}
+inline int min(int a, int b) {
+    return a < b ? a : b;
+}
+inline int max(int a, int b) {
+    return a > b ? a : b;
+}
+inline uint min(uint a, uint b) {
+    return a < b ? a : b;
+}
+inline uint as_uint(float f) {
+    uint u;
+    std::memcpy(&u, &f, 4);
+    return u;
+}
+inline float as_float(uint u) {
+    float f;
+    std::memcpy(&f, &u, 4);
+    return f;
+}
+inline int isfinite(float x) {
+    return std::isfinite(x) ? 1 : 0;
+}
+} // namespace etk
+
+#endif
+
+#define ETK_PI 3.14159265358979323846f
+#define ETK_INV_PI 0.31830988618379067154f
+#define ETK_INV_2PI2 0.05066059182116888572f // 1 / (2 pi^2)
+// Largest float below one: keeps a sample inside the cell its binary search chose.
+#define ETK_ONE_MINUS_EPS 0.99999994f
+
+#endif

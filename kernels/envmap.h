@@ -1,0 +1,85 @@
+// Environment-map light: radiance lookup, importance sampling and its solid-angle density
+// (paper, Section 3.4). The texels are RGB floats, row-major, row 0 looking up; the distribution
+// is a flat 2D piecewise-constant table (piecewise_constant.h) of dist_w x dist_h cells over the
+// same lat-long domain. A rotation about the up axis turns map space into world space.
+#ifndef ETK_ENVMAP_H
+#define ETK_ENVMAP_H
+#include "compat.h"
+#include "latlong.h"
+#include "piecewise_constant.h"
+
+ETK_BEGIN
+
+// Passed by value to kernels: 4-byte members only, so host and device layouts agree.
+typedef struct {
+    int tex_w, tex_h;   // texel resolution
+    int dist_w, dist_h; // sampling distribution resolution
+    float scale;        // radiance multiplier
+    float rot_cos, rot_sin;
+    int has_light; // 0 for an all-black map: sampling returns density 0
+} EtkEnvMap;
+
+ETK_FN float3 etk_env_to_world(EtkEnvMap env, float3 d) {
+    return make_float3(env.rot_cos * d.x - env.rot_sin * d.z, d.y,
+                       env.rot_sin * d.x + env.rot_cos * d.z);
+}
+ETK_FN float3 etk_world_to_env(EtkEnvMap env, float3 d) {
+    return make_float3(env.rot_cos * d.x + env.rot_sin * d.z, d.y,
+                       -env.rot_sin * d.x + env.rot_cos * d.z);
+}
+
+ETK_FN float3 etk_texel(ETK_GLOBAL const float* texels, int w, int row, int col) {
+    ETK_GLOBAL const float* t = texels + 3 * (row * w + col);
+    return make_float3(t[0], t[1], t[2]);
+}
+
+// Bilinear lookup at (u, v) with texel centres at half-integers: wraps in u, clamps at the poles.
+ETK_FN float3 etk_env_lookup_uv(ETK_GLOBAL const float* texels, int w, int h, float2 uv) {
+    float x = uv.x * (float)w - 0.5f;
+    float y = uv.y * (float)h - 0.5f;
+    float fx = floor(x), fy = floor(y);
+    float tx = x - fx, ty = y - fy;
+    int c0 = (int)fx % w;
+    if (c0 < 0)
+        c0 += w;
+    int c1 = c0 + 1 == w ? 0 : c0 + 1;
+    int r0 = clamp((int)fy, 0, h - 1);
+    int r1 = clamp((int)fy + 1, 0, h - 1);
+    float3 top = etk_texel(texels, w, r0, c0) * (1.0f - tx) + etk_texel(texels, w, r0, c1) * tx;
+    float3 bot = etk_texel(texels, w, r1, c0) * (1.0f - tx) + etk_texel(texels, w, r1, c1) * tx;
+    return top * (1.0f - ty) + bot * ty;
+}
+
+// Radiance arriving from world direction d.
+ETK_FN float3 etk_env_radiance(ETK_GLOBAL const float* texels, EtkEnvMap env, float3 d) {
+    float2 uv = etk_dir_to_latlong(etk_world_to_env(env, d));
+    return etk_env_lookup_uv(texels, env.tex_w, env.tex_h, uv) * env.scale;
+}
+
+// Solid-angle density of sampling world direction d.
+ETK_FN float etk_env_pdf(ETK_GLOBAL const float* dist, EtkEnvMap env, float3 d) {
+    if (!env.has_light)
+        return 0.0f;
+    float2 uv = etk_dir_to_latlong(etk_world_to_env(env, d));
+    return etk_latlong_pdf_to_solid_angle(etk_pdf_2d(dist, env.dist_w, env.dist_h, uv), uv.y);
+}
+
+typedef struct {
+    float3 dir;   // world space
+    float pdf;    // solid angle; 0 means no sample (all-black map)
+    float2 uv;    // lat-long coordinates in map space
+    int row, col; // distribution cell
+} EtkEnvSample;
+
+ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, float2 xi) {
+    EtkEnvSample s;
+    float pdf_uv;
+    s.uv = etk_sample_2d(dist, env.dist_w, env.dist_h, xi, &pdf_uv, &s.row, &s.col);
+    s.dir = etk_env_to_world(env, etk_latlong_to_dir(s.uv));
+    s.pdf = env.has_light ? etk_latlong_pdf_to_solid_angle(pdf_uv, s.uv.y) : 0.0f;
+    return s;
+}
+
+ETK_END
+
+#endif

@@ -1,0 +1,37 @@
+// The lat-long parameterisation of directions (y-up, row 0 looks straight up, the image centre
+// looks along -Z, u grows towards +X):
+//     u = (1 + atan2(x, -z) / pi) / 2,    v = acos(y) / pi
+// This is the convention of ../shared/data/README.md, Mitsuba 3's envmap and the ICT probes.
+#ifndef ETK_LATLONG_H
+#define ETK_LATLONG_H
+#include "compat.h"
+
+ETK_BEGIN
+
+// sin(theta) for theta = pi v, accurate at both poles (sin(pi) in float is not zero).
+ETK_FN float etk_latlong_sin_theta(float v) {
+    return sin(ETK_PI * fmin(v, 1.0f - v));
+}
+
+ETK_FN float3 etk_latlong_to_dir(float2 uv) {
+    float phi = ETK_PI * (2.0f * uv.x - 1.0f);
+    float st = etk_latlong_sin_theta(uv.y);
+    return make_float3(st * sin(phi), cos(ETK_PI * uv.y), -st * cos(phi));
+}
+
+ETK_FN float2 etk_dir_to_latlong(float3 d) {
+    float u = 0.5f * (1.0f + atan2(d.x, -d.z) * ETK_INV_PI);
+    float v = acos(clamp(d.y, -1.0f, 1.0f)) * ETK_INV_PI;
+    return make_float2(u, v);
+}
+
+// Density conversion from the unit square to solid angle: |J| = 2 pi^2 sin(theta).
+// Zero where sin(theta) is zero: the poles carry no area and are never sampled.
+ETK_FN float etk_latlong_pdf_to_solid_angle(float pdf_uv, float v) {
+    float st = etk_latlong_sin_theta(v);
+    return st > 0.0f ? pdf_uv * ETK_INV_2PI2 / st : 0.0f;
+}
+
+ETK_END
+
+#endif

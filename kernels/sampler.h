@@ -1,0 +1,91 @@
+// Deterministic sample values regenerated from (seed, stream, index, dimension pair): nothing is
+// stored, and host and device compute identical bits.
+//
+// ETK_SAMPLER_SOBOL: the first two Sobol' dimensions, a (0,2)-sequence, randomised per stream and
+// pair by random digit (XOR) scrambling as in Kollig & Keller 2002. Each pair also shuffles the
+// sample index by a nested uniform scramble of its bits (Burley 2020), which maps every aligned
+// block of 2^m indices onto another aligned block, so the first 2^m samples of a stream are still
+// a (0,m,2)-net while different pairs of dimensions are decorrelated (padding).
+// ETK_SAMPLER_RANDOM: independent uniform values from a hash.
+#ifndef ETK_SAMPLER_H
+#define ETK_SAMPLER_H
+#include "compat.h"
+
+#define ETK_SAMPLER_RANDOM 0
+#define ETK_SAMPLER_SOBOL 1
+
+ETK_BEGIN
+
+// Wellons' lowbias32 integer hash.
+ETK_FN uint etk_hash(uint x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+ETK_FN uint etk_hash_combine(uint a, uint b) {
+    return etk_hash(a ^ (etk_hash(b) + 0x9e3779b9u));
+}
+
+ETK_FN uint etk_reverse_bits(uint x) {
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+// Second Sobol' dimension (the first is the bit-reversed index).
+ETK_FN uint etk_sobol_dim1(uint i) {
+    uint v = 0x80000000u, r = 0u;
+    for (; i != 0u; i >>= 1, v ^= v >> 1)
+        if (i & 1u)
+            r ^= v;
+    return r;
+}
+
+// Laine-Karras style hash on reversed bits: a nested uniform scramble of the index.
+ETK_FN uint etk_shuffle_index(uint i, uint seed) {
+    uint x = etk_reverse_bits(i);
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return etk_reverse_bits(x);
+}
+
+// 24 bits to [0,1): exactly representable, never 1.
+ETK_FN float etk_unit_float(uint bits) {
+    return (float)(bits >> 8) * 5.9604644775390625e-8f;
+}
+
+// The scrambled (0,2)-sequence point of a stream before shuffling, as raw 32-bit values.
+ETK_FN uint etk_sobol02_x(uint index, uint scramble) {
+    return etk_reverse_bits(index) ^ scramble;
+}
+ETK_FN uint etk_sobol02_y(uint index, uint scramble) {
+    return etk_sobol_dim1(index) ^ scramble;
+}
+
+// Two sample values for dimensions (2 pair, 2 pair + 1) of sample `index` of `stream`.
+ETK_FN float2 etk_sample_pair(int sampler, uint seed, uint stream, uint index, uint pair) {
+    uint key = etk_hash_combine(etk_hash_combine(seed, stream), pair);
+    if (sampler == ETK_SAMPLER_SOBOL) {
+        uint i = etk_shuffle_index(index, etk_hash(key ^ 0x5bd1e995u));
+        uint sx = etk_hash(key ^ 0x68e31da4u);
+        uint sy = etk_hash(key ^ 0xb5297a4du);
+        return make_float2(etk_unit_float(etk_sobol02_x(i, sx)),
+                           etk_unit_float(etk_sobol02_y(i, sy)));
+    }
+    uint h = etk_hash_combine(key, index);
+    return make_float2(etk_unit_float(etk_hash(h ^ 0x1b873593u)),
+                       etk_unit_float(etk_hash(h ^ 0xcc9e2d51u)));
+}
+
+ETK_END
+
+#endif
