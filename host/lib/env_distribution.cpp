@@ -4,6 +4,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <thread>
+
+// One streaming pass over the map, a row at a time: luminance into a wrap-padded row, the
+// horizontal filter into a ring of 2r+1 filtered rows, the vertical filter (clamped at the poles)
+// straight into the conditional-density rows of the table, then sin(theta) and the row's CDF
+// while the row is still in cache. The only full-size buffer is the table itself. The arithmetic
+// (operands, order of the float sums) is that of the straightforward separable filter and area
+// resample, so the densities are bit-identical to it; the double prefix sums run as several
+// independent chains and agree to double rounding (see prefix_sums).
 
 namespace et {
 namespace {
@@ -28,37 +37,6 @@ std::vector<float> filter_taps(float sigma) {
     return taps;
 }
 
-// Horizontal pass (wraps around in phi) then vertical pass (clamps at the poles), in place.
-void separable_filter(std::vector<float>& img, int w, int h, const std::vector<float>& taps) {
-    const int r = static_cast<int>(taps.size() / 2);
-    const int k = static_cast<int>(taps.size());
-    std::vector<float> pad(w + 2 * r);
-    for (int y = 0; y < h; ++y) {
-        float* row = &img[static_cast<size_t>(y) * w];
-        for (int x = 0; x < w + 2 * r; ++x)
-            pad[x] = row[((x - r) % w + w) % w];
-        std::fill(row, row + w, 0.0f);
-        for (int t = 0; t < k; ++t) {
-            const float wt = taps[t];
-            const float* src = pad.data() + t;
-            for (int x = 0; x < w; ++x)
-                row[x] += wt * src[x];
-        }
-    }
-    std::vector<float> col(static_cast<size_t>(w) * h, 0.0f);
-    for (int y = 0; y < h; ++y) {
-        float* dst = &col[static_cast<size_t>(y) * w];
-        for (int t = 0; t < k; ++t) {
-            const int sy = std::clamp(y + t - r, 0, h - 1);
-            const float wt = taps[t];
-            const float* src = &img[static_cast<size_t>(sy) * w];
-            for (int x = 0; x < w; ++x)
-                dst[x] += wt * src[x];
-        }
-    }
-    img.swap(col);
-}
-
 // Area-weighted resampling weights from n input cells to m output cells over the same interval.
 struct Span {
     int first;
@@ -78,36 +56,41 @@ std::vector<Span> area_weights(int n, int m) {
     return spans;
 }
 
-std::vector<float> resample(const std::vector<float>& img, int w, int h, int ow, int oh) {
-    if (ow == w && oh == h)
-        return img;
-    auto sx = area_weights(w, ow), sy = area_weights(h, oh);
-    std::vector<float> tmp(static_cast<size_t>(ow) * h, 0.0f),
-        out(static_cast<size_t>(ow) * oh, 0.0f);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < ow; ++x) {
-            float s = 0.0f;
-            for (size_t i = 0; i < sx[x].weights.size(); ++i)
-                s += sx[x].weights[i] * img[static_cast<size_t>(y) * w + sx[x].first + i];
-            tmp[static_cast<size_t>(y) * ow + x] = s;
+// Independent accumulation chains for the double prefix sums: a single chain is bound by the
+// latency of a double add (about 4 cycles per element), several chains run in parallel.
+constexpr int kChains = 8;
+
+// local[i + 1] = sum of f over [segment start, i] for kChains contiguous segments of n / kChains
+// elements and a short tail; seg_offset[j] = sum of f before segment j (kChains + 2 entries).
+// Returns the sum of f. Every partial sum is exact to double rounding of float inputs.
+double prefix_sums(const float* f, int n, double* local, double* seg_offset) {
+    const int len = n / kChains;
+    double acc[kChains] = {};
+    for (int i = 0; i < len; ++i)
+        for (int j = 0; j < kChains; ++j) {
+            acc[j] += f[j * len + i];
+            local[j * len + i + 1] = acc[j];
         }
-    for (int y = 0; y < oh; ++y)
-        for (size_t i = 0; i < sy[y].weights.size(); ++i) {
-            const float wt = sy[y].weights[i];
-            const float* src = &tmp[static_cast<size_t>(sy[y].first + i) * ow];
-            float* dst = &out[static_cast<size_t>(y) * ow];
-            for (int x = 0; x < ow; ++x)
-                dst[x] += wt * src[x];
-        }
-    return out;
+    double tail = 0.0;
+    for (int i = kChains * len; i < n; ++i) {
+        tail += f[i];
+        local[i + 1] = tail;
+    }
+    double run = 0.0;
+    for (int j = 0; j < kChains; ++j) {
+        seg_offset[j] = run;
+        run += acc[j];
+    }
+    seg_offset[kChains] = run;
+    run += tail;
+    seg_offset[kChains + 1] = run;
+    return run;
 }
 
-} // namespace
-
-double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf) {
-    double sum = 0.0;
-    for (int i = 0; i < n; ++i)
-        sum += f[i];
+// build_piecewise_constant_1d with pdf allowed to alias f, using scratch of n + 1 doubles.
+double build_1d(const float* f, int n, float* pdf, float* cdf, double* local) {
+    double seg_offset[kChains + 2];
+    const double sum = prefix_sums(f, n, local, seg_offset);
     cdf[0] = 0.0f;
     if (!(sum > 0.0)) {
         // No mass: a linear CDF keeps the binary search well defined; densities stay zero.
@@ -120,45 +103,182 @@ double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf
     }
     const double inv = 1.0 / sum;
     const float density_scale = static_cast<float>(n * inv);
-    double run = 0.0;
-    for (int i = 0; i < n; ++i) {
-        pdf[i] = f[i] * density_scale;
-        run += f[i];
-        cdf[i + 1] = static_cast<float>(run * inv);
+    const int len = n / kChains;
+    for (int j = 0; j <= kChains; ++j) {
+        const int begin = j * len, end = j < kChains ? begin + len : n;
+        const double off = seg_offset[j];
+        for (int i = begin; i < end; ++i) {
+            pdf[i] = f[i] * density_scale;
+            cdf[i + 1] = static_cast<float>((off + local[i + 1]) * inv);
+        }
     }
+    // Float rounding of a monotone double sequence is monotone; pin the end exactly.
     cdf[n] = 1.0f;
     return sum;
 }
 
-EnvDistribution build_env_distribution(const RgbImage& image, const DistributionOptions& options) {
-    const int w = image.width, h = image.height;
-    const int dw = options.width > 0 ? options.width : w;
-    const int dh = options.height > 0 ? options.height : h;
+// Everything that depends only on the map and the options, shared by the worker threads.
+struct Plan {
+    const RgbImage* image;
+    int w, h, dw, dh, r, k;
+    std::vector<float> taps;
+    bool resampled;
+    std::vector<Span> sx, sy;
+    float* cond_pdf;
+    float* cond_cdf;
+    float* row_mass;
+};
 
-    std::vector<float> lum(static_cast<size_t>(w) * h);
-    for (size_t p = 0; p < lum.size(); ++p)
-        lum[p] = luminance(&image.rgb[3 * p]);
-    separable_filter(lum, w, h, filter_taps(options.blur_sigma));
-    std::vector<float> f = resample(lum, w, h, dw, dh);
+// Works on distribution rows [o0, o1): filters the input rows they need, writes their densities
+// and CDFs and their masses. Rows are independent, so ranges can run on separate threads.
+void build_rows(const Plan& p, int o0, int o1) {
+    if (o0 >= o1)
+        return;
+    const int w = p.w, h = p.h, dw = p.dw, dh = p.dh, r = p.r, k = p.k;
+    const float* taps = p.taps.data();
+    const float* rgb = p.image->rgb.data();
 
-    EnvDistribution d;
-    d.width = dw;
-    d.height = dh;
-    d.table.assign(etk::etk_dist2d_size(dw, dh), 0.0f);
-    float* cond_pdf = d.table.data() + etk::etk_dist2d_conditional_pdf(dh);
-    float* cond_cdf = d.table.data() + etk::etk_dist2d_conditional_cdf(dw, dh);
-    std::vector<float> row_mass(dh);
-    for (int y = 0; y < dh; ++y) {
-        const float sin_theta = std::sin(static_cast<float>(M_PI) * (y + 0.5f) / dh);
-        float* fr = &f[static_cast<size_t>(y) * dw];
+    // Input rows needed: the area spans of the output rows (all of [o0, o1) without resampling).
+    int y0 = o0, y1 = o1;
+    if (p.resampled) {
+        y0 = p.sy[o0].first;
+        y1 = p.sy[o1 - 1].first + static_cast<int>(p.sy[o1 - 1].weights.size());
+    }
+
+    std::vector<float> pad(static_cast<size_t>(w) + 2 * r);
+    std::vector<float> ring(static_cast<size_t>(k) * w);
+    std::vector<float> vrow(p.resampled ? w : 0), hres(p.resampled ? dw : 0);
+    std::vector<double> scratch(static_cast<size_t>(std::max(w, dw)) + 1);
+    int next = std::max(0, y0 - r); // next input row to filter horizontally into the ring
+
+    // Horizontal pass of input row sy (wraps around in phi) into its ring slot.
+    auto filter_row = [&](int sy) {
+        const float* src = rgb + 3 * static_cast<size_t>(sy) * w;
+        float* lum = pad.data() + r;
+        for (int x = 0; x < w; ++x)
+            lum[x] = luminance(src + 3 * x);
+        for (int x = 0; x < r; ++x) {
+            pad[x] = lum[((x - r) % w + w) % w];
+            pad[w + r + x] = lum[x % w];
+        }
+        float* out = &ring[static_cast<size_t>(sy % k) * w];
+        std::fill(out, out + w, 0.0f);
+        for (int t = 0; t < k; ++t) {
+            const float wt = taps[t];
+            const float* s = pad.data() + t;
+            for (int x = 0; x < w; ++x)
+                out[x] += wt * s[x];
+        }
+    };
+
+    // The sin(theta)-weighted function of distribution row o, in place, then its tables.
+    auto finish_row = [&](int o, float* fr) {
+        const float sin_theta = std::sin(static_cast<float>(M_PI) * (o + 0.5f) / dh);
         for (int x = 0; x < dw; ++x)
             fr[x] = std::max(0.0f, fr[x]) * sin_theta; // max: filters never go negative, NaN-safe
-        row_mass[y] = static_cast<float>(
-            build_piecewise_constant_1d(fr, dw, cond_pdf + static_cast<size_t>(y) * dw,
-                                        cond_cdf + static_cast<size_t>(y) * (dw + 1)));
+        p.row_mass[o] = static_cast<float>(
+            build_1d(fr, dw, fr, p.cond_cdf + static_cast<size_t>(o) * (dw + 1), scratch.data()));
+    };
+
+    int o_next = o0; // resampled case: first output row not yet finished
+    for (int y = y0; y < y1; ++y) {
+        for (; next <= std::min(y + r, h - 1); ++next)
+            filter_row(next);
+        // Vertical pass (clamped at the poles).
+        float* dst = p.resampled ? vrow.data() : p.cond_pdf + static_cast<size_t>(y) * dw;
+        std::fill(dst, dst + w, 0.0f);
+        for (int t = 0; t < k; ++t) {
+            const int sy = std::clamp(y + t - r, 0, h - 1);
+            const float wt = taps[t];
+            const float* src = &ring[static_cast<size_t>(sy % k) * w];
+            for (int x = 0; x < w; ++x)
+                dst[x] += wt * src[x];
+        }
+        if (!p.resampled) {
+            finish_row(y, dst);
+            continue;
+        }
+        // Area resample: across the row, then accumulated into the output rows whose span holds
+        // input row y, in increasing y as a row-by-row vertical pass would.
+        for (int x = 0; x < dw; ++x) {
+            const Span& s = p.sx[x];
+            float acc = 0.0f;
+            for (size_t i = 0; i < s.weights.size(); ++i)
+                acc += s.weights[i] * vrow[s.first + i];
+            hres[x] = acc;
+        }
+        for (int o = o_next; o < o1 && p.sy[o].first <= y; ++o) {
+            const Span& s = p.sy[o];
+            const int i = y - s.first;
+            if (i >= static_cast<int>(s.weights.size()))
+                continue;
+            const float wt = s.weights[i];
+            float* out = p.cond_pdf + static_cast<size_t>(o) * dw;
+            for (int x = 0; x < dw; ++x)
+                out[x] += wt * hres[x];
+        }
+        // Output rows whose span ends at or before y + 1 are complete.
+        while (o_next < o1 &&
+               p.sy[o_next].first + static_cast<int>(p.sy[o_next].weights.size()) <= y + 1) {
+            finish_row(o_next, p.cond_pdf + static_cast<size_t>(o_next) * dw);
+            ++o_next;
+        }
     }
-    d.total = build_piecewise_constant_1d(row_mass.data(), dh, d.table.data(),
-                                          d.table.data() + etk::etk_dist2d_marginal_cdf(dh));
+    for (; o_next < o1 && p.resampled; ++o_next)
+        finish_row(o_next, p.cond_pdf + static_cast<size_t>(o_next) * dw);
+}
+
+} // namespace
+
+double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf) {
+    std::vector<double> scratch(static_cast<size_t>(std::max(n, 0)) + 1);
+    return build_1d(f, n, pdf, cdf, scratch.data());
+}
+
+EnvDistribution build_env_distribution(const RgbImage& image, const DistributionOptions& options) {
+    Plan p;
+    p.image = &image;
+    p.w = image.width;
+    p.h = image.height;
+    p.dw = options.width > 0 ? options.width : p.w;
+    p.dh = options.height > 0 ? options.height : p.h;
+    p.taps = filter_taps(options.blur_sigma);
+    p.k = static_cast<int>(p.taps.size());
+    p.r = p.k / 2;
+    p.resampled = p.dw != p.w || p.dh != p.h;
+    if (p.resampled) {
+        p.sx = area_weights(p.w, p.dw);
+        p.sy = area_weights(p.h, p.dh);
+    }
+
+    EnvDistribution d;
+    d.width = p.dw;
+    d.height = p.dh;
+    d.table.assign(etk::etk_dist2d_size(p.dw, p.dh), 0.0f);
+    p.cond_pdf = d.table.data() + etk::etk_dist2d_conditional_pdf(p.dh);
+    p.cond_cdf = d.table.data() + etk::etk_dist2d_conditional_cdf(p.dw, p.dh);
+    std::vector<float> row_mass(p.dh);
+    p.row_mass = row_mass.data();
+
+    int threads = options.threads > 0 ? options.threads
+                                      : static_cast<int>(std::thread::hardware_concurrency());
+    threads = std::clamp(threads, 1, std::max(1, p.dh / 16));
+    if (threads == 1) {
+        build_rows(p, 0, p.dh);
+    } else {
+        std::vector<std::thread> pool;
+        for (int t = 1; t < threads; ++t)
+            pool.emplace_back(build_rows, std::cref(p),
+                              static_cast<int>(int64_t(p.dh) * t / threads),
+                              static_cast<int>(int64_t(p.dh) * (t + 1) / threads));
+        build_rows(p, 0, p.dh / threads);
+        for (auto& th : pool)
+            th.join();
+    }
+
+    std::vector<double> scratch(static_cast<size_t>(p.dh) + 1);
+    d.total = build_1d(row_mass.data(), p.dh, d.table.data(),
+                       d.table.data() + etk::etk_dist2d_marginal_cdf(p.dh), scratch.data());
     return d;
 }
 

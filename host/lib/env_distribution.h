@@ -9,6 +9,7 @@ namespace et {
 struct DistributionOptions {
     int width = 0, height = 0; // 0: the map's resolution
     float blur_sigma = 0.5f;   // Gaussian blur of luminance, in texels; 0 disables it
+    int threads = 1;           // rows built on this many threads (0: all cores); same result
 };
 
 struct EnvDistribution {
