@@ -45,12 +45,22 @@ ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
     return clamp(first - 1, 0, n - 1);
 }
 
+ETK_FN int etk_cell_of(float x, int n) {
+    return clamp((int)(x * (float)n), 0, n - 1);
+}
+
 // Continuous coordinate in [i/n, (i+1)/n) for offset t in [0,1): rounding never leaves the cell,
-// so the density evaluated at the result is the density of the chosen cell.
+// so the density evaluated at the result is the density of the chosen cell. The division can
+// round across either edge (e.g. 53/100 rounds below 0.53): step back by one float at a time.
 ETK_FN float etk_cell_coordinate(int i, float t, int n) {
     float x = ((float)i + t) / (float)n;
     float hi = (float)(i + 1) / (float)n;
-    return x < hi ? x : as_float(as_uint(hi) - 1u);
+    x = x < hi ? x : as_float(as_uint(hi) - 1u);
+    while (etk_cell_of(x, n) < i)
+        x = as_float(as_uint(x) + 1u);
+    while (etk_cell_of(x, n) > i)
+        x = as_float(as_uint(x) - 1u);
+    return x;
 }
 
 // Samples a 1D piecewise-constant density over [0,1]: returns x, its density and its cell.
@@ -63,10 +73,6 @@ ETK_FN float etk_sample_1d(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* 
     *density = pdf[i];
     *cell = i;
     return etk_cell_coordinate(i, t, n);
-}
-
-ETK_FN int etk_cell_of(float x, int n) {
-    return clamp((int)(x * (float)n), 0, n - 1);
 }
 
 // Samples (u, v) on the unit square: row from the marginal, column from that row's conditional.
