@@ -19,9 +19,11 @@ ETK_FN float3 etk_latlong_to_dir(float2 uv) {
     return make_float3(st * sin(phi), cos(ETK_PI * uv.y), -st * cos(phi));
 }
 
+// theta = atan2(sqrt(x^2 + z^2), y) rather than acos(y): acos loses theta near the poles, where
+// y rounds to +-1 for theta below ~3e-4 and a sampled direction would map back to the pole.
 ETK_FN float2 etk_dir_to_latlong(float3 d) {
     float u = 0.5f * (1.0f + atan2(d.x, -d.z) * ETK_INV_PI);
-    float v = acos(clamp(d.y, -1.0f, 1.0f)) * ETK_INV_PI;
+    float v = atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * ETK_INV_PI;
     return make_float2(u, v);
 }
 

@@ -69,7 +69,8 @@ ETK_FN float etk_sample_1d(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* 
     int i = etk_find_interval(cdf, n, u);
     float width = cdf[i + 1] - cdf[i];
     float t = width > 0.0f ? (u - cdf[i]) / width : 0.5f;
-    t = clamp(t, 0.0f, ETK_ONE_MINUS_EPS);
+    // t > 0: x is never exactly 0, where the lat-long density has its zero at the pole.
+    t = clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS);
     *density = pdf[i];
     *cell = i;
     return etk_cell_coordinate(i, t, n);
