@@ -14,6 +14,10 @@
 #define make_float2(a, b) ((float2)((a), (b)))
 #define make_float3(a, b, c) ((float3)((a), (b), (c)))
 #define ETK_UINT_MAX 0xffffffffu
+#define make_float4(a, b, c, d) ((float4)((a), (b), (c), (d)))
+// Reserves a slot in a work queue.
+#define ETK_ATOMIC_INC(p) atomic_inc(p)
+#define ETK_ATOMIC_PTR volatile __global uint*
 
 #else // C++ host
 
@@ -26,6 +30,8 @@
 #define ETK_FN inline
 #define ETK_GLOBAL
 #define ETK_UINT_MAX 0xffffffffu
+#define ETK_ATOMIC_INC(p) __atomic_fetch_add((p), 1u, __ATOMIC_RELAXED)
+#define ETK_ATOMIC_PTR uint*
 
 namespace etk {
 using std::acos;
@@ -36,6 +42,7 @@ using std::fabs;
 using std::floor;
 using std::fmax;
 using std::fmin;
+using std::pow;
 using std::sin;
 using std::sqrt;
 typedef std::uint32_t uint;
@@ -46,6 +53,13 @@ struct float2 {
 struct float3 {
     float x, y, z;
 };
+// 16-byte aligned like OpenCL's float4, so arrays of it match device buffers.
+struct alignas(16) float4 {
+    float x, y, z, w;
+};
+inline float4 make_float4(float a, float b, float c, float d) {
+    return float4{a, b, c, d};
+}
 inline float2 make_float2(float a, float b) {
     return float2{a, b};
 }
@@ -70,6 +84,9 @@ inline float3 operator*(float3 a, float s) {
 }
 inline float3 operator*(float s, float3 a) {
     return {a.x * s, a.y * s, a.z * s};
+}
+inline float3 operator/(float3 a, float3 b) {
+    return {a.x / b.x, a.y / b.y, a.z / b.z};
 }
 inline float3 operator/(float3 a, float s) {
     return {a.x / s, a.y / s, a.z / s};
@@ -120,6 +137,12 @@ inline float as_float(uint u) {
     float f;
     std::memcpy(&f, &u, 4);
     return f;
+}
+inline float3 fmin(float3 a, float3 b) {
+    return {std::fmin(a.x, b.x), std::fmin(a.y, b.y), std::fmin(a.z, b.z)};
+}
+inline float3 fmax(float3 a, float3 b) {
+    return {std::fmax(a.x, b.x), std::fmax(a.y, b.y), std::fmax(a.z, b.z)};
 }
 inline int isfinite(float x) {
     return std::isfinite(x) ? 1 : 0;

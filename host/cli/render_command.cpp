@@ -1,61 +1,229 @@
 #include "commands.h"
-#include "env_sampling.h"
 #include "error.h"
-#include "json_file.h"
-#include "kernels/sampler.h"
+#include "image_io.h"
 #include "preview.h"
-#include "scene_environment.h"
+#include "scene.h"
+#include "scene_arrays.h"
+#include "timer.h"
+#include "wavefront_cl.h"
 
+#include <nlohmann/json.hpp>
+
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
 
 namespace et::cli {
 namespace {
 
 struct RenderArgs {
-    std::string scene, output;
+    std::string scene, output, stats_file, strategy, heuristic, sampler;
+    int spp = 0, max_depth = 0, paths = -1;
+    long long seed = -1;
+    double time_limit = -1.0;
 };
 
-// Until the path tracer lands (issue 3), `render` shows what it will be lit by: the scene's
-// environment with its importance samples drawn on it.
+// out.exr -> (out.exr, out.png); out.png -> (out.exr, out.png).
+std::pair<std::string, std::string> output_names(const std::string& out) {
+    fs::path p(out);
+    std::string ext = p.extension().string();
+    for (auto& c : ext)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
+        return {fs::path(p).replace_extension(".exr").string(), out};
+    if (ext == ".exr" || ext == ".hdr" || ext == ".pfm")
+        return {out, fs::path(p).replace_extension(".png").string()};
+    throw Error(out + ": unsupported output format '" + ext + "' (use .exr, .hdr, .pfm or .png)");
+}
+
+class Progress {
+  public:
+    Progress(int total, double limit) : total_(total), limit_(limit), tty_(isatty(2)) {}
+    void update(int done, double elapsed) {
+        double frac = limit_ > 0 ? std::min(1.0, elapsed / limit_) : double(done) / total_;
+        if (tty_) {
+            int width = 30, fill = static_cast<int>(frac * width);
+            double eta = frac > 0 ? elapsed * (1 - frac) / frac : 0;
+            std::fprintf(stderr, "\r[%.*s%*s] %3d%%  %d spp  %.1fs  ETA %.1fs ", fill,
+                         "##############################", width - fill, "", int(frac * 100), done,
+                         elapsed, eta);
+        } else if (int(frac * 10) > last_decile_) {
+            last_decile_ = int(frac * 10);
+            std::fprintf(stderr, "envtrace: %d%% (%d spp, %.1f s)\n", last_decile_ * 10, done,
+                         elapsed);
+        }
+    }
+    void finish() {
+        if (tty_)
+            std::fprintf(stderr, "\n");
+    }
+
+  private:
+    int total_;
+    double limit_;
+    bool tty_;
+    int last_decile_ = 0;
+};
+
 void run(const RenderArgs& a, const Globals& g) {
-    nlohmann::json scene = read_json_file(a.scene);
-    const std::string dir = std::filesystem::path(a.scene).parent_path().string();
-    if (!scene.contains("environment"))
-        throw Error(a.scene + ": no \"environment\" block");
-    EnvMap env = load_scene_environment(scene["environment"], dir, a.scene, {});
-    std::printf("environment %s: %dx%d, distribution built in %.2f ms\n", env.name.c_str(),
-                env.image.width, env.image.height, env.build_seconds * 1e3);
-    std::printf("note: the path tracer is not implemented yet; drawing the environment's "
-                "importance samples instead\n");
+    Timer total;
+    Scene scene = load_scene(a.scene);
+    auto& st = scene.settings;
+    if (a.spp > 0)
+        st.spp = a.spp;
+    if (a.max_depth > 0)
+        st.max_depth = a.max_depth;
+    if (!a.strategy.empty())
+        st.strategy = a.strategy;
+    if (!a.heuristic.empty())
+        st.heuristic = a.heuristic;
+    if (!a.sampler.empty())
+        st.sampler = a.sampler;
+    if (a.seed >= 0)
+        st.seed = static_cast<uint32_t>(a.seed);
+    if (a.time_limit >= 0)
+        st.time_limit = a.time_limit;
+    if (a.paths >= 0)
+        st.paths = a.paths;
+    std::string out = !a.output.empty()       ? a.output
+                      : !scene.output.empty() ? scene.output
+                                              : fs::path(a.scene).stem().string() + ".exr";
+    auto [exr_name, png_name] = output_names(out);
+    // Fail on an unwritable destination before spending the render time.
+    fs::path dir = fs::path(exr_name).parent_path();
+    std::error_code ec;
+    if (!dir.empty() && !fs::is_directory(dir, ec))
+        throw Error(exr_name + ": cannot write: folder '" + dir.string() + "' does not exist");
+
+    SceneArrays arrays = build_scene_arrays(scene);
+    etk::EtkParams params = make_params(scene, arrays);
+    std::printf("scene %s: %zu triangles, BVH %d nodes (depth %d, SAH cost %.1f) in %.1f ms; "
+                "environment %dx%d, distribution in %.2f ms\n",
+                a.scene.c_str(), scene.triangles.size(), arrays.bvh.node_count(), arrays.bvh.depth,
+                arrays.bvh.sah_cost, arrays.bvh.build_seconds * 1e3, scene.env.image.width,
+                scene.env.image.height, scene.env.build_seconds * 1e3);
+
     ClRuntime rt(g.device);
     ProgramBuildInfo build;
-    EnvSamplerCL sampler(rt, env, &build);
-    auto samples = sampler.sample_sequence(ETK_SAMPLER_SOBOL, 1, 0, 0, 256);
-    std::vector<float> display = tone_map(env.image);
-    const float colour[3] = {1.0f, 0.15f, 0.1f};
-    for (const auto& s : samples) {
-        if (!(s.pdf > 0.0f))
-            continue;
-        etk::float2 uv = etk::etk_dir_to_latlong(
-            etk::etk_world_to_env(env.desc(), etk::make_float3(s.dir[0], s.dir[1], s.dir[2])));
-        draw_dot(display, env.image.width, env.image.height, uv.x, uv.y,
-                 std::max(1, env.image.width / 256), colour);
+    WavefrontCL renderer(rt, arrays, params, st.paths, &build);
+    std::printf("device %s: program build %.3f s (%s); %dx%d, %s spp, depth %d, strategy %s, "
+                "sampler %s, %d paths in flight\n",
+                rt.device().device_name.c_str(), build.seconds,
+                build.from_cache ? "cached binary" : "compiled", scene.width, scene.height,
+                st.time_limit > 0 ? "time-limited" : std::to_string(st.spp).c_str(), st.max_depth,
+                st.strategy.c_str(), st.sampler.c_str(), renderer.paths());
+    std::fflush(stdout);
+
+    Progress progress(st.spp, st.time_limit);
+    Timer render;
+    int done = 0;
+    for (;;) {
+        if (st.time_limit > 0 ? render.seconds() >= st.time_limit : done >= st.spp)
+            break;
+        renderer.render_sample(static_cast<uint32_t>(done));
+        ++done;
+        progress.update(done, render.seconds());
     }
-    std::string out =
-        a.output.empty() ? std::filesystem::path(a.scene).stem().string() + ".png" : a.output;
-    write_image(out, env.image.width, env.image.height, 3, display);
-    std::printf("program build %.3f s (%s); wrote %s\n", build.seconds,
-                build.from_cache ? "cached" : "compiled", out.c_str());
+    progress.finish();
+    const double render_s = render.seconds();
+    std::vector<float> img = renderer.image();
+    const RenderStats& s = renderer.stats();
+
+    std::vector<std::pair<std::string, std::string>> meta = {
+        {"envtrace:spp", std::to_string(done)},
+        {"envtrace:strategy", st.strategy},
+        {"envtrace:mis_heuristic", st.heuristic},
+        {"envtrace:sampler", st.sampler},
+        {"envtrace:seed", std::to_string(st.seed)},
+        {"envtrace:max_depth", std::to_string(st.max_depth)},
+        {"envtrace:render_seconds", std::to_string(render_s)},
+        {"envtrace:backend", "opencl"},
+        {"envtrace:device", rt.device().device_name},
+        {"Software", "envtrace " ENVTRACE_VERSION},
+    };
+    write_image(exr_name, scene.width, scene.height, 3, img, meta);
+    RgbImage film{scene.width, scene.height, img};
+    write_image(png_name, scene.width, scene.height, 3, tone_map(film, 1.0f));
+
+    const double mrays = s.rays() / render_s * 1e-6;
+    std::printf(
+        "rendered %d spp in %.2f s: %.2f Mrays/s (%llu camera, %llu continuation, %llu shadow), "
+        "%.3g samples/s, %.4f s/spp\n",
+        done, render_s, mrays, (unsigned long long)s.camera_rays,
+        (unsigned long long)s.continuation_rays, (unsigned long long)s.shadow_rays,
+        double(done) * scene.width * scene.height / render_s, render_s / std::max(1, done));
+    std::printf("device time per stage:");
+    for (const auto& [name, t] : s.stage_seconds)
+        std::printf(" %s %.3fs", name.c_str(), t);
+    std::printf("\nwrote %s and %s (total %.2f s)\n", exr_name.c_str(), png_name.c_str(),
+                total.seconds());
+
+    if (!a.stats_file.empty()) {
+        nlohmann::json j;
+        j["scene"] = a.scene;
+        j["backend"] = "opencl";
+        j["device"] = rt.device().device_name;
+        j["width"] = scene.width;
+        j["height"] = scene.height;
+        j["spp"] = done;
+        j["max_depth"] = st.max_depth;
+        j["strategy"] = st.strategy;
+        j["sampler"] = st.sampler;
+        j["render_seconds"] = render_s;
+        j["seconds_per_spp"] = render_s / std::max(1, done);
+        j["rays"] = {{"camera", s.camera_rays},
+                     {"continuation", s.continuation_rays},
+                     {"shadow", s.shadow_rays}};
+        j["mrays_per_second"] = mrays;
+        j["samples_per_second"] = double(done) * scene.width * scene.height / render_s;
+        j["program_build_seconds"] = build.seconds;
+        j["program_from_cache"] = build.from_cache;
+        j["bvh"] = {{"nodes", arrays.bvh.node_count()},
+                    {"depth", arrays.bvh.depth},
+                    {"sah_cost", arrays.bvh.sah_cost},
+                    {"build_seconds", arrays.bvh.build_seconds}};
+        j["environment_build_seconds"] = scene.env.build_seconds;
+        for (const auto& [name, t] : s.stage_seconds)
+            j["stage_seconds"][name] = t;
+        std::string tmp = a.stats_file + ".tmp";
+        {
+            std::ofstream f(tmp);
+            if (!f)
+                throw Error(a.stats_file + ": cannot write");
+            f << j.dump(2) << "\n";
+        }
+        fs::rename(tmp, a.stats_file);
+    }
 }
 
 } // namespace
 
 void add_render_command(CLI::App& app, Globals& g) {
     auto a = std::make_shared<RenderArgs>();
-    auto* cmd = app.add_subcommand("render", "Render a scene file");
-    cmd->add_option("scene", a->scene, "Scene file (.json)")->required();
-    cmd->add_option("-o,--output", a->output, "Output image (default: SCENE.png)");
+    auto* cmd = app.add_subcommand("render", "Render a scene file with the wavefront path tracer");
+    cmd->add_option("scene", a->scene, "Scene file (.json, see scenes/README.md)")->required();
+    cmd->add_option("-o,--output", a->output,
+                    "Output image: .exr/.hdr/.pfm (linear) plus a .png preview beside it");
+    cmd->add_option("--spp", a->spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
+    cmd->add_option("--time-limit", a->time_limit, "Render for this many seconds instead of --spp")
+        ->check(CLI::Range(0.0, 1e7));
+    cmd->add_option("--max-depth", a->max_depth,
+                    "Bounces (1: direct lighting only, the paper's setting)")
+        ->check(CLI::Range(1, 1000));
+    cmd->add_option("--strategy", a->strategy, "light | bsdf | mis | uniform")
+        ->check(CLI::IsMember({"light", "bsdf", "mis", "uniform"}));
+    cmd->add_option("--mis-heuristic", a->heuristic, "balance | power")
+        ->check(CLI::IsMember({"balance", "power"}));
+    cmd->add_option("--sampler", a->sampler, "sobol | random")
+        ->check(CLI::IsMember({"sobol", "random"}));
+    cmd->add_option("--seed", a->seed, "Sampler seed")->check(CLI::Range(0LL, 4294967295LL));
+    cmd->add_option("--paths", a->paths, "Paths in flight (0: the whole film, capped by memory)")
+        ->check(CLI::Range(0, 1 << 26));
+    cmd->add_option("--stats", a->stats_file, "Write the render summary as JSON");
     cmd->callback([a, &g] { run(*a, g); });
 }
 

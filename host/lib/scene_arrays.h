@@ -1,0 +1,30 @@
+// Host precompute -> flat arrays: everything the integrator stages read, in the layouts of
+// kernels/integrator.h, ready to upload or to hand to the native back end.
+#pragma once
+#include "bvh.h"
+#include "kernels/integrator.h"
+#include "scene.h"
+
+#include <string>
+#include <vector>
+
+namespace et {
+
+struct SceneArrays {
+    Bvh bvh;
+    std::vector<etk::float4> tris, normals, materials;
+    std::vector<int> tri_material;
+    const EnvMap* env = nullptr;
+    float ray_epsilon = 1e-4f;
+};
+
+SceneArrays build_scene_arrays(const Scene& scene);
+
+int parse_strategy(const std::string& s);
+int parse_heuristic(const std::string& s);
+int parse_sampler(const std::string& s);
+
+// Per-pass parameters (the sample index and first pixel are set per pass).
+etk::EtkParams make_params(const Scene& scene, const SceneArrays& arrays);
+
+} // namespace et

@@ -1,0 +1,179 @@
+// Materials: Lambertian, Cook-Torrance microfacet (GGX distribution, separable Smith shadowing,
+// Schlick Fresnel) with an optional Lambertian base ("plastic"), and a perfect mirror.
+// Everything is in the local shading frame: normal = +z. Evaluations exclude the cosine term.
+//
+// A material is two float4: (albedo rgb, type as int bits), (specular F0 rgb, GGX alpha).
+// The paper's "roughness" is used directly as the GGX alpha.
+#ifndef ETK_BSDF_H
+#define ETK_BSDF_H
+#include "compat.h"
+
+#define ETK_MAT_DIFFUSE 0
+#define ETK_MAT_MICROFACET 1
+#define ETK_MAT_MIRROR 2
+
+ETK_BEGIN
+
+typedef struct {
+    float3 albedo;
+    float3 specular;
+    float alpha;
+    int type;
+} EtkMaterial;
+
+ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
+    float4 a = mats[2 * id], b = mats[2 * id + 1];
+    EtkMaterial m;
+    m.albedo = make_float3(a.x, a.y, a.z);
+    m.type = (int)as_uint(a.w);
+    m.specular = make_float3(b.x, b.y, b.z);
+    m.alpha = fmax(b.w, 1e-3f);
+    return m;
+}
+
+ETK_FN float etk_max3(float3 v) {
+    return fmax(v.x, fmax(v.y, v.z));
+}
+ETK_FN float etk_luma(float3 v) {
+    return 0.2126f * v.x + 0.7152f * v.y + 0.0722f * v.z;
+}
+
+// Orthonormal basis around n (Duff et al. 2017).
+ETK_FN void etk_make_frame(float3 n, float3* t, float3* b) {
+    float s = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (s + n.z);
+    float c = n.x * n.y * a;
+    *t = make_float3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
+    *b = make_float3(c, s + n.y * n.y * a, -n.y);
+}
+ETK_FN float3 etk_to_local(float3 v, float3 t, float3 b, float3 n) {
+    return make_float3(dot(v, t), dot(v, b), dot(v, n));
+}
+ETK_FN float3 etk_from_local(float3 v, float3 t, float3 b, float3 n) {
+    return t * v.x + b * v.y + n * v.z;
+}
+
+// Cosine-weighted hemisphere by the concentric disk map (Shirley & Chiu 1997).
+ETK_FN float3 etk_sample_cosine_hemisphere(float2 u) {
+    float ox = 2.0f * u.x - 1.0f, oy = 2.0f * u.y - 1.0f;
+    float r = 0.0f, phi = 0.0f;
+    if (ox != 0.0f || oy != 0.0f) {
+        if (fabs(ox) > fabs(oy)) {
+            r = ox;
+            phi = 0.25f * ETK_PI * (oy / ox);
+        } else {
+            r = oy;
+            phi = 0.5f * ETK_PI - 0.25f * ETK_PI * (ox / oy);
+        }
+    }
+    float x = r * cos(phi), y = r * sin(phi);
+    return make_float3(x, y, sqrt(fmax(0.0f, 1.0f - x * x - y * y)));
+}
+
+ETK_FN float3 etk_sample_uniform_sphere(float2 u) {
+    float z = 1.0f - 2.0f * u.x;
+    float r = sqrt(fmax(0.0f, 1.0f - z * z));
+    float phi = 2.0f * ETK_PI * u.y;
+    return make_float3(r * cos(phi), r * sin(phi), z);
+}
+
+ETK_FN float etk_ggx_d(float cos_h, float alpha) {
+    float a2 = alpha * alpha;
+    float c2 = cos_h * cos_h;
+    float d = c2 * (a2 - 1.0f) + 1.0f;
+    return a2 / (ETK_PI * d * d);
+}
+ETK_FN float etk_smith_g1(float cos_v, float alpha) {
+    float c2 = cos_v * cos_v;
+    float tan2 = fmax(0.0f, 1.0f - c2) / fmax(c2, 1e-12f);
+    return 2.0f / (1.0f + sqrt(1.0f + alpha * alpha * tan2));
+}
+ETK_FN float3 etk_schlick(float3 f0, float cos_d) {
+    float m = clamp(1.0f - cos_d, 0.0f, 1.0f);
+    float m5 = m * m * m * m * m;
+    return f0 + (make_float3(1.0f, 1.0f, 1.0f) - f0) * m5;
+}
+
+// Probability of choosing the specular lobe of a microfacet material with a diffuse base.
+ETK_FN float etk_specular_weight(EtkMaterial m) {
+    float ws = etk_luma(m.specular);
+    float wd = etk_luma(m.albedo) * (1.0f - etk_max3(m.specular));
+    return ws + wd > 0.0f ? ws / (ws + wd) : 1.0f;
+}
+
+ETK_FN int etk_bsdf_is_delta(EtkMaterial m) {
+    return m.type == ETK_MAT_MIRROR;
+}
+
+ETK_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
+    float3 zero = make_float3(0.0f, 0.0f, 0.0f);
+    if (wo.z <= 0.0f || wi.z <= 0.0f || m.type == ETK_MAT_MIRROR)
+        return zero;
+    if (m.type == ETK_MAT_DIFFUSE)
+        return m.albedo * ETK_INV_PI;
+    float3 h = normalize(wo + wi);
+    float d = etk_ggx_d(h.z, m.alpha);
+    float g = etk_smith_g1(wo.z, m.alpha) * etk_smith_g1(wi.z, m.alpha);
+    float3 f = etk_schlick(m.specular, dot(wi, h));
+    float3 spec = f * (d * g / (4.0f * wo.z * wi.z));
+    return spec + m.albedo * (ETK_INV_PI * (1.0f - etk_max3(m.specular)));
+}
+
+ETK_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
+    if (wo.z <= 0.0f || wi.z <= 0.0f || m.type == ETK_MAT_MIRROR)
+        return 0.0f;
+    float diffuse = wi.z * ETK_INV_PI;
+    if (m.type == ETK_MAT_DIFFUSE)
+        return diffuse;
+    float3 h = normalize(wo + wi);
+    float spec = etk_ggx_d(h.z, m.alpha) * h.z / (4.0f * dot(wo, h));
+    float ps = etk_specular_weight(m);
+    return ps * spec + (1.0f - ps) * diffuse;
+}
+
+typedef struct {
+    float3 wi;
+    float3 weight; // f cos / pdf (for a delta lobe: the reflectance)
+    float pdf;     // 0: no sample
+    int delta;
+} EtkBsdfSample;
+
+// u: two values for the direction; lobe: one value choosing diffuse or specular.
+ETK_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 u, float lobe) {
+    EtkBsdfSample s;
+    s.weight = make_float3(0.0f, 0.0f, 0.0f);
+    s.pdf = 0.0f;
+    s.delta = 0;
+    s.wi = make_float3(0.0f, 0.0f, 1.0f);
+    if (wo.z <= 0.0f)
+        return s;
+    if (m.type == ETK_MAT_MIRROR) {
+        s.wi = make_float3(-wo.x, -wo.y, wo.z);
+        s.weight = m.specular;
+        s.pdf = 1.0f;
+        s.delta = 1;
+        return s;
+    }
+    if (m.type == ETK_MAT_MICROFACET && lobe < etk_specular_weight(m)) {
+        // GGX normal distribution sampling: pdf(h) = D(h) cos(theta_h).
+        float a2 = m.alpha * m.alpha;
+        float cos2 = (1.0f - u.x) / (1.0f + (a2 - 1.0f) * u.x);
+        float ct = sqrt(fmax(0.0f, cos2)), st = sqrt(fmax(0.0f, 1.0f - cos2));
+        float phi = 2.0f * ETK_PI * u.y;
+        float3 h = make_float3(st * cos(phi), st * sin(phi), ct);
+        float oh = dot(wo, h);
+        s.wi = h * (2.0f * oh) - wo;
+    } else {
+        s.wi = etk_sample_cosine_hemisphere(u);
+    }
+    if (s.wi.z <= 0.0f)
+        return s;
+    s.pdf = etk_bsdf_pdf(m, wo, s.wi);
+    if (s.pdf > 0.0f)
+        s.weight = etk_bsdf_eval(m, wo, s.wi) * (s.wi.z / s.pdf);
+    return s;
+}
+
+ETK_END
+
+#endif
