@@ -5,7 +5,7 @@
 #include "scene.h"
 #include "scene_arrays.h"
 #include "timer.h"
-#include "wavefront_cl.h"
+#include "renderer.h"
 
 #include <nlohmann/json.hpp>
 
@@ -21,8 +21,8 @@ namespace et::cli {
 namespace {
 
 struct RenderArgs {
-    std::string scene, output, stats_file, strategy, heuristic, sampler;
-    int spp = 0, max_depth = 0, paths = -1;
+    std::string scene, output, stats_file, strategy, heuristic, sampler, backend = "opencl";
+    int spp = 0, max_depth = 0, paths = -1, threads = 0;
     long long seed = -1;
     double time_limit = -1.0;
 };
@@ -107,15 +107,22 @@ void run(const RenderArgs& a, const Globals& g) {
                 arrays.bvh.sah_cost, arrays.bvh.build_seconds * 1e3, scene.env.image.width,
                 scene.env.image.height, scene.env.build_seconds * 1e3);
 
-    ClRuntime rt(g.device);
+    RendererOptions ro;
+    ro.backend = a.backend;
+    ro.device = g.device;
+    ro.paths = st.paths;
+    ro.threads = a.threads;
     ProgramBuildInfo build;
-    WavefrontCL renderer(rt, arrays, params, st.paths, &build);
-    std::printf("device %s: program build %.3f s (%s); %dx%d, %s spp, depth %d, strategy %s, "
-                "sampler %s, %d paths in flight\n",
-                rt.device().device_name.c_str(), build.seconds,
-                build.from_cache ? "cached binary" : "compiled", scene.width, scene.height,
-                st.time_limit > 0 ? "time-limited" : std::to_string(st.spp).c_str(), st.max_depth,
-                st.strategy.c_str(), st.sampler.c_str(), renderer.paths());
+    std::unique_ptr<Renderer> renderer_ptr = make_renderer(ro, arrays, params, &build);
+    Renderer& renderer = *renderer_ptr;
+    if (a.backend == "opencl")
+        std::printf("OpenCL program build %.3f s (%s)\n", build.seconds,
+                    build.from_cache ? "cached binary" : "compiled");
+    std::printf(
+        "backend %s: %dx%d, %s spp, depth %d, strategy %s, sampler %s, %d paths in flight\n",
+        renderer.name().c_str(), scene.width, scene.height,
+        st.time_limit > 0 ? "time-limited" : std::to_string(st.spp).c_str(), st.max_depth,
+        st.strategy.c_str(), st.sampler.c_str(), renderer.paths());
     std::fflush(stdout);
 
     Progress progress(st.spp, st.time_limit);
@@ -141,8 +148,7 @@ void run(const RenderArgs& a, const Globals& g) {
         {"envtrace:seed", std::to_string(st.seed)},
         {"envtrace:max_depth", std::to_string(st.max_depth)},
         {"envtrace:render_seconds", std::to_string(render_s)},
-        {"envtrace:backend", "opencl"},
-        {"envtrace:device", rt.device().device_name},
+        {"envtrace:backend", renderer.name()},
         {"Software", "envtrace " ENVTRACE_VERSION},
     };
     write_image(exr_name, scene.width, scene.height, 3, img, meta);
@@ -156,7 +162,7 @@ void run(const RenderArgs& a, const Globals& g) {
         done, render_s, mrays, (unsigned long long)s.camera_rays,
         (unsigned long long)s.continuation_rays, (unsigned long long)s.shadow_rays,
         double(done) * scene.width * scene.height / render_s, render_s / std::max(1, done));
-    std::printf("device time per stage:");
+    std::printf("%s time per stage:", a.backend == "cpu" ? "thread" : "device");
     for (const auto& [name, t] : s.stage_seconds)
         std::printf(" %s %.3fs", name.c_str(), t);
     std::printf("\nwrote %s and %s (total %.2f s)\n", exr_name.c_str(), png_name.c_str(),
@@ -165,8 +171,7 @@ void run(const RenderArgs& a, const Globals& g) {
     if (!a.stats_file.empty()) {
         nlohmann::json j;
         j["scene"] = a.scene;
-        j["backend"] = "opencl";
-        j["device"] = rt.device().device_name;
+        j["backend"] = renderer.name();
         j["width"] = scene.width;
         j["height"] = scene.height;
         j["spp"] = done;
@@ -224,6 +229,11 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--paths", a->paths, "Paths in flight (0: the whole film, capped by memory)")
         ->check(CLI::Range(0, 1 << 26));
     cmd->add_option("--stats", a->stats_file, "Write the render summary as JSON");
+    cmd->add_option("--backend", a->backend,
+                    "opencl (default) or cpu (native C++, same kernels/ sources)")
+        ->check(CLI::IsMember({"opencl", "cpu"}));
+    cmd->add_option("--threads", a->threads, "Native back end threads (0: all cores)")
+        ->check(CLI::Range(0, 1024));
     cmd->callback([a, &g] { run(*a, g); });
 }
 

@@ -26,9 +26,10 @@ template <typename T> cl::Buffer upload(cl::Context& ctx, const std::vector<T>& 
 
 } // namespace
 
-WavefrontCL::WavefrontCL(ClRuntime& rt, const SceneArrays& a, const etk::EtkParams& params,
-                         int paths, ProgramBuildInfo* build)
-    : rt_(rt), params_(params), pixels_(params.width * params.height) {
+WavefrontCL::WavefrontCL(std::unique_ptr<ClRuntime> rt_ptr, const SceneArrays& a,
+                         const etk::EtkParams& params, int paths, ProgramBuildInfo* build)
+    : rt_(std::move(rt_ptr)), params_(params), pixels_(params.width * params.height) {
+    ClRuntime& rt = *rt_;
     const cl::Device& dev = rt.device().device;
     const size_t max_alloc = dev.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
     const size_t global_mem = dev.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
@@ -147,6 +148,10 @@ std::vector<float> WavefrontCL::image() {
         for (int c = 0; c < 3; ++c)
             rgb[3 * p + c] = film[p].s[c] * inv;
     }
+    return rgb;
+}
+
+const RenderStats& WavefrontCL::stats() {
     // Stage times from the profiling events collected so far.
     stats_.stage_seconds.clear();
     for (int s = 0; s < STAGES; ++s) {
@@ -157,7 +162,7 @@ std::vector<float> WavefrontCL::image() {
                  1e-9;
         stats_.stage_seconds.emplace_back(kStages[s], t);
     }
-    return rgb;
+    return stats_;
 }
 
 } // namespace et

@@ -1,7 +1,6 @@
 // The OpenCL back end: the wavefront stages of kernels/wavefront.cl driven over work queues.
 #pragma once
-#include "opencl_runtime.h"
-#include "scene_arrays.h"
+#include "renderer.h"
 
 #include <cstdint>
 #include <string>
@@ -9,28 +8,18 @@
 
 namespace et {
 
-struct RenderStats {
-    uint64_t camera_rays = 0, continuation_rays = 0, shadow_rays = 0;
-    int samples_per_pixel = 0;
-    double seconds = 0.0;
-    // Device time per stage, from OpenCL profiling events (seconds).
-    std::vector<std::pair<std::string, double>> stage_seconds;
-    uint64_t rays() const { return camera_rays + continuation_rays + shadow_rays; }
-};
-
-class WavefrontCL {
+class WavefrontCL : public Renderer {
   public:
     // paths: paths in flight (0: the film, capped by memory).
-    WavefrontCL(ClRuntime& rt, const SceneArrays& arrays, const etk::EtkParams& params, int paths,
-                ProgramBuildInfo* build = nullptr);
+    WavefrontCL(std::unique_ptr<ClRuntime> rt, const SceneArrays& arrays,
+                const etk::EtkParams& params, int paths, ProgramBuildInfo* build = nullptr);
 
     // Adds one sample to every pixel (index `sample_index` of each pixel's sequence).
-    void render_sample(uint32_t sample_index);
-
-    // Mean radiance per pixel (RGB, row-major, row 0 at the top).
-    std::vector<float> image();
-    const RenderStats& stats() const { return stats_; }
-    int paths() const { return paths_; }
+    void render_sample(uint32_t sample_index) override;
+    std::vector<float> image() override;
+    const RenderStats& stats() override;
+    int paths() const override { return paths_; }
+    std::string name() const override { return "opencl"; }
 
   private:
     void launch(int stage, int n);
@@ -38,7 +27,7 @@ class WavefrontCL {
     void zero_counters();
     void read_counters(uint32_t* out);
 
-    ClRuntime& rt_;
+    std::unique_ptr<ClRuntime> rt_;
     etk::EtkParams params_;
     int pixels_, paths_;
     cl::CommandQueue queue_;
