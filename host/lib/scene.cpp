@@ -60,7 +60,24 @@ glm::mat4 read_transform(const json& s, const Reader& r) {
         return m;
     const json& t = s["transform"];
     Reader rt{r.where + ".transform"};
-    warn_unknown_keys(t, {"translate", "rotate", "scale"}, rt.where);
+    warn_unknown_keys(t, {"translate", "rotate", "scale", "matrix"}, rt.where);
+    if (t.contains("matrix")) {
+        // A full 4x4 matrix, row-major (as Mitsuba writes them); nothing else alongside it.
+        const json& a = t["matrix"];
+        if (!a.is_array() || a.size() != 16)
+            throw Error(rt.where + ": 'matrix' must be 16 numbers, row-major");
+        if (t.size() != 1)
+            throw Error(rt.where + ": 'matrix' cannot be combined with translate/rotate/scale");
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) {
+                if (!a[4 * r + c].is_number())
+                    throw Error(rt.where + ": 'matrix' must be 16 numbers, row-major");
+                m[c][r] = a[4 * r + c].get<float>(); // glm is column-major
+            }
+        if (!(std::fabs(glm::determinant(glm::mat3(m))) > 0.0f))
+            throw Error(rt.where + ": 'matrix' is singular");
+        return m;
+    }
     // Applied as scale, then rotate (about [x, y, z] by degrees), then translate.
     m = glm::translate(m, rt.vec3(t, "translate", glm::vec3(0.0f)));
     if (t.contains("rotate")) {
