@@ -1,0 +1,66 @@
+#include "commands.h"
+#include "error.h"
+#include "image_metrics.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace et::cli {
+namespace {
+
+struct CompareArgs {
+    std::string a, b, mask, json;
+};
+
+void run(const CompareArgs& args) {
+    RgbImage a = read_rgb_image(args.a);
+    RgbImage b = read_rgb_image(args.b);
+    if (a.width != b.width || a.height != b.height)
+        throw Error(args.a + " is " + std::to_string(a.width) + "x" + std::to_string(a.height) +
+                    " but " + args.b + " is " + std::to_string(b.width) + "x" +
+                    std::to_string(b.height) + ": cannot compare images of different sizes");
+    std::vector<unsigned char> mask;
+    if (!args.mask.empty())
+        mask = read_mask(args.mask, a.width, a.height);
+    const ImageErrors e = compare_images(a, b, mask);
+    std::printf("pixels %zu\nrmse %.6g\nrel_mse %.6g\nl2 %.6g\nmean %.6g (reference %.6g)\n",
+                e.pixels, e.rmse, e.rel_mse, e.l2, e.mean_a, e.mean_b);
+    if (!args.json.empty()) {
+        nlohmann::json j{{"image", args.a},
+                         {"reference", args.b},
+                         {"mask", args.mask},
+                         {"pixels", e.pixels},
+                         {"rmse", e.rmse},
+                         {"rel_mse", e.rel_mse},
+                         {"rel_mse_epsilon", kRelMseEpsilon},
+                         {"l2", e.l2},
+                         {"mean", e.mean_a},
+                         {"reference_mean", e.mean_b}};
+        const std::string tmp = args.json + ".tmp";
+        {
+            std::ofstream f(tmp);
+            if (!f)
+                throw Error(args.json + ": cannot write");
+            f << j.dump(2) << "\n";
+        }
+        std::filesystem::rename(tmp, args.json);
+    }
+}
+
+} // namespace
+
+void add_compare_command(CLI::App& app, Globals&) {
+    auto a = std::make_shared<CompareArgs>();
+    auto* cmd = app.add_subcommand(
+        "compare", "Error of image A against reference B: RMSE, relative MSE and relative L2");
+    cmd->add_option("image", a->a, "Image to evaluate (.exr, .hdr, .pfm, ...)")->required();
+    cmd->add_option("reference", a->b, "Reference image of the same size")->required();
+    cmd->add_option("--mask", a->mask, "Only pixels where this image's first channel is > 0.5");
+    cmd->add_option("--json", a->json, "Also write the metrics as JSON");
+    cmd->callback([a] { run(*a); });
+}
+
+} // namespace et::cli
