@@ -6,6 +6,8 @@
 #include "scene_arrays.h"
 #include "timer.h"
 #include "renderer.h"
+#include "light_render.h"
+#include "sis.h"
 
 #include <nlohmann/json.hpp>
 
@@ -22,6 +24,8 @@ namespace {
 
 struct RenderArgs {
     std::string scene, output, stats_file, strategy, heuristic, sampler, backend = "opencl";
+    std::string lights; // --lights: render with this directional light set
+    int sis_samples = 64;
     int spp = 0, max_depth = 0, paths = -1, threads = 0;
     long long seed = -1;
     double time_limit = -1.0;
@@ -99,8 +103,42 @@ void run(const RenderArgs& a, const Globals& g) {
     if (!dir.empty() && !fs::is_directory(dir, ec))
         throw Error(exr_name + ": cannot write: folder '" + dir.string() + "' does not exist");
 
+    // Directional lights and SIS sum over a set of directions per shading point: a native loop
+    // of their own (light_render.h) instead of the wavefront back ends.
+    const bool use_sis = st.strategy == "sis", use_lights = !a.lights.empty();
+    if (use_sis && use_lights)
+        throw Error("--lights and --strategy sis exclude each other");
+    if ((use_sis || use_lights) && st.max_depth != 1) {
+        warn("--lights and --strategy sis render direct lighting only: using --max-depth 1");
+        st.max_depth = 1;
+    }
+    if (use_sis && st.time_limit <= 0 && st.spp % a.sis_samples != 0)
+        throw Error("--strategy sis visits one stratum per sample: --spp (" +
+                    std::to_string(st.spp) + ") must be a multiple of --sis-samples (" +
+                    std::to_string(a.sis_samples) + ")");
+    if (use_sis)
+        st.strategy = "light"; // for make_params; the SIS loop ignores it
     SceneArrays arrays = build_scene_arrays(scene);
     etk::EtkParams params = make_params(scene, arrays);
+    if (use_sis)
+        st.strategy = "sis";
+    LightSet light_set;
+    SisResult sis;
+    if (use_lights) {
+        light_set = read_lights(a.lights);
+        std::printf("light set %s: %zu directional lights (%s)\n", a.lights.c_str(),
+                    light_set.lights.size(), light_set.method.c_str());
+        st.strategy = "lights";
+    }
+    if (use_sis) {
+        SisOptions so;
+        so.samples = a.sis_samples;
+        sis = build_sis(scene.env, so);
+        std::printf("SIS: %d strata (per level:", a.sis_samples);
+        for (int n : sis.level_samples)
+            std::printf(" %d", n);
+        std::printf(") precomputed in %.3f s\n", sis.seconds);
+    }
     std::printf("scene %s: %zu triangles, BVH %d nodes (depth %d, SAH cost %.1f) in %.1f ms; "
                 "environment %dx%d, distribution in %.2f ms\n",
                 a.scene.c_str(), scene.triangles.size(), arrays.bvh.node_count(), arrays.bvh.depth,
@@ -113,9 +151,12 @@ void run(const RenderArgs& a, const Globals& g) {
     ro.paths = st.paths;
     ro.threads = a.threads;
     ProgramBuildInfo build;
-    std::unique_ptr<Renderer> renderer_ptr = make_renderer(ro, arrays, params, &build);
+    std::unique_ptr<Renderer> renderer_ptr =
+        use_lights ? std::make_unique<LightSetRenderer>(arrays, params, light_set.lights, a.threads)
+        : use_sis  ? std::make_unique<LightSetRenderer>(arrays, params, sis.strata, a.threads)
+                   : make_renderer(ro, arrays, params, &build);
     Renderer& renderer = *renderer_ptr;
-    if (a.backend == "opencl")
+    if (a.backend == "opencl" && !use_sis && !use_lights)
         std::printf("OpenCL program build %.3f s (%s)\n", build.seconds,
                     build.from_cache ? "cached binary" : "compiled");
     std::printf(
@@ -149,6 +190,8 @@ void run(const RenderArgs& a, const Globals& g) {
         {"envtrace:max_depth", std::to_string(st.max_depth)},
         {"envtrace:render_seconds", std::to_string(render_s)},
         {"envtrace:backend", renderer.name()},
+        {"envtrace:lights", a.lights},
+        {"envtrace:sis_seconds", std::to_string(sis.seconds)},
         {"Software", "envtrace " ENVTRACE_VERSION},
     };
     write_image(exr_name, scene.width, scene.height, 3, img, meta);
@@ -177,6 +220,12 @@ void run(const RenderArgs& a, const Globals& g) {
         j["spp"] = done;
         j["max_depth"] = st.max_depth;
         j["strategy"] = st.strategy;
+        if (use_lights)
+            j["lights"] = {{"file", a.lights}, {"count", light_set.lights.size()}};
+        if (use_sis)
+            j["sis"] = {{"samples", a.sis_samples},
+                        {"precompute_seconds", sis.seconds},
+                        {"level_samples", sis.level_samples}};
         j["sampler"] = st.sampler;
         j["render_seconds"] = render_s;
         j["seconds_per_spp"] = render_s / std::max(1, done);
@@ -219,8 +268,14 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--max-depth", a->max_depth,
                     "Bounces (1: direct lighting only, the paper's setting)")
         ->check(CLI::Range(1, 1000));
-    cmd->add_option("--strategy", a->strategy, "light | bsdf | mis | uniform")
-        ->check(CLI::IsMember({"light", "bsdf", "mis", "uniform"}));
+    cmd->add_option("--strategy", a->strategy,
+                    "light | bsdf | mis | uniform | sis (structured importance sampling, native)")
+        ->check(CLI::IsMember({"light", "bsdf", "mis", "uniform", "sis"}));
+    cmd->add_option("--sis-samples", a->sis_samples,
+                    "SIS strata (one shadow ray per sample; --spp a multiple of it)")
+        ->check(CLI::Range(1, 1 << 16));
+    cmd->add_option("--lights", a->lights,
+                    "Render with this directional light set ('envtrace lights'), natively");
     cmd->add_option("--mis-heuristic", a->heuristic, "balance | power")
         ->check(CLI::IsMember({"balance", "power"}));
     cmd->add_option("--sampler", a->sampler, "sobol | random")

@@ -1,0 +1,85 @@
+#include "commands.h"
+#include "error.h"
+#include "image_io.h"
+#include "kernels/latlong.h"
+#include "light_set.h"
+#include "preview.h"
+
+#include <cstdio>
+
+namespace et::cli {
+namespace {
+
+struct LightsArgs {
+    std::string map, output = "lights.json", method = "ours", power = "share", plot;
+    int count = 32, sis_levels = 6;
+    unsigned seed = 1;
+    float blur = 0.5f;
+};
+
+void run(const LightsArgs& a) {
+    DistributionOptions opt;
+    opt.blur_sigma = a.blur;
+    EnvMap env = load_envmap(a.map, opt);
+    LightSet set;
+    if (a.method == "ours") {
+        set = make_lights_ours(env, a.count, a.seed, a.power == "voronoi");
+    } else {
+        SisOptions o;
+        o.levels = a.sis_levels;
+        set = make_lights_sis(env, a.count, o);
+    }
+    write_lights(a.output, set);
+    glm::dvec3 sum(0.0);
+    for (const auto& l : set.lights)
+        sum += l.power;
+    std::printf("map %s: %dx%d, power (integral of L) %.6g %.6g %.6g\n", a.map.c_str(),
+                env.image.width, env.image.height, set.map_power.x, set.map_power.y,
+                set.map_power.z);
+    std::printf("%zu lights by %s (power: %s), sum of powers %.6g %.6g %.6g\n", set.lights.size(),
+                set.method.c_str(), set.power_rule.c_str(), sum.x, sum.y, sum.z);
+    std::printf("precompute %.4f s + selection %.4f s = %.4f s\n", set.precompute_seconds,
+                set.selection_seconds, set.total_seconds());
+    std::printf("wrote %s\n", a.output.c_str());
+    if (!a.plot.empty()) {
+        std::vector<float> display = tone_map(env.image);
+        const int radius = std::max(1, env.image.width / 256);
+        const float colour[3] = {1.0f, 0.15f, 0.1f};
+        for (const auto& l : set.lights) {
+            etk::float3 d = etk::etk_world_to_env(
+                env.desc(), etk::make_float3(l.direction.x, l.direction.y, l.direction.z));
+            etk::float2 uv = etk::etk_dir_to_latlong(d);
+            draw_dot(display, env.image.width, env.image.height, uv.x, uv.y, radius, colour);
+        }
+        write_image(a.plot, env.image.width, env.image.height, 3, display,
+                    {{"Software", "envtrace " ENVTRACE_VERSION}});
+        std::printf("wrote %s\n", a.plot.c_str());
+    }
+}
+
+} // namespace
+
+void add_lights_command(CLI::App& app, Globals&) {
+    auto a = std::make_shared<LightsArgs>();
+    auto* cmd = app.add_subcommand(
+        "lights", "Turn an environment map into N directional lights (paper, Figure 8)");
+    cmd->add_option("map", a->map, "Lat-long environment map")->required();
+    cmd->add_option("-n,--count", a->count, "Number of lights")->check(CLI::Range(1, 1 << 20));
+    cmd->add_option("-o,--output", a->output, "Light set (.json) for 'envtrace render --lights'");
+    cmd->add_option("--method", a->method,
+                    "ours (warped low-discrepancy points) or sis (structured importance sampling)")
+        ->check(CLI::IsMember({"ours", "sis"}));
+    cmd->add_option("--power", a->power,
+                    "ours: share (each sample's L/(N pdf), rescaled to the map's power) or "
+                    "voronoi (each light's Voronoi cell)")
+        ->check(CLI::IsMember({"share", "voronoi"}));
+    cmd->add_option("--seed", a->seed, "Scrambling seed of the (0,2)-sequence (ours)");
+    cmd->add_option("--blur", a->blur, "Gaussian blur sigma of the sampling luminance, texels")
+        ->check(CLI::Range(0.0f, 64.0f));
+    cmd->add_option("--sis-levels", a->sis_levels, "SIS brightness levels")
+        ->check(CLI::Range(1, 64));
+    cmd->add_option("--plot", a->plot, "Also draw the light directions on the map (.png)");
+    cmd->callback([a] { run(*a); });
+}
+
+} // namespace et::cli
