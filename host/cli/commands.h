@@ -11,6 +11,7 @@ struct Globals {
 void add_devices_command(CLI::App& app, Globals& g);
 void add_sample_command(CLI::App& app, Globals& g);
 void add_render_command(CLI::App& app, Globals& g);
+void add_bench_command(CLI::App& app, Globals& g);
 void add_compare_command(CLI::App& app, Globals& g);
 void add_lights_command(CLI::App& app, Globals& g);
 

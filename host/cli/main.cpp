@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     et::cli::add_devices_command(app, globals);
     et::cli::add_sample_command(app, globals);
     et::cli::add_render_command(app, globals);
+    et::cli::add_bench_command(app, globals);
     et::cli::add_compare_command(app, globals);
     et::cli::add_lights_command(app, globals);
     try {
