@@ -213,15 +213,54 @@ json run_probe(const BenchArgs& a, const Globals& g, const fs::path& dir) {
     return json::parse(out.substr(brace));
 }
 
+// The pixels whose camera ray hits the scene: the first bounce's shade calls, each of which draws
+// one light sample. Runs the renderer's first two stages (etk_generate, etk_intersect) natively.
+std::vector<etk::uint> camera_hit_pixels(const Prepared& p) {
+    const int pixels = p.params.width * p.params.height, tile = 4096;
+    std::vector<etk::float4> ray_o(tile), ray_d(tile), beta(tile), radiance(tile), hit(tile),
+        shadow_o(tile), shadow_d(tile), shadow_L(tile);
+    std::vector<int> pixel(tile), queue_a(tile), queue_b(tile), escaped(tile), shade(tile),
+        shadow(tile);
+    uint32_t counters[ETK_Q_COUNT];
+    etk::EtkPaths P{ray_o.data(),    ray_d.data(),    beta.data(),     radiance.data(), hit.data(),
+                    shadow_o.data(), shadow_d.data(), shadow_L.data(), pixel.data()};
+    etk::EtkQueues Q{queue_a.data(), queue_b.data(), escaped.data(),
+                     shade.data(),   shadow.data(),  counters};
+    const SceneArrays& a = p.arrays;
+    const etk::EtkScene S{a.bvh.nodes.data(),     a.tris.data(),      a.normals.data(),
+                          a.tri_material.data(),  a.materials.data(), a.env->dist.table.data(),
+                          a.env->image.rgb.data()};
+    etk::EtkParams prm = p.params;
+    std::vector<etk::uint> hits;
+    for (int first = 0; first < pixels; first += tile) {
+        const int n = std::min(tile, pixels - first);
+        prm.first_pixel = first;
+        std::fill(counters, counters + ETK_Q_COUNT, 0u);
+        for (int i = 0; i < n; ++i) // fills queue_b (Q.ray_out)
+            etk::etk_generate(P, Q, prm, i);
+        etk::EtkQueues Qi = Q;
+        Qi.ray_in = queue_b.data();
+        Qi.ray_out = queue_a.data();
+        std::fill(counters, counters + ETK_Q_COUNT, 0u);
+        for (int q = 0; q < n; ++q)
+            etk::etk_intersect(P, Qi, S, prm, q);
+        for (uint32_t k = 0; k < counters[ETK_Q_SHADE]; ++k)
+            hits.push_back(static_cast<etk::uint>(pixel[shade[k]]));
+    }
+    return hits;
+}
+
 // Environment-map sampling of one frame on its own: `n` samples drawn as the shade stage draws
-// them (sampler pair 1 + 3 bounce of pixel k mod pixels), over `threads` threads. mode 0: the
-// sample values only; 1: plus etk_env_sample; 2: plus the radiance lookup in the sampled
-// direction (what the shade stage does with the sample). Returns seconds.
-double native_env_sampling(const Prepared& p, long long n, int threads, int mode, double* sink) {
+// them: sample k at pixel hits[k mod H] with sampler pair 1 + 3 (k / H) (bounce k / H), over
+// `threads` threads. mode 0: the sample values only; 1: plus etk_env_sample; 2: plus the
+// radiance lookup in the sampled direction (what the shade stage does with the sample). Returns
+// seconds.
+double native_env_sampling(const Prepared& p, const std::vector<etk::uint>& hits, long long n,
+                           int threads, int mode, double* sink) {
     const etk::EtkParams& prm = p.params;
     const float* dist = p.arrays.env->dist.table.data();
     const float* texels = p.arrays.env->image.rgb.data();
-    const long long pixels = static_cast<long long>(prm.width) * prm.height;
+    const long long h = std::max<long long>(1, static_cast<long long>(hits.size()));
     std::vector<double> sums(threads, 0.0);
     std::atomic<long long> next{0};
     constexpr long long kChunk = 4096;
@@ -233,8 +272,8 @@ double native_env_sampling(const Prepared& p, long long n, int threads, int mode
                 break;
             const long long end = std::min(n, begin + kChunk);
             for (long long k = begin; k < end; ++k) {
-                const etk::uint pixel = static_cast<etk::uint>(k % pixels);
-                const etk::uint pair = 1u + 3u * static_cast<etk::uint>(k / pixels);
+                const etk::uint pixel = hits.empty() ? 0u : hits[k % h];
+                const etk::uint pair = 1u + 3u * static_cast<etk::uint>(k / h);
                 const etk::float2 u =
                     etk::etk_sample_pair(prm.sampler, prm.seed, pixel, prm.sample_index, pair);
                 if (mode == 0) {
@@ -363,16 +402,19 @@ void run(const BenchArgs& a, const Globals& g) {
                 warm_cl.first_sample_seconds, cl_second, warm_cpu.seconds, spp);
     std::fflush(stdout);
 
-    // Light samples of one frame, bounded above: every shade call draws at most one, and only
-    // rays with depth < max depth are shaded (camera rays at depth 1; camera and continuation
-    // rays beyond). Timed on their own right after each render (see README.md).
+    // Light samples of one frame: one per shade call. At depth 1 exactly one per camera ray that
+    // hits the scene; beyond, also at most one per continuation ray (an upper bound: continuation
+    // rays that escape or reach the last depth are not shaded). Timed on their own right after
+    // each render (see tools/bench/README.md).
+    const std::vector<etk::uint> hits = camera_hit_pixels(p);
     const RenderStats& ws = warm_cpu.stats;
-    const long long n_env = static_cast<long long>(
-        sc.settings.max_depth > 1 ? ws.camera_rays + ws.continuation_rays : ws.camera_rays);
+    const long long n_env =
+        static_cast<long long>(hits.size()) +
+        (sc.settings.max_depth > 1 ? static_cast<long long>(ws.continuation_rays) : 0);
     ClEnvSampling cl_env(p, g, n_env);
     double sink = 0;
     for (int mode = 0; mode < 3; ++mode) // warm-up
-        native_env_sampling(p, n_env, threads, mode, &sink);
+        native_env_sampling(p, hits, n_env, threads, mode, &sink);
 
     std::vector<Run> cl_runs, cpu_runs;
     std::vector<double> env_t[4]; // native modes 0-2, opencl
@@ -381,7 +423,7 @@ void run(const BenchArgs& a, const Globals& g) {
         env_t[3].push_back(cl_env.time());
         cpu_runs.push_back(render_run(a, g, p, "cpu", spp));
         for (int mode = 0; mode < 3; ++mode)
-            env_t[mode].push_back(native_env_sampling(p, n_env, threads, mode, &sink));
+            env_t[mode].push_back(native_env_sampling(p, hits, n_env, threads, mode, &sink));
         std::printf("  pair %d: opencl %.3f Mrays/s, cpu %.3f Mrays/s, ratio %.3f\n", r + 1,
                     cl_runs.back().mrays(), cpu_runs.back().mrays(),
                     cl_runs.back().mrays() / cpu_runs.back().mrays());
@@ -478,9 +520,9 @@ void run(const BenchArgs& a, const Globals& g) {
     }
     const double shade_cl_share = summarize(shade_cl).median,
                  shade_cpu_share = summarize(shade_cpu).median;
-    std::printf("environment sampling, %lld samples (upper bound on one frame's light samples), "
+    std::printf("environment sampling, %lld samples (one frame's light samples%s), "
                 "medians of %d, each right after a render:\n",
-                n_env, a.runs);
+                n_env, sc.settings.max_depth > 1 ? ", an upper bound" : ", exact", a.runs);
     std::printf("  native, %d threads: sample values %.2f ms, + etk_env_sample %.2f ms, + "
                 "radiance lookup %.2f ms; frame %.1f ms -> etk_env_sample %.2f%% of the frame "
                 "(%.2f%% with the sample values, %.2f%% with the lookup)\n",
