@@ -40,7 +40,7 @@ struct BenchArgs {
     std::string scene, json_file;
     int spp = 0, runs = 5, max_depth = 0, threads = 0, paths = -1;
     double target_seconds = 2.0;
-    bool build_probe = false, no_cold = false;
+    bool build_probe = false, no_cold = false, no_insitu = false;
 };
 
 struct Prepared {
@@ -80,13 +80,14 @@ struct Run {
 };
 
 Run render_run(const BenchArgs& a, const Globals& g, const Prepared& p, const std::string& backend,
-               int spp) {
+               int spp, const etk::EtkParams* params = nullptr) {
     Run r;
     r.backend = backend;
     r.spp = spp;
     ProgramBuildInfo build;
     Timer construct;
-    auto renderer = make_renderer(options(a, g, p, backend), p.arrays, p.params, &build);
+    auto renderer =
+        make_renderer(options(a, g, p, backend), p.arrays, params ? *params : p.params, &build);
     r.construct_seconds = construct.seconds();
     r.build_seconds = build.seconds;
     r.from_cache = build.from_cache;
@@ -352,6 +353,20 @@ class ClEnvSampling {
     double first_launch_seconds_ = 0;
 };
 
+double stage_seconds(const Run& r, const char* stage) {
+    for (const auto& [name, t] : r.stats.stage_seconds)
+        if (name == stage)
+            return t;
+    return 0.0;
+}
+
+double total_stage_seconds(const Run& r) {
+    double total = 0;
+    for (const auto& st : r.stats.stage_seconds)
+        total += st.second;
+    return total;
+}
+
 double stage_share(const Run& r, const char* stage) {
     double total = 0, s = 0;
     for (const auto& [name, t] : r.stats.stage_seconds) {
@@ -416,7 +431,15 @@ void run(const BenchArgs& a, const Globals& g) {
     for (int mode = 0; mode < 3; ++mode) // warm-up
         native_env_sampling(p, hits, n_env, threads, mode, &sink);
 
-    std::vector<Run> cl_runs, cpu_runs;
+    // In situ: the same renders with the light sample drawn uniformly on the sphere
+    // (--strategy uniform: etk_sample_uniform_sphere instead of etk_env_sample and no MIS weight;
+    // the rest of the shade stage is the same). The shade stage's time difference estimates
+    // what drawing the environment-map samples costs inside the frame.
+    const bool insitu = !a.no_insitu && (p.params.strategy == ETK_STRATEGY_MIS ||
+                                         p.params.strategy == ETK_STRATEGY_LIGHT);
+    etk::EtkParams uniform = p.params;
+    uniform.strategy = ETK_STRATEGY_UNIFORM;
+    std::vector<Run> cl_runs, cpu_runs, cl_uniform, cpu_uniform;
     std::vector<double> env_t[4]; // native modes 0-2, opencl
     for (int r = 0; r < a.runs; ++r) {
         cl_runs.push_back(render_run(a, g, p, "opencl", spp));
@@ -424,6 +447,10 @@ void run(const BenchArgs& a, const Globals& g) {
         cpu_runs.push_back(render_run(a, g, p, "cpu", spp));
         for (int mode = 0; mode < 3; ++mode)
             env_t[mode].push_back(native_env_sampling(p, hits, n_env, threads, mode, &sink));
+        if (insitu) {
+            cl_uniform.push_back(render_run(a, g, p, "opencl", spp, &uniform));
+            cpu_uniform.push_back(render_run(a, g, p, "cpu", spp, &uniform));
+        }
         std::printf("  pair %d: opencl %.3f Mrays/s, cpu %.3f Mrays/s, ratio %.3f\n", r + 1,
                     cl_runs.back().mrays(), cpu_runs.back().mrays(),
                     cl_runs.back().mrays() / cpu_runs.back().mrays());
@@ -532,6 +559,23 @@ void run(const BenchArgs& a, const Globals& g) {
     std::printf("  opencl, envmap_sample_reduce (values + sample + lookup): %.2f ms; frame %.1f "
                 "ms -> %.2f%% of the frame\n",
                 env_cl.median * 1e3, cl_spp * 1e3, 100 * share_cl.median);
+    // Shade-stage time saved by the uniform light sample, as a share of the frame's stage time.
+    std::vector<double> saved_cl, saved_cpu;
+    for (size_t r = 0; r < cl_uniform.size(); ++r) {
+        auto saved = [](const Run& env, const Run& uni) {
+            return stage_share(env, "shade_hits") -
+                   stage_seconds(uni, "shade_hits") / total_stage_seconds(env);
+        };
+        saved_cl.push_back(saved(cl_runs[r], cl_uniform[r]));
+        saved_cpu.push_back(saved(cpu_runs[r], cpu_uniform[r]));
+    }
+    const Summary insitu_cl = summarize(saved_cl), insitu_cpu = summarize(saved_cpu);
+    if (insitu)
+        std::printf("  in situ: the shade stage with a uniform-sphere light sample instead is "
+                    "shorter by %.1f%% of the frame's stage time natively [%.1f - %.1f], %.1f%% "
+                    "on OpenCL [%.1f - %.1f]\n",
+                    100 * insitu_cpu.median, 100 * insitu_cpu.min, 100 * insitu_cpu.max,
+                    100 * insitu_cl.median, 100 * insitu_cl.min, 100 * insitu_cl.max);
     std::printf("  in situ, upper bound: the shade stage (which draws the sample) is %.1f%% of "
                 "opencl device time and %.1f%% of native thread time\n",
                 100 * shade_cl_share, 100 * shade_cpu_share);
@@ -575,6 +619,9 @@ void run(const BenchArgs& a, const Globals& g) {
                                      {"seconds_per_spp", to_json(m[b][2])}};
             for (const Run& r : b == 0 ? cl_runs : cpu_runs)
                 j["runs_detail"][keys[b]].push_back(to_json(r, pixels));
+            for (const Run& r : b == 0 ? cl_uniform : cpu_uniform)
+                j["runs_detail"][std::string(keys[b]) + "_uniform_light"].push_back(
+                    to_json(r, pixels));
         }
         j["ratio_opencl_over_native"] = {{"of_medians", ratio_of_medians},
                                          {"per_pair", pair_ratios},
@@ -582,20 +629,25 @@ void run(const BenchArgs& a, const Globals& g) {
         j["program_build"] = {{"cold_child", cold},
                               {"warm_child", warm_probe},
                               {"warm_in_process", to_json(warm_build)}};
-        j["env_sampling"] = {{"samples", n_env},
-                             {"native_threads", threads},
-                             {"native_values_seconds", to_json(env_vals)},
-                             {"native_sample_seconds", to_json(env_sample)},
-                             {"native_sample_lookup_seconds", to_json(env_lookup)},
-                             {"opencl_seconds", to_json(env_cl)},
-                             {"opencl_first_launch_seconds", cl_env.first_launch_seconds()},
-                             {"share_native_sample_only", to_json(share_only)},
-                             {"share_native_with_values", to_json(share_values)},
-                             {"share_native_with_lookup", to_json(share_lookup)},
-                             {"share_opencl", to_json(share_cl)},
-                             {"shade_stage_share_opencl", shade_cl_share},
-                             {"shade_stage_share_native", shade_cpu_share},
-                             {"checksum", sink}};
+        j["env_sampling"] = {
+            {"samples", n_env},
+            {"samples_exact", sc.settings.max_depth == 1},
+            {"camera_hits", hits.size()},
+            {"native_threads", threads},
+            {"native_values_seconds", to_json(env_vals)},
+            {"native_sample_seconds", to_json(env_sample)},
+            {"native_sample_lookup_seconds", to_json(env_lookup)},
+            {"opencl_seconds", to_json(env_cl)},
+            {"opencl_first_launch_seconds", cl_env.first_launch_seconds()},
+            {"share_native_sample_only", to_json(share_only)},
+            {"share_native_with_values", to_json(share_values)},
+            {"share_native_with_lookup", to_json(share_lookup)},
+            {"share_opencl", to_json(share_cl)},
+            {"shade_stage_share_opencl", shade_cl_share},
+            {"shade_stage_share_native", shade_cpu_share},
+            {"insitu_uniform_saving_native", insitu ? to_json(insitu_cpu) : json()},
+            {"insitu_uniform_saving_opencl", insitu ? to_json(insitu_cl) : json()},
+            {"checksum", sink}};
         const std::string tmp = a.json_file + ".tmp";
         {
             std::ofstream f(tmp);
@@ -631,6 +683,8 @@ void add_bench_command(CLI::App& app, Globals& g) {
                     "Seconds per run when choosing the default --spp (default 2)")
         ->check(CLI::Range(0.01, 3600.0));
     cmd->add_flag("--no-cold", a->no_cold, "Skip the cold program build measurement");
+    cmd->add_flag("--no-insitu", a->no_insitu,
+                  "Skip the extra renders with a uniform light sample (in-situ sampling cost)");
     cmd->add_option("--json", a->json_file, "Write everything as JSON");
     // Internal: the child process of the cold/warm program build measurement.
     cmd->add_flag("--build-probe", a->build_probe)->group("");

@@ -121,27 +121,42 @@ def main():
     L.append("")
 
     L.append("## Environment-sampling share of the frame\n")
-    L.append("Right after each render, the light samples of one frame are drawn again on their "
-             "own, with the same sampler dimensions the shade stage uses, on the same threads "
-             "(native: 2 threads; OpenCL: `envmap_sample_reduce`, one sample per work-item, "
-             "work-groups of 64). Their number is an upper bound on the frame's light samples "
-             "(camera rays at depth 1; camera + continuation rays at depth 5: every shade call "
-             "draws at most one). Share = that time / the frame time of the render just before "
-             "it, median over the pairs. *sample* = `etk_env_sample` alone (the binary searches "
-             "and the direction; the sample values' own cost subtracted), *+values* includes "
-             "generating the two sample values, *+lookup* also the radiance lookup in the "
-             "sampled direction. The shade stage (which draws the sample, evaluates the BSDF, "
-             "samples the BSDF) is an in-situ upper bound: its share of the stage times.\n")
-    L.append("| scene | depth | light samples/frame (bound) | native: sample | native: +values "
-             "| native: +lookup | OpenCL: values+sample+lookup | shade stage share, native / OpenCL |")
+    L.append("Two independent measurements, both side by side with the renders (see README.md, "
+             "\"Environment-sampling share\"):\n")
+    L.append("- **isolated**: right after each render, the frame's light samples are drawn again on "
+             "their own, with the sampler dimensions the shade stage uses, on the same threads "
+             "(native: all threads; OpenCL: `envmap_sample_reduce`, one sample per work-item, "
+             "work-groups of 64, which also does the radiance lookup). Their number is exact at "
+             "depth 1 (the camera rays that hit, found by running `etk_generate` and "
+             "`etk_intersect`) and an upper bound at depth 5 (plus every continuation ray). "
+             "Share = that time / the frame time of the render just before it. *sample* = "
+             "`etk_env_sample` alone (the binary searches and the direction; the cost of "
+             "generating the two sample values subtracted), *+values* includes it, *+lookup* also "
+             "the radiance lookup in the sampled direction.")
+    L.append("- **in situ**: each pair also renders the same spp with `--strategy uniform` (the "
+             "light direction from `etk_sample_uniform_sphere` instead of `etk_env_sample`, no MIS "
+             "weight; the rest of the shade stage unchanged). Shade-stage time saved / all stage "
+             "time of the real render (native: thread time; OpenCL: device time from profiling "
+             "events).")
+    L.append("- the whole shade stage's share (sample, BSDF evaluation and sampling, shading "
+             "frame) is an upper bound.\n")
+    L.append("Medians over the pairs.\n")
+    L.append("| scene | depth | light samples/frame | isolated native: sample / +values / +lookup "
+             "| isolated OpenCL: values+sample+lookup | in situ native | in situ OpenCL "
+             "| shade stage, native / OpenCL |")
     L.append("|---|---|---|---|---|---|---|---|")
     for j in results:
         e = j["env_sampling"]
-        L.append(f"| {j['name']} | {j['max_depth']} | {e['samples'] / 1e3:.0f} k "
-                 f"| {100 * e['share_native_sample_only']['median']:.1f}% "
-                 f"| {100 * e['share_native_with_values']['median']:.1f}% "
-                 f"| {100 * e['share_native_with_lookup']['median']:.1f}% "
+        ins_n = e.get("insitu_uniform_saving_native")
+        ins_c = e.get("insitu_uniform_saving_opencl")
+        L.append(f"| {j['name']} | {j['max_depth']} "
+                 f"| {e['samples'] / 1e3:.0f} k{'' if e.get('samples_exact') else ' (bound)'} "
+                 f"| {100 * e['share_native_sample_only']['median']:.1f}% / "
+                 f"{100 * e['share_native_with_values']['median']:.1f}% / "
+                 f"{100 * e['share_native_with_lookup']['median']:.1f}% "
                  f"| {100 * e['share_opencl']['median']:.1f}% "
+                 f"| {'%.1f%%' % (100 * ins_n['median']) if ins_n else '–'} "
+                 f"| {'%.1f%%' % (100 * ins_c['median']) if ins_c else '–'} "
                  f"| {100 * e['shade_stage_share_native']:.1f}% / "
                  f"{100 * e['shade_stage_share_opencl']:.1f}% |")
     L.append("")
