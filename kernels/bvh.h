@@ -2,8 +2,8 @@
 //
 // Node i is two float4: (bounds min, meta) and (bounds max, axis << 16 | count), the integers
 // stored as float bits. Inner node: count 0, first child i+1, meta = second child, axis = split
-// axis. Leaf: meta = first triangle, count > 0 triangles. An empty scene has one node with an
-// inverted box, which every ray misses. The host keeps the tree shallower than ETK_BVH_STACK.
+// axis. Leaf: meta = first triangle, count > 0 triangles. An empty scene has one leaf holding one
+// all-zero (never hit) triangle. The host keeps the tree shallower than ETK_BVH_STACK.
 // Triangles are three float4 each: v0, edge1 = v1 - v0, edge2 = v2 - v0 (Moller-Trumbore).
 #ifndef ETK_BVH_H
 #define ETK_BVH_H

@@ -160,9 +160,12 @@ Bvh build_bvh(const TriangleSoup& soup, int max_leaf) {
         bvh.order[t] = t;
     bvh.nodes.resize(2);
     if (n == 0) {
-        Box empty; // inverted: every ray misses it
+        // One leaf holding triangle 0, which flatten_triangles makes all zero (det 0: never hit).
+        // Not an inner node: the slab test takes min/max per axis, so rays do "hit" an inverted
+        // box, and an inner root with child index 0 made traversal loop forever.
+        Box empty;
         bvh.nodes[0] = etk::make_float4(empty.lo.x, empty.lo.y, empty.lo.z, 0.0f);
-        bvh.nodes[1] = etk::make_float4(empty.hi.x, empty.hi.y, empty.hi.z, 0.0f);
+        bvh.nodes[1] = etk::make_float4(empty.hi.x, empty.hi.y, empty.hi.z, as_float_bits(1u));
         bvh.build_seconds = timer.seconds();
         return bvh;
     }
@@ -180,6 +183,8 @@ Bvh build_bvh(const TriangleSoup& soup, int max_leaf) {
 
 std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup,
                                            const std::vector<int>& order) {
+    if (order.empty()) // the empty scene's leaf points at one degenerate triangle
+        return std::vector<etk::float4>(3, etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
     std::vector<etk::float4> out(3 * order.size());
     for (size_t i = 0; i < order.size(); ++i) {
         const glm::vec3* p = &soup.positions[3 * order[i]];

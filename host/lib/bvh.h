@@ -20,7 +20,8 @@ struct Bvh {
 // Leaves hold at most `max_leaf` triangles; depth stays below the kernels' stack size.
 Bvh build_bvh(const TriangleSoup& soup, int max_leaf = 4);
 
-// Triangles in BVH order as the kernels read them: v0, e1, e2 (three float4 each).
+// Triangles in BVH order as the kernels read them: v0, e1, e2 (three float4 each); one all-zero
+// triangle for an empty soup (the empty BVH's leaf points at it).
 std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup, const std::vector<int>& order);
 
 } // namespace et
