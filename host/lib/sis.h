@@ -6,9 +6,13 @@
 // weighted statistics):
 //  1. Brightness levels: thresholds t_i = i * sigma(Y), i = 0 .. levels-1; band i holds the texels
 //     with t_i <= Y < t_(i+1) (the last band is open above); level i is the nested region Y >= t_i.
-//  2. Sample budget: band i has solid angle W_i and mean luminance Y_i; its importance is
-//     Gamma_i = Y_i * W_i^(1/4) (SIS's metric L^a dw^b with a = 1, b = 1/4) and it receives
-//     N * Gamma_i / sum Gamma points (largest-remainder rounding, so they add up to N).
+//  2. Sample budget: band i has solid angle W_i and power P_i (integral of Y over it); its
+//     importance is Gamma_i = P_i * W_i^(1/4) (SIS's metric L^a dw^b with a = 1, b = 1/4, L the
+//     region's total illumination: importance sampling's share, tilted towards large regions for
+//     the visibility term) and it receives N * Gamma_i / sum Gamma points (largest-remainder
+//     rounding, so they add up to N). Reading L as the band's mean radiance instead gives a map
+//     like grace.hdr no point at all outside its few bright sources (0 of 32): its whole dim
+//     sphere is then lit from the sources' directions and every shadow turns black.
 //  3. Placement: from the brightest level down, Hochbaum-Shmoys farthest-point selection inside
 //     level i's nested region: the first point of the brightest non-empty level is its brightest
 //     texel, every next point the texel of the region whose angular distance to the nearest point

@@ -15,11 +15,11 @@ def main():
     a = c.parser(__doc__.splitlines()[0])
     a.add_argument("--spp", type=int, default=64)
     a.add_argument("--ref-spp", type=int, default=1024)
-    a.add_argument("--size", type=int, default=96)
+    a.add_argument("--size", type=int, default=80)
     args = a.parse_args()
     out = c.out_dir(args, "fig5")
     maps = ["grace.hdr", "pedestrian_overpass_1k.hdr"]
-    rough = [0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8]
+    rough = [0.02, 0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8]
     size, spp, ref_spp = args.size, args.spp, args.ref_spp
     if args.tiny:
         maps, rough, size, spp, ref_spp = ["grace.hdr"], [0.05, 0.5], 24, 16, 64
