@@ -1,0 +1,193 @@
+// BSDF sampling and evaluation (kernels/bsdf.h): chi-square goodness of fit of etk_bsdf_sample's
+// directions against etk_bsdf_pdf (the harness of tests/chi2.h, as for the environment map),
+// the pdf's integral against the fraction of samples lost below the horizon, the density and
+// weight returned with each sample, and reciprocity of etk_bsdf_eval.
+//
+// Grid: 64 bins in phi x 32 bins in theta over the upper hemisphere, plus one cell for samples
+// returned with pdf 0 (lost below the horizon). theta bins rather than equal-area cos(theta)
+// bins: at normal incidence a roughness-0.05 lobe is ~0.1 rad wide and would sit entirely in the
+// first cos(theta) bin. The expected count of a bin is N times the integral of etk_bsdf_pdf
+// sin(theta) over it (an adaptive midpoint rule, below); the lost cell expects N (1 - total).
+#include "chi2.h"
+#include "kernels/bsdf.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <sstream>
+
+namespace {
+
+constexpr int kPhi = 64, kTheta = 32;
+constexpr int kSamples = 1 << 20;
+
+struct Config {
+    const char* name;
+    etk::EtkMaterial m;
+    float cos_o;
+};
+
+etk::EtkMaterial material(int type, float albedo, float f0, float alpha) {
+    etk::EtkMaterial m;
+    m.type = type;
+    m.albedo = etk::make_float3(albedo, albedo, albedo);
+    m.specular = etk::make_float3(f0, f0, f0);
+    m.alpha = alpha;
+    return m;
+}
+
+std::vector<Config> configs() {
+    std::vector<Config> c;
+    for (float cos_o : {1.0f, 0.6f, 0.2f, 0.05f}) {
+        c.push_back({"diffuse", material(ETK_MAT_DIFFUSE, 0.8f, 0.0f, 0.3f), cos_o});
+        for (float alpha : {0.05f, 0.2f, 0.5f, 1.0f}) {
+            c.push_back({"microfacet", material(ETK_MAT_MICROFACET, 0.0f, 0.9f, alpha), cos_o});
+            c.push_back({"plastic", material(ETK_MAT_MICROFACET, 0.5f, 0.04f, alpha), cos_o});
+        }
+    }
+    return c;
+}
+
+etk::float3 wo_of(float cos_o) {
+    // Azimuth 0.3 rad: nothing special about phi = 0.
+    const float s = std::sqrt(1 - cos_o * cos_o);
+    return etk::make_float3(s * std::cos(0.3f), s * std::sin(0.3f), cos_o);
+}
+
+int bin_of(const etk::float3& w) {
+    const double th = std::acos(std::clamp(double(w.z), -1.0, 1.0));
+    double ph = std::atan2(double(w.y), double(w.x));
+    if (ph < 0)
+        ph += 2 * M_PI;
+    const int it = std::min(kTheta - 1, int(th / (M_PI / 2) * kTheta));
+    const int ip = std::min(kPhi - 1, int(ph / (2 * M_PI) * kPhi));
+    return it * kPhi + ip;
+}
+
+// Integral of pdf sin(theta) over bin (it, ip) by the n x n midpoint rule.
+double bin_integral(const etk::EtkMaterial& m, etk::float3 wo, int it, int ip, int n) {
+    const double dth = M_PI / 2 / kTheta / n, dph = 2 * M_PI / kPhi / n;
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) {
+        const double th = (it * n + i + 0.5) * dth, st = std::sin(th), ct = std::cos(th);
+        for (int j = 0; j < n; ++j) {
+            const double ph = (ip * n + j + 0.5) * dph;
+            sum += st * etk::etk_bsdf_pdf(m, wo,
+                                          etk::make_float3(float(st * std::cos(ph)),
+                                                           float(st * std::sin(ph)), float(ct)));
+        }
+    }
+    return sum * dth * dph;
+}
+
+// Integral of the pdf (solid angle) over each bin: the midpoint rule refined (8, 16, ... 512
+// points a side) until two successive estimates agree within 1e-4 relative or 0.01 of an
+// expected sample. Near grazing incidence the lowest-roughness lobe is squeezed against the
+// horizon to a few thousandths of a radian, so a fixed rule is not enough there.
+std::vector<double> integrate_pdf(const etk::EtkMaterial& m, etk::float3 wo) {
+    std::vector<double> p(kPhi * kTheta, 0.0);
+    for (int it = 0; it < kTheta; ++it)
+        for (int ip = 0; ip < kPhi; ++ip) {
+            double prev = bin_integral(m, wo, it, ip, 8), cur = prev;
+            for (int n = 16; n <= 512; n *= 2) {
+                cur = bin_integral(m, wo, it, ip, n);
+                if (std::fabs(cur - prev) <= std::max(1e-4 * cur, 0.01 / kSamples))
+                    break;
+                prev = cur;
+            }
+            p[it * kPhi + ip] = cur;
+        }
+    return p;
+}
+
+TEST(Bsdf, SamplingMatchesPdfChiSquare) {
+    const std::vector<Config> cs = configs();
+    const double alpha = ett::sidak_alpha(0.01, static_cast<int>(cs.size()));
+    std::mt19937 rng(2024);
+    std::uniform_real_distribution<float> U(0.0f, 0.99999994f);
+    for (const Config& c : cs) {
+        const etk::float3 wo = wo_of(c.cos_o);
+        std::ostringstream label;
+        label << c.name << " roughness " << c.m.alpha << " cos(theta_o) " << c.cos_o;
+        SCOPED_TRACE(label.str());
+        std::vector<double> observed(kPhi * (kTheta + 1), 0.0);
+        int lost = 0;
+        for (int k = 0; k < kSamples; ++k) {
+            const etk::float2 u = etk::make_float2(U(rng), U(rng));
+            const etk::EtkBsdfSample s = etk::etk_bsdf_sample(c.m, wo, u, U(rng));
+            if (!(s.pdf > 0.0f)) {
+                ++lost;
+                continue;
+            }
+            ASSERT_GT(s.wi.z, 0.0f);
+            ASSERT_NEAR(std::sqrt(etk::dot(s.wi, s.wi)), 1.0f, 1e-5f);
+            // The density and weight handed out with the sample are the pdf and f cos / pdf.
+            const float pdf = etk::etk_bsdf_pdf(c.m, wo, s.wi);
+            ASSERT_NEAR(s.pdf, pdf, 1e-5f * pdf);
+            const float w = etk::etk_bsdf_eval(c.m, wo, s.wi).x * s.wi.z / pdf;
+            ASSERT_NEAR(s.weight.x, w, 1e-5f * w + 1e-7f);
+            observed[bin_of(s.wi)] += 1.0;
+        }
+        observed[kPhi * kTheta] = lost;
+        const std::vector<double> prob = integrate_pdf(c.m, wo);
+        std::vector<double> expected(kPhi * (kTheta + 1), 0.0);
+        double total = 0.0;
+        for (int i = 0; i < kPhi * kTheta; ++i) {
+            expected[i] = prob[i] * kSamples;
+            total += prob[i];
+        }
+        expected[kPhi * kTheta] = std::max(0.0, 1.0 - total) * kSamples;
+
+        // The pdf integrates to at most one, and what it misses is what sampling loses below
+        // the horizon (binomial noise, 5 sigma, plus 1e-4 of quadrature error).
+        const double lost_fraction = double(lost) / kSamples;
+        EXPECT_LE(total, 1.0 + 1e-4);
+        EXPECT_NEAR(1.0 - total, lost_fraction,
+                    5 * std::sqrt(std::max(lost_fraction, 1e-6) / kSamples) + 1e-4)
+            << "pdf integral " << total << ", lost " << lost_fraction;
+        if (c.m.type == ETK_MAT_DIFFUSE) {
+            EXPECT_EQ(lost, 0);
+            EXPECT_NEAR(total, 1.0, 1e-4);
+        }
+
+        const ett::Chi2Result r = ett::chi2_test(observed, expected, kPhi, kTheta + 1, alpha);
+        if (!r.passed)
+            ett::dump_histograms("bsdf-chi2-" + std::string(c.name), observed, expected, kPhi,
+                                 kTheta + 1);
+        EXPECT_TRUE(r.passed) << r.report;
+        std::printf("%-40s pdf integral %.5f, lost %.5f, chi2 p = %.3g (dof %d)\n",
+                    label.str().c_str(), total, lost_fraction, r.p_value, r.dof);
+    }
+}
+
+TEST(Bsdf, EvaluationIsReciprocal) {
+    std::mt19937 rng(99);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    auto dir = [&] {
+        const float z = std::max(1e-3f, U(rng)), s = std::sqrt(1 - z * z),
+                    ph = 2 * float(M_PI) * U(rng);
+        return etk::make_float3(s * std::cos(ph), s * std::sin(ph), z);
+    };
+    for (const Config& c : configs())
+        for (int k = 0; k < 20000; ++k) {
+            const etk::float3 a = dir(), b = dir();
+            const etk::float3 fab = etk::etk_bsdf_eval(c.m, a, b),
+                              fba = etk::etk_bsdf_eval(c.m, b, a);
+            for (float x : {fab.x, fab.y, fab.z})
+                ASSERT_TRUE(std::isfinite(x) && x >= 0.0f) << c.name;
+            ASSERT_NEAR(fab.x, fba.x, 1e-5f * std::max(fab.x, fba.x) + 1e-9f)
+                << c.name << " roughness " << c.m.alpha << " wo.z " << a.z << " wi.z " << b.z;
+        }
+}
+
+TEST(Bsdf, NothingBelowTheHorizonOrFromBehind) {
+    const etk::EtkMaterial m = material(ETK_MAT_MICROFACET, 0.5f, 0.04f, 0.3f);
+    const etk::float3 up = etk::make_float3(0, 0, 1), down = etk::make_float3(0.6f, 0, -0.8f);
+    EXPECT_EQ(etk::etk_bsdf_eval(m, up, down).x, 0.0f);
+    EXPECT_EQ(etk::etk_bsdf_eval(m, down, up).x, 0.0f);
+    EXPECT_EQ(etk::etk_bsdf_pdf(m, up, down), 0.0f);
+    EXPECT_EQ(etk::etk_bsdf_sample(m, down, etk::make_float2(0.3f, 0.7f), 0.1f).pdf, 0.0f);
+}
+
+} // namespace
