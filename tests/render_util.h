@@ -118,4 +118,37 @@ inline double image_mean(const std::vector<float>& img) {
     return img.empty() ? 0.0 : s / img.size();
 }
 
+// Two independent renders of the same expectation: z = (a - b) / sqrt(var_a / n_a + var_b /
+// n_b) per pixel channel. For correct estimators mean z^2 is ~1 and |z| > 4 is rare (6e-5 for
+// a Gaussian; more with the heavy tails of a poorly matched strategy, whose per-pass variance
+// from a few hundred passes is itself noisy). The image means are compared with the summed
+// variance.
+struct Agreement {
+    double mean_z2 = 0.0, max_abs_z = 0.0, frac_over_4 = 0.0;
+    double mean_a = 0.0, mean_b = 0.0, mean_z = 0.0; // mean_z: of the image means
+};
+
+inline Agreement agreement(const RenderResult& a, const RenderResult& b) {
+    Agreement g;
+    const size_t n = a.mean.size();
+    double var_sum = 0.0;
+    int over = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const double v = a.var_mean(i) + b.var_mean(i);
+        var_sum += v;
+        const double d = double(a.mean[i]) - b.mean[i];
+        // Float rounding floor for zero-variance pixels (the background seen directly).
+        const double sd = std::sqrt(v) + 1e-6 * (std::fabs(a.mean[i]) + 1e-6);
+        const double z = d / sd;
+        g.mean_z2 += z * z / n;
+        g.max_abs_z = std::max(g.max_abs_z, std::fabs(z));
+        over += std::fabs(z) > 4;
+    }
+    g.frac_over_4 = double(over) / n;
+    g.mean_a = image_mean(a.mean);
+    g.mean_b = image_mean(b.mean);
+    g.mean_z = (g.mean_a - g.mean_b) / (std::sqrt(var_sum) / n + 1e-9);
+    return g;
+}
+
 } // namespace ett

@@ -1,0 +1,120 @@
+// The light, bsdf and mis strategies estimate the same integral, so they converge to the same
+// image; and the error of an unbiased estimator with independent samples falls as 1/sqrt(spp).
+//
+// Noise: every render uses the random sampler (independent passes), and the per-pixel variance
+// of the mean is measured from the passes (render_util.h). Two renders of the same image give
+// z = (a - b) / sd per pixel channel: the test first checks that this noise estimate is
+// calibrated on two seeds of the same strategy (mean z^2 ~ 1), then holds every pair of
+// strategies to the same statistics. Bounds: mean z^2 <= 1.3 (its standard error over
+// 32 x 32 x 3 values is ~0.03 for Gaussian z, a few times that with heavy tails); |z| > 4 in at
+// most 0.5% of the values (6e-5 expected for a Gaussian; the bsdf strategy's variance, measured
+// from a few hundred passes under a map with bright spots, is heavy-tailed); image means within
+// 5 sigma of their summed variance.
+#include "render_util.h"
+
+#include <gtest/gtest.h>
+
+namespace {
+
+et::Scene scene(const et::EnvMap& env, const std::string& strategy, int depth, uint32_t seed) {
+    et::Scene s = ett::base_scene(32, 32, env);
+    s.materials.push_back(ett::diffuse(0.5f));
+    s.materials.push_back(ett::diffuse(0.8f));
+    et::Material plastic;
+    plastic.type = ETK_MAT_MICROFACET;
+    plastic.albedo = glm::vec3(0.3f);
+    plastic.specular = glm::vec3(0.04f);
+    plastic.roughness = 0.2f;
+    s.materials.push_back(plastic);
+    ett::add_square(s.triangles, glm::vec3(0.0f), glm::vec3(0, 1, 0), 4.0f, 0);
+    ett::add_sphere(s.triangles, glm::vec3(-0.6f, 0.5f, 0.0f), 0.5f, 32, true, 1);
+    ett::add_sphere(s.triangles, glm::vec3(0.6f, 0.5f, 0.0f), 0.5f, 32, true, 2);
+    s.camera.eye = {0.0f, 1.2f, 3.2f};
+    s.camera.target = {0.0f, 0.45f, 0.0f};
+    s.camera.fov_deg = 40.0f;
+    s.settings.strategy = strategy;
+    s.settings.max_depth = depth;
+    s.settings.seed = seed;
+    return s;
+}
+
+void expect_agree(const ett::RenderResult& a, const ett::RenderResult& b, const std::string& what) {
+    const ett::Agreement g = ett::agreement(a, b);
+    std::printf("%-28s means %.5f / %.5f (z %.2f), mean z^2 %.3f, max |z| %.2f, |z|>4 %.4f\n",
+                what.c_str(), g.mean_a, g.mean_b, g.mean_z, g.mean_z2, g.max_abs_z, g.frac_over_4);
+    EXPECT_LE(std::fabs(g.mean_z), 5.0) << what;
+    EXPECT_LE(g.mean_z2, 1.3) << what;
+    EXPECT_LE(g.frac_over_4, 0.005) << what;
+}
+
+class Strategies : public ::testing::TestWithParam<int> {};
+
+TEST_P(Strategies, ConvergeToTheSameImage) {
+    ETT_DATA_FILE(path, "envmaps/pisa.hdr");
+    const int depth = GetParam();
+    const et::EnvMap env = et::load_envmap(path, {});
+    const int spp = 256;
+    const auto light = ett::render(scene(env, "light", depth, 1), "cpu", spp);
+    const auto light2 = ett::render(scene(env, "light", depth, 2), "cpu", spp);
+    const auto bsdf = ett::render(scene(env, "bsdf", depth, 3), "cpu", spp);
+    const auto mis = ett::render(scene(env, "mis", depth, 4), "cpu", spp);
+    const std::string d = " depth " + std::to_string(depth);
+    // The noise estimate itself: two seeds of one strategy.
+    const ett::Agreement self = ett::agreement(light, light2);
+    EXPECT_GT(self.mean_z2, 0.8);
+    expect_agree(light, light2, "light vs light (seed)" + d);
+    expect_agree(light, bsdf, "light vs bsdf" + d);
+    expect_agree(light, mis, "light vs mis" + d);
+    expect_agree(bsdf, mis, "bsdf vs mis" + d);
+}
+
+INSTANTIATE_TEST_SUITE_P(Depth, Strategies, ::testing::Values(1, 3));
+
+// RMSE against a high-spp reference, for spp = 4 ... 128 (independent seeds): a log-log fit of
+// slope -1/2. The reference's own noise (var / N_ref per pixel, measured) is subtracted from each
+// mean squared error. Each MSE's standard error is measured from the spread of the per-pixel
+// squared errors (sd / sqrt(pixels)); through d log RMSE = d MSE / (2 MSE) it weights a least
+// squares fit whose slope has a standard error from those weights. The slope must be within 4
+// of its standard errors (plus 0.01 for what the weights miss) of -0.5.
+TEST(Strategies, RmseFallsAsOneOverSqrtSpp) {
+    ETT_DATA_FILE(path, "envmaps/pisa.hdr");
+    const et::EnvMap env = et::load_envmap(path, {});
+    const int n_ref = 2048;
+    const auto ref = ett::render(scene(env, "mis", 1, 100), "cpu", n_ref);
+    double ref_noise = 0.0;
+    for (size_t i = 0; i < ref.mean.size(); ++i)
+        ref_noise += ref.var_mean(i) / ref.mean.size();
+    std::vector<double> x, y, w;
+    for (int spp = 4; spp <= 128; spp *= 2) {
+        const auto r = ett::render(scene(env, "mis", 1, 200 + spp), "cpu", spp, false);
+        const size_t n = r.mean.size();
+        double m = 0.0, m2 = 0.0;
+        for (size_t i = 0; i < n; ++i) {
+            const double e2 = std::pow(double(r.mean[i]) - ref.mean[i], 2);
+            m += e2 / n;
+            m2 += e2 * e2 / n;
+        }
+        const double se = std::sqrt(std::max(0.0, m2 - m * m) / n);
+        const double mse = m - ref_noise;
+        ASSERT_GT(mse, 4 * se) << "spp " << spp << ": error lost in the reference's noise";
+        const double sd_log = 0.5 * se / mse;
+        x.push_back(std::log(double(spp)));
+        y.push_back(0.5 * std::log(mse));
+        w.push_back(1.0 / (sd_log * sd_log));
+        std::printf("spp %4d: RMSE %.5f (+- %.1f%%)\n", spp, std::sqrt(mse), 100 * sd_log);
+    }
+    double sw = 0, sx = 0, sy = 0;
+    for (size_t i = 0; i < x.size(); ++i)
+        sw += w[i], sx += w[i] * x[i], sy += w[i] * y[i];
+    const double mx = sx / sw, my = sy / sw;
+    double sxx = 0, sxy = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+        sxx += w[i] * (x[i] - mx) * (x[i] - mx);
+        sxy += w[i] * (x[i] - mx) * (y[i] - my);
+    }
+    const double slope = sxy / sxx, se_slope = std::sqrt(1.0 / sxx);
+    std::printf("log-log slope %.4f +- %.4f (reference %d spp)\n", slope, se_slope, n_ref);
+    EXPECT_NEAR(slope, -0.5, 4 * se_slope + 0.01);
+}
+
+} // namespace
