@@ -1,0 +1,156 @@
+// The OpenCL and native back ends run the same integrator stages (kernels/integrator.h) on the
+// same sample values (regenerated bit-identically from pixel, index and dimension), so:
+// - at max_depth 1, with the same scene, seed and sampler, the images are equal up to float
+//   rounding: per-pixel relative difference below 1e-4 wherever the value is above 1e-3 of the
+//   image mean (issue 4), except for a few pixels on maps with a tiny sun (see below);
+// - at depth 5, where rounding differences grow into different paths (a continuation ray that
+//   grazes an edge hits another triangle, Russian roulette compares against a value that moved
+//   by an ulp), they agree statistically: the calibrated z statistics of render_util.h (mean
+//   z^2 <= 1.3, |z| > 4 in at most 0.5% of values, image means within 5 sigma).
+// Scenes: spheres on a ground quad under pisa, and bunny_5k on a quad under grace,
+// royal_esplanade_1k and pedestrian_overpass_1k, written as scene files and loaded by
+// load_scene.
+#include "render_util.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace {
+
+std::string write_scene(const std::string& name, const std::string& map, bool bunny) {
+    const std::string dir = ett::scratch_dir("backends-" + name);
+    const std::string path = dir + "/scene.json";
+    std::ofstream f(path);
+    f << R"({
+  "camera": {"eye": [0, 1.1, 3.4], "target": [0, 0.6, 0], "up": [0, 1, 0], "fov": 36},
+  "film": {"width": 48, "height": 32},
+  "environment": {"map": ")"
+      << map << R"(", "rotation": 30},
+  "materials": {
+    "ground": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]},
+    "clay": {"type": "diffuse", "albedo": [0.8, 0.4, 0.3]},
+    "glossy": {"type": "plastic", "albedo": [0.2, 0.3, 0.7], "roughness": 0.2},
+    "metal": {"type": "microfacet", "specular": [0.9, 0.8, 0.6], "roughness": 0.35},
+    "chrome": {"type": "mirror", "specular": [0.9, 0.9, 0.9]}
+  },
+  "shapes": [
+    {"type": "quad", "center": [0, 0, 0], "size": 8, "material": "ground"},
+)";
+    if (bunny)
+        f << R"(    {"type": "mesh", "file": ")" << ett::data_file("meshes/bunny_5k.obj")
+          << R"(", "material": "glossy",
+     "transform": {"translate": [0.17, -0.33, 0], "scale": 10}},
+    {"type": "sphere", "center": [1.3, 0.4, -0.5], "radius": 0.4, "material": "chrome"}
+)";
+    else
+        f << R"(    {"type": "sphere", "center": [-1.0, 0.5, 0], "radius": 0.5, "material": "clay"},
+    {"type": "sphere", "center": [0, 0.5, -0.2], "radius": 0.5, "material": "metal"},
+    {"type": "sphere", "center": [1.0, 0.5, 0], "radius": 0.5, "material": "chrome",
+     "segments": 24, "smooth": false}
+)";
+    f << "  ]\n}\n";
+    return path;
+}
+
+struct Case {
+    const char* name;
+    const char* map;
+    bool bunny;
+};
+
+class Backends : public ::testing::TestWithParam<Case> {};
+
+TEST_P(Backends, DepthOneEqualUpToRounding) {
+    const Case c = GetParam();
+    ETT_DATA_FILE(map, std::string("envmaps/") + c.map);
+    if (c.bunny && ett::data_file("meshes/bunny_5k.obj").empty())
+        GTEST_SKIP() << "meshes/bunny_5k.obj not found";
+    et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
+    s.settings.max_depth = 1;
+    s.settings.sampler = "sobol";
+    s.settings.strategy = "mis";
+    s.settings.seed = 11;
+    const int spp = 16;
+    const auto cl = ett::render(s, "opencl", spp, false);
+    const auto cpu = ett::render(s, "cpu", spp, false);
+    const double floor = 1e-3 * ett::image_mean(cpu.mean);
+    // A map is "sharp" when its peak texel luminance is over 1000 times the mean texel's (grace
+    // 5.2e3, royal_esplanade_1k 1.8e4; pisa 24, pedestrian_overpass_1k 38). On such a map a
+    // // direction that differs by an ulp between the back ends (device sin/cos/sqrt round
+    // differently) moves the bilinear lookup by ~1e-5 of a 0.006 rad texel, which on the sun's
+    // edge changes that one sample's radiance by up to ~1e-5 x 5e4 = 0.5 of the map's mean. A
+    // pixel where a mirror or glossy reflection grazes the sun then differs by ~1e-4..1e-3 after
+    // 16 samples. Measured: bunny_esplanade 2 pixels (6 values of 4525) up to 4.2e-4 relative,
+    // all on the chrome sphere (with a diffuse sphere instead the worst value is 8.5e-5).
+    // Allowed on sharp maps only: at most 0.5% of the compared values in [1e-4, 1e-2).
+    float peak = 0.0f;
+    double map_mean = 0.0;
+    for (size_t i = 0; i < s.env.image.rgb.size(); i += 3) {
+        const float l = 0.2126f * s.env.image.rgb[i] + 0.7152f * s.env.image.rgb[i + 1] +
+                        0.0722f * s.env.image.rgb[i + 2];
+        peak = std::max(peak, l);
+        map_mean += l;
+    }
+    map_mean /= s.env.image.rgb.size() / 3;
+    const bool sharp = peak > 1000.0 * map_mean;
+    double worst = 0.0;
+    int compared = 0, over = 0;
+    for (size_t i = 0; i < cpu.mean.size(); ++i) {
+        const double a = cl.mean[i], b = cpu.mean[i];
+        ASSERT_TRUE(std::isfinite(a) && std::isfinite(b));
+        if (std::max(a, b) <= floor)
+            continue;
+        ++compared;
+        const double rel = std::fabs(a - b) / std::max(a, b);
+        worst = std::max(worst, rel);
+        if (rel >= 1e-4) {
+            ++over;
+            std::printf("  pixel (%d, %d) channel %d: opencl %.7g, cpu %.7g, relative %.3g\n",
+                        int(i / 3) % s.width, int(i / 3) / s.width, int(i % 3), a, b, rel);
+        }
+        if (rel >= (sharp ? 1e-2 : 1e-4)) {
+            ADD_FAILURE() << c.name << ": pixel " << i / 3 << " (" << (i / 3) % s.width << ", "
+                          << (i / 3) / s.width << ") channel " << i % 3 << ": opencl " << a
+                          << ", cpu " << b << " (relative " << rel << ")";
+        }
+    }
+    std::printf("%-22s depth 1: %d values compared, worst relative difference %.3g, %d >= 1e-4 "
+                "(map peak / mean %.3g)\n",
+                c.name, compared, worst, over, peak / map_mean);
+    EXPECT_GT(compared, static_cast<int>(cpu.mean.size() / 2));
+    EXPECT_LE(over, sharp ? compared / 200 : 0) << "values differing by 1e-4 relative or more";
+}
+
+TEST_P(Backends, DepthFiveAgreeStatistically) {
+    const Case c = GetParam();
+    ETT_DATA_FILE(map, std::string("envmaps/") + c.map);
+    if (c.bunny && ett::data_file("meshes/bunny_5k.obj").empty())
+        GTEST_SKIP() << "meshes/bunny_5k.obj not found";
+    et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
+    s.settings.max_depth = 5;
+    s.settings.sampler = "random";
+    s.settings.strategy = "mis";
+    const int spp = 128;
+    s.settings.seed = 21;
+    const auto cl = ett::render(s, "opencl", spp);
+    s.settings.seed = 22; // independent noise: the statistics assume it
+    const auto cpu = ett::render(s, "cpu", spp);
+    const ett::Agreement g = ett::agreement(cl, cpu);
+    std::printf("%-22s depth 5: means %.5f / %.5f (z %.2f), mean z^2 %.3f, max |z| %.2f, |z|>4 "
+                "%.4f\n",
+                c.name, g.mean_a, g.mean_b, g.mean_z, g.mean_z2, g.max_abs_z, g.frac_over_4);
+    EXPECT_LE(std::fabs(g.mean_z), 5.0);
+    EXPECT_LE(g.mean_z2, 1.3);
+    EXPECT_LE(g.frac_over_4, 0.005);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, Backends,
+                         ::testing::Values(Case{"spheres_pisa", "pisa.hdr", false},
+                                           Case{"bunny_grace", "grace.hdr", true},
+                                           Case{"bunny_esplanade", "royal_esplanade_1k.hdr", true},
+                                           Case{"bunny_overpass", "pedestrian_overpass_1k.hdr",
+                                                true}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+} // namespace
