@@ -77,13 +77,14 @@ TEST_P(Backends, DepthOneEqualUpToRounding) {
     const double floor = 1e-3 * ett::image_mean(cpu.mean);
     // A map is "sharp" when its peak texel luminance is over 1000 times the mean texel's (grace
     // 5.2e3, royal_esplanade_1k 1.8e4; pisa 24, pedestrian_overpass_1k 38). On such a map a
-    // // direction that differs by an ulp between the back ends (device sin/cos/sqrt round
+    // direction that differs by an ulp between the back ends (device sin/cos/sqrt round
     // differently) moves the bilinear lookup by ~1e-5 of a 0.006 rad texel, which on the sun's
-    // edge changes that one sample's radiance by up to ~1e-5 x 5e4 = 0.5 of the map's mean. A
-    // pixel where a mirror or glossy reflection grazes the sun then differs by ~1e-4..1e-3 after
-    // 16 samples. Measured: bunny_esplanade 2 pixels (6 values of 4525) up to 4.2e-4 relative,
-    // all on the chrome sphere (with a diffuse sphere instead the worst value is 8.5e-5).
-    // Allowed on sharp maps only: at most 0.5% of the compared values in [1e-4, 1e-2).
+    // edge changes that one sample's radiance by up to ~1e-5 x 5e4 = 0.5 of the map's mean
+    // (solid-angle weighted peak / mean: 5.2e4). A pixel where a mirror or glossy reflection grazes
+    // the sun then differs by ~1e-4..1e-3 after 16 samples. Measured: bunny_esplanade 2 pixels (6
+    // values of 4525) up to 4.2e-4 relative, all on the chrome sphere (with a diffuse sphere
+    // instead the worst value is 8.5e-5). Allowed on sharp maps only: at most 0.5% of the compared
+    // values in [1e-4, 1e-2).
     float peak = 0.0f;
     double map_mean = 0.0;
     for (size_t i = 0; i < s.env.image.rgb.size(); i += 3) {
