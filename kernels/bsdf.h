@@ -7,6 +7,7 @@
 #ifndef ETK_BSDF_H
 #define ETK_BSDF_H
 #include "compat.h"
+#include "trig.h"
 
 #define ETK_MAT_DIFFUSE 0
 #define ETK_MAT_MICROFACET 1
@@ -56,25 +57,26 @@ ETK_FN float3 etk_from_local(float3 v, float3 t, float3 b, float3 n) {
 // Cosine-weighted hemisphere by the concentric disk map (Shirley & Chiu 1997).
 ETK_FN float3 etk_sample_cosine_hemisphere(float2 u) {
     float ox = 2.0f * u.x - 1.0f, oy = 2.0f * u.y - 1.0f;
-    float r = 0.0f, phi = 0.0f;
+    float r = 0.0f, phi = 0.0f; // phi in units of pi
     if (ox != 0.0f || oy != 0.0f) {
         if (fabs(ox) > fabs(oy)) {
             r = ox;
-            phi = 0.25f * ETK_PI * (oy / ox);
+            phi = 0.25f * (oy / ox);
         } else {
             r = oy;
-            phi = 0.5f * ETK_PI - 0.25f * ETK_PI * (ox / oy);
+            phi = 0.5f - 0.25f * (ox / oy);
         }
     }
-    float x = r * cos(phi), y = r * sin(phi);
+    float2 sc = etk_sincospi(phi);
+    float x = r * sc.y, y = r * sc.x;
     return make_float3(x, y, sqrt(fmax(0.0f, 1.0f - x * x - y * y)));
 }
 
 ETK_FN float3 etk_sample_uniform_sphere(float2 u) {
     float z = 1.0f - 2.0f * u.x;
     float r = sqrt(fmax(0.0f, 1.0f - z * z));
-    float phi = 2.0f * ETK_PI * u.y;
-    return make_float3(r * cos(phi), r * sin(phi), z);
+    float2 sc = etk_sincospi(2.0f * u.y);
+    return make_float3(r * sc.y, r * sc.x, z);
 }
 
 ETK_FN float etk_ggx_d(float cos_h, float alpha) {
@@ -159,8 +161,8 @@ ETK_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 u, float l
         float a2 = m.alpha * m.alpha;
         float cos2 = (1.0f - u.x) / (1.0f + (a2 - 1.0f) * u.x);
         float ct = sqrt(fmax(0.0f, cos2)), st = sqrt(fmax(0.0f, 1.0f - cos2));
-        float phi = 2.0f * ETK_PI * u.y;
-        float3 h = make_float3(st * cos(phi), st * sin(phi), ct);
+        float2 sc = etk_sincospi(2.0f * u.y);
+        float3 h = make_float3(st * sc.y, st * sc.x, ct);
         float oh = dot(wo, h);
         s.wi = h * (2.0f * oh) - wo;
     } else {

@@ -7,6 +7,8 @@
 
 #ifdef __OPENCL_VERSION__
 
+// No fused multiply-adds: the host compiles with -ffp-contract=off, so both round alike.
+#pragma OPENCL FP_CONTRACT OFF
 #define ETK_BEGIN
 #define ETK_END
 #define ETK_FN static inline

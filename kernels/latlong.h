@@ -5,25 +5,26 @@
 #ifndef ETK_LATLONG_H
 #define ETK_LATLONG_H
 #include "compat.h"
+#include "trig.h"
 
 ETK_BEGIN
 
 // sin(theta) for theta = pi v, accurate at both poles (sin(pi) in float is not zero).
 ETK_FN float etk_latlong_sin_theta(float v) {
-    return sin(ETK_PI * fmin(v, 1.0f - v));
+    return etk_sinpi(fmin(v, 1.0f - v));
 }
 
 ETK_FN float3 etk_latlong_to_dir(float2 uv) {
-    float phi = ETK_PI * (2.0f * uv.x - 1.0f);
+    float2 phi = etk_sincospi(2.0f * uv.x - 1.0f);
     float st = etk_latlong_sin_theta(uv.y);
-    return make_float3(st * sin(phi), cos(ETK_PI * uv.y), -st * cos(phi));
+    return make_float3(st * phi.x, etk_cospi(uv.y), -st * phi.y);
 }
 
 // theta = atan2(sqrt(x^2 + z^2), y) rather than acos(y): acos loses theta near the poles, where
 // y rounds to +-1 for theta below ~3e-4 and a sampled direction would map back to the pole.
 ETK_FN float2 etk_dir_to_latlong(float3 d) {
-    float u = 0.5f * (1.0f + atan2(d.x, -d.z) * ETK_INV_PI);
-    float v = atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * ETK_INV_PI;
+    float u = 0.5f * (1.0f + etk_atan2(d.x, -d.z) * ETK_INV_PI);
+    float v = etk_atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * ETK_INV_PI;
     return make_float2(u, v);
 }
 

@@ -31,18 +31,15 @@ ETK_FN int etk_dist2d_size(int w, int h) {
 // never returned for u in [0,1): the last of a run of equal entries is the one whose successor
 // is larger.
 ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
-    int first = 1, count = n;
-    while (count > 0) {
-        int step = count >> 1;
-        int mid = first + step;
-        if (cdf[mid] <= u) {
-            first = mid + 1;
-            count -= step + 1;
-        } else {
-            count = step;
-        }
+    // Binary lifting with a fixed number of steps (n <= 65536) and no branches: every work-item
+    // runs the same instructions, so OpenCL compilers can vectorise across work-items.
+    int lo = 0; // invariant: cdf[lo] <= u
+    for (int step = 1 << 16; step > 0; step >>= 1) {
+        int mid = lo + step;
+        float c = cdf[min(mid, n - 1)];
+        lo = (mid < n && c <= u) ? mid : lo;
     }
-    return clamp(first - 1, 0, n - 1);
+    return lo;
 }
 
 ETK_FN int etk_cell_of(float x, int n) {
@@ -56,10 +53,11 @@ ETK_FN float etk_cell_coordinate(int i, float t, int n) {
     float x = ((float)i + t) / (float)n;
     float hi = (float)(i + 1) / (float)n;
     x = x < hi ? x : as_float(as_uint(hi) - 1u);
-    while (etk_cell_of(x, n) < i)
-        x = as_float(as_uint(x) + 1u);
-    while (etk_cell_of(x, n) > i)
-        x = as_float(as_uint(x) - 1u);
+    // Rounding is off by at most a float step or two; fixed-count steps keep this branch-free.
+    for (int k = 0; k < 2; ++k)
+        x = etk_cell_of(x, n) < i ? as_float(as_uint(x) + 1u) : x;
+    for (int k = 0; k < 2; ++k)
+        x = etk_cell_of(x, n) > i ? as_float(as_uint(x) - 1u) : x;
     return x;
 }
 

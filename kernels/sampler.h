@@ -40,10 +40,12 @@ ETK_FN uint etk_reverse_bits(uint x) {
 
 // Second Sobol' dimension (the first is the bit-reversed index).
 ETK_FN uint etk_sobol_dim1(uint i) {
+    // A fixed 32-step loop without branches (unrolled, vectorisable across work-items).
     uint v = 0x80000000u, r = 0u;
-    for (; i != 0u; i >>= 1, v ^= v >> 1)
-        if (i & 1u)
-            r ^= v;
+    for (int k = 0; k < 32; ++k) {
+        r ^= v & (0u - ((i >> k) & 1u));
+        v ^= v >> 1;
+    }
     return r;
 }
 
