@@ -1,9 +1,12 @@
 // Closest-hit and any-hit traversal of the flattened BVH the host builds (host/lib/bvh.h).
 //
-// Node i is two float4: (bounds min, meta) and (bounds max, axis << 16 | count), the integers
-// stored as float bits. Inner node: count 0, first child i+1, meta = second child, axis = split
-// axis. Leaf: meta = first triangle, count > 0 triangles. An empty scene has one leaf holding one
-// all-zero (never hit) triangle. The host keeps the tree shallower than ETK_BVH_STACK.
+// Each inner node is four float4 holding both children: (box min, meta) and (box max, flags)
+// for the first child, then the same for the second; integers are stored as float bits. An inner
+// child has flags 0 and meta = its node index. A leaf child has flags = 0x80000000 | count and
+// meta = its first triangle; leaves are intersected straight from their parent, so a leaf costs
+// no node fetch. Node 0 is the root (a scene of one leaf or none gets a root whose other child
+// is an empty leaf). Both child boxes are tested together and the nearer is visited first. The
+// host keeps the tree shallower than ETK_BVH_STACK.
 // Triangles are three float4 each: v0, edge1 = v1 - v0, edge2 = v2 - v0 (Moller-Trumbore).
 #ifndef ETK_BVH_H
 #define ETK_BVH_H
@@ -19,24 +22,25 @@ typedef struct {
     float b1, b2; // barycentrics of v1 and v2
 } EtkHit;
 
-ETK_FN int etk_node_meta(float4 lo) {
+ETK_FN int etk_child_meta(float4 lo) {
     return (int)as_uint(lo.w);
 }
-ETK_FN int etk_node_count(float4 hi) {
-    return (int)(as_uint(hi.w) & 0xffffu);
+ETK_FN int etk_child_is_leaf(float4 hi) {
+    return (as_uint(hi.w) & 0x80000000u) != 0u;
 }
-ETK_FN int etk_node_axis(float4 hi) {
-    return (int)(as_uint(hi.w) >> 16);
+ETK_FN int etk_child_count(float4 hi) {
+    return (int)(as_uint(hi.w) & 0x7fffffffu);
 }
 
 // Slab test against [0, tmax]; the slack keeps rays that graze a flat box from missing it.
-ETK_FN int etk_box_hit(float4 lo, float4 hi, float3 org, float3 inv_dir, float tmax) {
+ETK_FN int etk_box_hit(float4 lo, float4 hi, float3 org, float3 inv_dir, float tmax, float* tnear) {
     float tx0 = (lo.x - org.x) * inv_dir.x, tx1 = (hi.x - org.x) * inv_dir.x;
     float ty0 = (lo.y - org.y) * inv_dir.y, ty1 = (hi.y - org.y) * inv_dir.y;
     float tz0 = (lo.z - org.z) * inv_dir.z, tz1 = (hi.z - org.z) * inv_dir.z;
-    float tnear = fmax(fmax(fmin(tx0, tx1), fmin(ty0, ty1)), fmax(fmin(tz0, tz1), 0.0f));
-    float tfar = fmin(fmin(fmax(tx0, tx1), fmax(ty0, ty1)), fmin(fmax(tz0, tz1), tmax));
-    return tnear <= tfar * 1.00000024f;
+    float tn = fmax(fmax(fmin(tx0, tx1), fmin(ty0, ty1)), fmax(fmin(tz0, tz1), 0.0f));
+    float tf = fmin(fmin(fmax(tx0, tx1), fmax(ty0, ty1)), fmin(fmax(tz0, tz1), tmax));
+    *tnear = tn;
+    return tn <= tf * 1.00000024f;
 }
 
 // Moller-Trumbore; updates hit when closer than hit->t.
@@ -76,6 +80,16 @@ ETK_FN float3 etk_safe_inverse(float3 d) {
     return r;
 }
 
+// Intersects the triangles of a leaf; returns 1 when any_hit and one was hit.
+ETK_FN int etk_leaf_hit(ETK_GLOBAL const float4* tris, float4 lo, float4 hi, float3 org, float3 dir,
+                        int any_hit, EtkHit* hit) {
+    int first = etk_child_meta(lo), count = etk_child_count(hi);
+    for (int i = 0; i < count; ++i)
+        if (etk_triangle_hit(tris, first + i, org, dir, hit) && any_hit)
+            return 1;
+    return 0;
+}
+
 // Closest hit with t in (0, tmax), or any hit when any_hit != 0. Returns whether it hit.
 ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const float4* tris,
                             float3 org, float3 dir, float tmax, int any_hit, EtkHit* hit) {
@@ -83,36 +97,42 @@ ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const flo
     hit->prim = -1;
     hit->b1 = hit->b2 = 0.0f;
     float3 inv_dir = etk_safe_inverse(dir);
-    int neg[3] = {dir.x < 0.0f, dir.y < 0.0f, dir.z < 0.0f};
     int stack[ETK_BVH_STACK];
     int sp = 0;
     int node = 0;
     for (;;) {
-        float4 lo = nodes[2 * node], hi = nodes[2 * node + 1];
-        if (etk_box_hit(lo, hi, org, inv_dir, hit->t)) {
-            int count = etk_node_count(hi);
-            if (count > 0) {
-                int first = etk_node_meta(lo);
-                for (int i = 0; i < count; ++i)
-                    if (etk_triangle_hit(tris, first + i, org, dir, hit) && any_hit)
-                        return 1;
-            } else {
-                // Visit the child on the ray's near side of the split first.
-                int second = etk_node_meta(lo);
-                int near_child = node + 1, far_child = second;
-                if (neg[etk_node_axis(hi)]) {
-                    near_child = second;
-                    far_child = node + 1;
-                }
-                if (sp < ETK_BVH_STACK)
-                    stack[sp++] = far_child;
-                node = near_child;
-                continue;
-            }
+        ETK_GLOBAL const float4* n = nodes + 4 * node;
+        float4 lo0 = n[0], hi0 = n[1], lo1 = n[2], hi1 = n[3];
+        float t0, t1;
+        int in0 = etk_box_hit(lo0, hi0, org, inv_dir, hit->t, &t0);
+        int in1 = etk_box_hit(lo1, hi1, org, inv_dir, hit->t, &t1);
+        if (in0 && etk_child_is_leaf(hi0)) {
+            if (etk_leaf_hit(tris, lo0, hi0, org, dir, any_hit, hit))
+                return 1;
+            in0 = 0;
         }
-        if (sp == 0)
-            break;
-        node = stack[--sp];
+        if (in1 && etk_child_is_leaf(hi1)) {
+            if (t1 <= hit->t * 1.0000005f && etk_leaf_hit(tris, lo1, hi1, org, dir, any_hit, hit))
+                return 1;
+            in1 = 0;
+        }
+        in0 = in0 && t0 <= hit->t * 1.0000005f; // slack: tnear and t round differently
+        in1 = in1 && t1 <= hit->t * 1.0000005f;
+        if (in0 && in1) {
+            int near_child = etk_child_meta(t0 <= t1 ? lo0 : lo1);
+            int far_child = etk_child_meta(t0 <= t1 ? lo1 : lo0);
+            if (sp < ETK_BVH_STACK)
+                stack[sp++] = far_child;
+            node = near_child;
+        } else if (in0) {
+            node = etk_child_meta(lo0);
+        } else if (in1) {
+            node = etk_child_meta(lo1);
+        } else {
+            if (sp == 0)
+                break;
+            node = stack[--sp];
+        }
     }
     return hit->prim >= 0;
 }

@@ -34,19 +34,27 @@ float as_float_bits(uint32_t u) {
     return f;
 }
 
+// The binary tree as built, before flattening into the kernels' two-box layout.
+struct TreeNode {
+    Box box;
+    int left = -1, right = -1; // children; -1 for a leaf
+    int first = 0, count = 0;  // leaf triangles
+};
+
 struct Builder {
     const std::vector<Box>& boxes;
     const std::vector<glm::vec3>& centroids;
     std::vector<int>& order;
-    std::vector<etk::float4>& nodes;
+    std::vector<TreeNode>& nodes;
     int max_leaf;
     int depth = 0;
     double cost = 0.0;
     float root_area = 1.0f;
 
-    void set_node(int n, const Box& b, uint32_t meta, uint32_t axis_count) {
-        nodes[2 * n] = etk::make_float4(b.lo.x, b.lo.y, b.lo.z, as_float_bits(meta));
-        nodes[2 * n + 1] = etk::make_float4(b.hi.x, b.hi.y, b.hi.z, as_float_bits(axis_count));
+    void set_leaf(int n, const Box& b, int first, int count) {
+        nodes[n].box = b;
+        nodes[n].first = first;
+        nodes[n].count = count;
     }
 
     void build(int node, int begin, int end, int level) {
@@ -59,7 +67,7 @@ struct Builder {
         const int count = end - begin;
         const float area = bounds.area();
         auto make_leaf = [&] {
-            set_node(node, bounds, static_cast<uint32_t>(begin), static_cast<uint32_t>(count));
+            set_leaf(node, bounds, begin, count);
             cost += area / root_area * count;
         };
         if (count <= 1 || level >= kMaxDepth) {
@@ -114,7 +122,7 @@ struct Builder {
                 auto mid = std::partition(order.begin() + begin, order.begin() + end,
                                           [&](int t) { return bin_of(t) <= split; });
                 int m = static_cast<int>(mid - order.begin());
-                emit_inner(node, bounds, axis, begin, m, end, level, area);
+                emit_inner(node, bounds, begin, m, end, level, area);
                 return;
             }
         }
@@ -126,19 +134,49 @@ struct Builder {
         std::nth_element(order.begin() + begin, order.begin() + (begin + end) / 2,
                          order.begin() + end,
                          [&](int a, int b) { return centroids[a][axis] < centroids[b][axis]; });
-        emit_inner(node, bounds, axis, begin, (begin + end) / 2, end, level, area);
+        emit_inner(node, bounds, begin, (begin + end) / 2, end, level, area);
     }
 
-    void emit_inner(int node, const Box& bounds, int axis, int begin, int mid, int end, int level,
+    void emit_inner(int node, const Box& bounds, int begin, int mid, int end, int level,
                     float area) {
         cost += area / root_area;
-        const int left = static_cast<int>(nodes.size() / 2);
-        nodes.resize(nodes.size() + 2);
+        const int left = static_cast<int>(nodes.size());
+        nodes.emplace_back();
         build(left, begin, mid, level + 1);
-        const int right = static_cast<int>(nodes.size() / 2);
-        nodes.resize(nodes.size() + 2);
+        const int right = static_cast<int>(nodes.size());
+        nodes.emplace_back();
         build(right, mid, end, level + 1);
-        set_node(node, bounds, static_cast<uint32_t>(right), static_cast<uint32_t>(axis) << 16);
+        nodes[node].box = bounds;
+        nodes[node].left = left;
+        nodes[node].right = right;
+    }
+};
+
+// Flattens the tree depth-first into inner nodes of four float4 (kernels/bvh.h): each holds both
+// children's boxes; a leaf child carries its triangles, an inner child its node index.
+struct Flattener {
+    const std::vector<TreeNode>& tree;
+    std::vector<etk::float4>& out;
+
+    void child(int slot, int c) {
+        const TreeNode& t = tree[c];
+        uint32_t meta, flags;
+        if (t.left < 0) {
+            meta = static_cast<uint32_t>(t.first);
+            flags = 0x80000000u | static_cast<uint32_t>(t.count);
+        } else {
+            meta = static_cast<uint32_t>(emit(c));
+            flags = 0u;
+        }
+        out[slot] = etk::make_float4(t.box.lo.x, t.box.lo.y, t.box.lo.z, as_float_bits(meta));
+        out[slot + 1] = etk::make_float4(t.box.hi.x, t.box.hi.y, t.box.hi.z, as_float_bits(flags));
+    }
+    int emit(int n) {
+        const int index = static_cast<int>(out.size() / 4);
+        out.resize(out.size() + 4);
+        child(4 * index, tree[n].left);
+        child(4 * index + 2, tree[n].right);
+        return index;
     }
 };
 
@@ -158,32 +196,39 @@ Bvh build_bvh(const TriangleSoup& soup, int max_leaf) {
     bvh.order.resize(n);
     for (int t = 0; t < n; ++t)
         bvh.order[t] = t;
-    bvh.nodes.resize(2);
-    if (n == 0) {
-        // One leaf holding triangle 0, which flatten_triangles makes all zero (det 0: never hit).
-        // Not an inner node: the slab test takes min/max per axis, so rays do "hit" an inverted
-        // box, and an inner root with child index 0 made traversal loop forever.
-        Box empty;
-        bvh.nodes[0] = etk::make_float4(empty.lo.x, empty.lo.y, empty.lo.z, 0.0f);
-        bvh.nodes[1] = etk::make_float4(empty.hi.x, empty.hi.y, empty.hi.z, as_float_bits(1u));
-        bvh.build_seconds = timer.seconds();
-        return bvh;
+    std::vector<TreeNode> tree(1);
+    if (n > 0) {
+        Builder b{boxes, centroids, bvh.order, tree, std::max(1, max_leaf)};
+        Box root;
+        for (const auto& bx : boxes)
+            root.grow(bx);
+        b.root_area = std::max(root.area(), 1e-30f);
+        b.build(0, 0, n, 0);
+        bvh.depth = b.depth;
+        bvh.sah_cost = b.cost;
     }
-    Builder b{boxes, centroids, bvh.order, bvh.nodes, std::max(1, max_leaf)};
-    Box root;
-    for (const auto& bx : boxes)
-        root.grow(bx);
-    b.root_area = std::max(root.area(), 1e-30f);
-    b.build(0, 0, n, 0);
-    bvh.depth = b.depth;
-    bvh.sah_cost = b.cost;
+    if (tree[0].left < 0) {
+        // A single leaf (or no triangle at all): a root whose children are that leaf and an
+        // empty one, so the kernels always start from an inner node.
+        TreeNode leaf = tree[0], empty;
+        empty.box.lo = empty.box.hi = glm::vec3(0.0f);
+        if (n == 0)
+            leaf = empty;
+        tree.assign(1, TreeNode{});
+        tree[0].left = 1;
+        tree[0].right = 2;
+        tree.push_back(leaf);
+        tree.push_back(empty);
+    }
+    Flattener f{tree, bvh.nodes};
+    f.emit(0);
     bvh.build_seconds = timer.seconds();
     return bvh;
 }
 
 std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup,
                                            const std::vector<int>& order) {
-    if (order.empty()) // the empty scene's leaf points at one degenerate triangle
+    if (order.empty()) // device buffers cannot be empty: one all-zero triangle, never hit
         return std::vector<etk::float4>(3, etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
     std::vector<etk::float4> out(3 * order.size());
     for (size_t i = 0; i < order.size(); ++i) {
