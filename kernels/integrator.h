@@ -98,13 +98,54 @@ ETK_FN float2 etk_dims(EtkParams p, int pixel, uint pair) {
     return etk_sample_pair(p.sampler, p.seed, (uint)pixel, p.sample_index, pair);
 }
 
-// Stage 1: a camera ray for slot i.
-ETK_FN void etk_generate(EtkPaths P, EtkQueues Q, EtkParams p, int i) {
-    int pixel = p.first_pixel + i;
+// The camera ray direction of sample p.sample_index of `pixel` (pixel jitter from pair 0).
+ETK_FN float3 etk_camera_dir(EtkParams p, int pixel) {
     float2 j = etk_dims(p, pixel, 0u);
     float px = (float)(pixel % p.width) + j.x, py = (float)(pixel / p.width) + j.y;
     float sx = 2.0f * px / (float)p.width - 1.0f, sy = 1.0f - 2.0f * py / (float)p.height;
-    float3 d = normalize(etk_p3(p.forward) + etk_p3(p.right) * sx + etk_p3(p.up) * sy);
+    return normalize(etk_p3(p.forward) + etk_p3(p.right) * sx + etk_p3(p.up) * sy);
+}
+
+// What a surface point needs to be lit from any direction: its shading frame (t, b, ns), the
+// geometric normal facing the viewer, the outgoing direction in the frame, the material and
+// the origin of rays leaving it.
+typedef struct {
+    float3 t, b, ns, ng, origin, wo;
+    EtkMaterial m;
+} EtkSurface;
+
+// The surface at the closest hit h of the ray (o, d). Surfaces are two-sided; the shading
+// normal is flipped to the geometric normal's side.
+ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, EtkHit h) {
+    EtkSurface s;
+    int prim = h.prim;
+    float3 pos = o + d * h.t;
+    float4 e1 = S.tris[3 * prim + 1], e2 = S.tris[3 * prim + 2];
+    float3 ng = normalize(cross(etk_xyz(e1), etk_xyz(e2)));
+    float b0 = 1.0f - h.b1 - h.b2;
+    float3 ns = etk_xyz(S.normals[3 * prim]) * b0 + etk_xyz(S.normals[3 * prim + 1]) * h.b1 +
+                etk_xyz(S.normals[3 * prim + 2]) * h.b2;
+    float nl = length(ns);
+    ns = nl > 0.0f && isfinite(nl) ? ns / nl : ng;
+    float3 wo_world = -d;
+    if (dot(ng, wo_world) < 0.0f)
+        ng = -ng;
+    if (dot(ns, ng) < 0.0f)
+        ns = -ns;
+    etk_make_frame(ns, &s.t, &s.b);
+    s.ns = ns;
+    s.ng = ng;
+    s.wo = etk_to_local(wo_world, s.t, s.b, ns);
+    s.m = etk_material_load(S.materials, S.tri_material[prim]);
+    float scale = fmax(fmax(fabs(pos.x), fabs(pos.y)), fmax(fabs(pos.z), 1.0f));
+    s.origin = pos + ng * (p.ray_epsilon * scale);
+    return s;
+}
+
+// Stage 1: a camera ray for slot i.
+ETK_FN void etk_generate(EtkPaths P, EtkQueues Q, EtkParams p, int i) {
+    int pixel = p.first_pixel + i;
+    float3 d = etk_camera_dir(p, pixel);
     P.ray_o[i] = etk_f4(etk_p3(p.eye), 0.0f);
     P.ray_d[i] = etk_f4(d, -1.0f);
     P.beta[i] = make_float4(1.0f, 1.0f, 1.0f, 0.0f);
@@ -153,29 +194,16 @@ ETK_FN void etk_shade(EtkPaths P, EtkQueues Q, EtkScene S, EtkParams p, int q) {
     int slot = Q.shade[q];
     float4 o4 = P.ray_o[slot], d4 = P.ray_d[slot], h4 = P.hit[slot];
     int depth = (int)o4.w;
-    int prim = (int)as_uint(h4.y);
     int pixel = P.pixel[slot];
-    float3 wo_world = -etk_xyz(d4);
-    float3 pos = etk_xyz(o4) + etk_xyz(d4) * h4.x;
-
-    float4 e1 = S.tris[3 * prim + 1], e2 = S.tris[3 * prim + 2];
-    float3 ng = normalize(cross(etk_xyz(e1), etk_xyz(e2)));
-    float b0 = 1.0f - h4.z - h4.w;
-    float3 ns = etk_xyz(S.normals[3 * prim]) * b0 + etk_xyz(S.normals[3 * prim + 1]) * h4.z +
-                etk_xyz(S.normals[3 * prim + 2]) * h4.w;
-    float nl = length(ns);
-    ns = nl > 0.0f && isfinite(nl) ? ns / nl : ng;
-    if (dot(ng, wo_world) < 0.0f) // two-sided surfaces
-        ng = -ng;
-    if (dot(ns, ng) < 0.0f)
-        ns = -ns;
-    float3 t, b;
-    etk_make_frame(ns, &t, &b);
-    float3 wo = etk_to_local(wo_world, t, b, ns);
-    EtkMaterial m = etk_material_load(S.materials, S.tri_material[prim]);
+    EtkHit h;
+    h.t = h4.x;
+    h.prim = (int)as_uint(h4.y);
+    h.b1 = h4.z;
+    h.b2 = h4.w;
+    EtkSurface s = etk_surface_at(S, p, etk_xyz(o4), etk_xyz(d4), h);
+    float3 t = s.t, b = s.b, ns = s.ns, ng = s.ng, wo = s.wo, origin = s.origin;
+    EtkMaterial m = s.m;
     float3 beta = etk_xyz(P.beta[slot]);
-    float scale = fmax(fmax(fabs(pos.x), fabs(pos.y)), fmax(fabs(pos.z), 1.0f));
-    float3 origin = pos + ng * (p.ray_epsilon * scale);
     uint pair = 1u + 3u * (uint)depth;
 
     // Light sample.

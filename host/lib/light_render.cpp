@@ -51,13 +51,13 @@ void LightSetRenderer::render_sample(uint32_t sample_index) {
             for (int x = 0; x < width; ++x) {
                 const int pixel = y * width + x;
                 const etk::float3 o = etk::etk_p3(p.eye);
-                const etk::float3 d = etk::etk_dl_camera_dir(p, pixel);
+                const etk::float3 d = etk::etk_camera_dir(p, pixel);
                 etk::EtkHit h;
                 etk::float3 L = etk::make_float3(0, 0, 0);
                 if (!etk::etk_bvh_traverse(S.nodes, S.tris, o, d, 3.0e38f, 0, &h)) {
                     L = etk::etk_env_radiance(S.env_texels, p.env, d);
                 } else {
-                    const etk::EtkSurface s = etk::etk_dl_surface(S, p, o, d, h);
+                    const etk::EtkSurface s = etk::etk_surface_at(S, p, o, d, h);
                     if (!strata_) {
                         for (size_t k = 0; k < dirs_.size(); ++k) {
                             const etk::float3 c = etk::etk_dl_unshadowed(s, dirs_[k], power_[k]);
