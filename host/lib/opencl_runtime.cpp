@@ -131,8 +131,12 @@ std::string ClRuntime::cache_dir() {
 
 cl::Program ClRuntime::build(const std::string& file, const std::string& options,
                              ProgramBuildInfo* info) {
+    return build_source(file, expand_kernel_source(file), options, info);
+}
+
+cl::Program ClRuntime::build_source(const std::string& file, const std::string& source,
+                                    const std::string& options, ProgramBuildInfo* info) {
     Timer timer;
-    const std::string source = expand_kernel_source(file);
     const std::string full_options = "-cl-std=CL1.2 " + options;
     const std::string key =
         cache_key(source + '\0' + full_options + '\0' + entry_.platform_name + '\0' +

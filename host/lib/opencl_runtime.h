@@ -37,6 +37,9 @@ class ClRuntime {
     // Build errors throw et::Error carrying the compiler log (which names kernels/FILE:LINE).
     cl::Program build(const std::string& file, const std::string& options = "",
                       ProgramBuildInfo* info = nullptr);
+    // The same for a source already expanded (`file` names it in messages and the cache).
+    cl::Program build_source(const std::string& file, const std::string& source,
+                             const std::string& options = "", ProgramBuildInfo* info = nullptr);
 
     // Where program binaries are cached: $ENVTRACE_CACHE_DIR, else $XDG_CACHE_HOME/envtrace,
     // else ~/.cache/envtrace.
