@@ -37,8 +37,11 @@ ETK_FN int etk_box_hit(float4 lo, float4 hi, float3 org, float3 inv_dir, float t
     float tx0 = (lo.x - org.x) * inv_dir.x, tx1 = (hi.x - org.x) * inv_dir.x;
     float ty0 = (lo.y - org.y) * inv_dir.y, ty1 = (hi.y - org.y) * inv_dir.y;
     float tz0 = (lo.z - org.z) * inv_dir.z, tz1 = (hi.z - org.z) * inv_dir.z;
-    float tn = fmax(fmax(fmin(tx0, tx1), fmin(ty0, ty1)), fmax(fmin(tz0, tz1), 0.0f));
-    float tf = fmin(fmin(fmax(tx0, tx1), fmax(ty0, ty1)), fmin(fmax(tz0, tz1), tmax));
+    // Finite operands only (etk_safe_inverse): plain min/max suffice.
+    float tn = ETK_MAXF(ETK_MAXF(ETK_MINF(tx0, tx1), ETK_MINF(ty0, ty1)),
+                        ETK_MAXF(ETK_MINF(tz0, tz1), 0.0f));
+    float tf = ETK_MINF(ETK_MINF(ETK_MAXF(tx0, tx1), ETK_MAXF(ty0, ty1)),
+                        ETK_MINF(ETK_MAXF(tz0, tz1), tmax));
     *tnear = tn;
     return tn <= tf * 1.00000024f;
 }

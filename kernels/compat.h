@@ -101,13 +101,14 @@ inline float3& operator*=(float3& a, float s) {
     return a = a * s;
 }
 
-// OpenCL's fmin/fmax semantics (a NaN argument yields the other) as selects: std::fminf is a
-// libm call the compiler does not inline, twelve of them per BVH box test.
+// fmin/fmax as single min/max instructions: std::fminf is a libm call GCC does not inline
+// (twelve per BVH box test), and a NaN test makes it branch. These match OpenCL's fmin/fmax
+// except when the second argument is NaN, so shared code puts a value that may be NaN first.
 inline float fmin(float a, float b) {
-    return (b < a || a != a) ? b : a;
+    return a < b ? a : b;
 }
 inline float fmax(float a, float b) {
-    return (b > a || a != a) ? b : a;
+    return a > b ? a : b;
 }
 inline float dot(float3 a, float3 b) {
     return a.x * b.x + a.y * b.y + a.z * b.z;
@@ -157,6 +158,16 @@ inline int isfinite(float x) {
 }
 } // namespace etk
 
+#endif
+
+// Plain min/max (one instruction; a NaN operand yields the second): for hot paths whose
+// operands cannot be NaN, where OpenCL's fmin/fmax pay for NaN handling.
+#ifdef __OPENCL_VERSION__
+#define ETK_MINF(a, b) ((a) < (b) ? (a) : (b))
+#define ETK_MAXF(a, b) ((a) > (b) ? (a) : (b))
+#else
+#define ETK_MINF(a, b) etk::fmin((a), (b))
+#define ETK_MAXF(a, b) etk::fmax((a), (b))
 #endif
 
 #define ETK_PI 3.14159265358979323846f
