@@ -46,26 +46,30 @@ ETK_FN int etk_box_hit(float4 lo, float4 hi, float3 org, float3 inv_dir, float t
     return tn <= tf * 1.00000024f;
 }
 
-// Moller-Trumbore; updates hit when closer than hit->t.
+// Moller-Trumbore; updates hit when closer than hit->t. Written on scalar components: OpenCL
+// compilers otherwise do cross/dot as 3-wide vector shuffles, slower than scalar code on CPUs,
+// and both back ends then round the very same operations.
 ETK_FN int etk_triangle_hit(ETK_GLOBAL const float4* tris, int prim, float3 org, float3 dir,
                             EtkHit* hit) {
-    float4 a = tris[3 * prim], b = tris[3 * prim + 1], c = tris[3 * prim + 2];
-    float3 v0 = make_float3(a.x, a.y, a.z), e1 = make_float3(b.x, b.y, b.z),
-           e2 = make_float3(c.x, c.y, c.z);
-    float3 p = cross(dir, e2);
-    float det = dot(e1, p);
+    float4 v0 = tris[3 * prim], e1 = tris[3 * prim + 1], e2 = tris[3 * prim + 2];
+    float px = dir.y * e2.z - dir.z * e2.y; // p = dir x e2
+    float py = dir.z * e2.x - dir.x * e2.z;
+    float pz = dir.x * e2.y - dir.y * e2.x;
+    float det = e1.x * px + e1.y * py + e1.z * pz;
     if (det == 0.0f || !isfinite(det))
         return 0;
     float inv = 1.0f / det;
-    float3 s = org - v0;
-    float b1 = dot(s, p) * inv;
+    float sx = org.x - v0.x, sy = org.y - v0.y, sz = org.z - v0.z;
+    float b1 = (sx * px + sy * py + sz * pz) * inv;
     if (b1 < 0.0f || b1 > 1.0f)
         return 0;
-    float3 q = cross(s, e1);
-    float b2 = dot(dir, q) * inv;
+    float qx = sy * e1.z - sz * e1.y; // q = s x e1
+    float qy = sz * e1.x - sx * e1.z;
+    float qz = sx * e1.y - sy * e1.x;
+    float b2 = (dir.x * qx + dir.y * qy + dir.z * qz) * inv;
     if (b2 < 0.0f || b1 + b2 > 1.0f)
         return 0;
-    float t = dot(e2, q) * inv;
+    float t = (e2.x * qx + e2.y * qy + e2.z * qz) * inv;
     if (!(t > 0.0f) || !(t < hit->t))
         return 0;
     hit->t = t;
