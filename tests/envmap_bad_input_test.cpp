@@ -2,6 +2,7 @@
 // naming it (or loads with sanitised texels and a warning), in the library and through the CLI.
 #include "env_sampling.h"
 #include "kernels/sampler.h"
+#include "cli_run.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -169,23 +170,9 @@ TEST(EnvmapBadInput, EveryEdgeCaseImage) {
 
 // Runs build/envtrace with `args`; returns its wait status, stderr in `err`.
 int run_cli(const std::vector<std::string>& args, std::string& err) {
-    const std::string err_file = ett::scratch_dir("cli-err") + "/stderr.txt";
-    const pid_t pid = fork();
-    if (pid == 0) {
-        std::vector<char*> argv{const_cast<char*>(ENVTRACE_EXE)};
-        for (const auto& a : args)
-            argv.push_back(const_cast<char*>(a.c_str()));
-        argv.push_back(nullptr);
-        if (!freopen(err_file.c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout))
-            _exit(126);
-        execv(ENVTRACE_EXE, argv.data());
-        _exit(127);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
-    std::ifstream in(err_file);
-    err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    return status;
+    const ett::CliRun r = ett::run_envtrace(args, ett::scratch_dir("cli-err"));
+    err = r.err;
+    return r.status;
 }
 
 TEST(EnvmapBadInput, CliRejectsBadMapsWithOneLine) {

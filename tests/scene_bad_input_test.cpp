@@ -3,6 +3,7 @@
 // status 1 — never a signal, a hang (60 s limit), a NaN pixel, or an output file (or temporary)
 // left behind by a failed run.
 #include "image_io.h"
+#include "cli_run.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -21,45 +22,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int status = 0;
-    bool timed_out = false;
-    std::string err;
-    bool exited() const { return !timed_out && WIFEXITED(status); }
-    int code() const { return WEXITSTATUS(status); }
-};
+using ett::CliRun;
 
 CliRun run_cli(const std::vector<std::string>& args, const std::string& dir) {
-    const std::string err_file = dir + "/stderr.txt";
-    const pid_t pid = fork();
-    if (pid == 0) {
-        std::vector<char*> argv{const_cast<char*>(ENVTRACE_EXE)};
-        for (const auto& a : args)
-            argv.push_back(const_cast<char*>(a.c_str()));
-        argv.push_back(nullptr);
-        if (!freopen(err_file.c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout))
-            _exit(126);
-        execv(ENVTRACE_EXE, argv.data());
-        _exit(127);
-    }
-    CliRun r;
-    const auto start = std::chrono::steady_clock::now();
-    for (;;) {
-        const pid_t w = waitpid(pid, &r.status, WNOHANG);
-        if (w == pid)
-            break;
-        if (std::chrono::steady_clock::now() - start > std::chrono::seconds(60)) {
-            kill(pid, SIGKILL);
-            waitpid(pid, &r.status, 0);
-            r.timed_out = true;
-            break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    std::ifstream in(err_file);
-    r.err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    fs::remove(err_file);
-    return r;
+    return ett::run_envtrace(args, dir);
 }
 
 // Image files (final or temporary) in dir.

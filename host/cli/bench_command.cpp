@@ -228,9 +228,7 @@ std::vector<etk::uint> camera_hit_pixels(const Prepared& p) {
     etk::EtkQueues Q{queue_a.data(), queue_b.data(), escaped.data(),
                      shade.data(),   shadow.data(),  counters};
     const SceneArrays& a = p.arrays;
-    const etk::EtkScene S{a.bvh.nodes.data(),     a.tris.data(),      a.normals.data(),
-                          a.tri_material.data(),  a.materials.data(), a.env->dist.table.data(),
-                          a.env->image.rgb.data()};
+    const etk::EtkScene S = scene_view(a);
     etk::EtkParams prm = p.params;
     std::vector<etk::uint> hits;
     for (int first = 0; first < pixels; first += tile) {

@@ -37,9 +37,7 @@ void LightSetRenderer::render_sample(uint32_t sample_index) {
     etk::EtkParams p = params_;
     p.sample_index = sample_index;
     const SceneArrays& a = arrays_;
-    const etk::EtkScene S{a.bvh.nodes.data(),     a.tris.data(),      a.normals.data(),
-                          a.tri_material.data(),  a.materials.data(), a.env->dist.table.data(),
-                          a.env->image.rgb.data()};
+    const etk::EtkScene S = scene_view(a);
     const int width = p.width, height = p.height;
     const int n_strata = strata_ ? static_cast<int>(power_.size()) : 0;
     const int stratum = strata_ ? static_cast<int>(sample_index % uint32_t(n_strata)) : -1;

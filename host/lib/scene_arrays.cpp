@@ -67,6 +67,12 @@ SceneArrays build_scene_arrays(const Scene& scene) {
     return a;
 }
 
+etk::EtkScene scene_view(const SceneArrays& a) {
+    return etk::EtkScene{a.bvh.nodes.data(),     a.tris.data(),      a.normals.data(),
+                         a.tri_material.data(),  a.materials.data(), a.env->dist.table.data(),
+                         a.env->image.rgb.data()};
+}
+
 etk::EtkParams make_params(const Scene& scene, const SceneArrays& arrays) {
     etk::EtkParams p{};
     p.env = scene.env.desc();

@@ -20,6 +20,9 @@ struct SceneArrays {
 
 SceneArrays build_scene_arrays(const Scene& scene);
 
+// The arrays as the integrator stages take them on the host (the native back end).
+etk::EtkScene scene_view(const SceneArrays& arrays);
+
 int parse_strategy(const std::string& s);
 int parse_heuristic(const std::string& s);
 int parse_sampler(const std::string& s);

@@ -83,9 +83,7 @@ void WavefrontCPU::render_sample(uint32_t sample_index) {
     etk::EtkParams p = params_;
     p.sample_index = sample_index;
     const SceneArrays& a = arrays_;
-    const etk::EtkScene S{a.bvh.nodes.data(),     a.tris.data(),      a.normals.data(),
-                          a.tri_material.data(),  a.materials.data(), a.env->dist.table.data(),
-                          a.env->image.rgb.data()};
+    const etk::EtkScene S = scene_view(a);
     std::atomic<int> next{0};
     std::vector<Lane> lanes;
     lanes.reserve(threads_);
