@@ -10,6 +10,7 @@
 // Finally, the cost of drawing the environment-map samples of one frame, timed on its own (see
 // tools/bench/README.md, "Environment-sampling share").
 #include "commands.h"
+#include "parallel.h"
 #include "error.h"
 #include "opencl_runtime.h"
 #include "renderer.h"
@@ -290,12 +291,7 @@ double native_env_sampling(const Prepared& p, const std::vector<etk::uint>& hits
         sums[t] = acc;
     };
     Timer timer;
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t)
-        pool.emplace_back(work, t);
-    work(0);
-    for (auto& th : pool)
-        th.join();
+    run_on_threads(threads, work);
     const double s = timer.seconds();
     for (double v : sums)
         *sink += v;

@@ -1,4 +1,5 @@
 #include "env_distribution.h"
+#include "parallel.h"
 
 #include "kernels/piecewise_constant.h"
 
@@ -260,21 +261,11 @@ EnvDistribution build_env_distribution(const RgbImage& image, const Distribution
     std::vector<float> row_mass(p.dh);
     p.row_mass = row_mass.data();
 
-    int threads = options.threads > 0 ? options.threads
-                                      : static_cast<int>(std::thread::hardware_concurrency());
-    threads = std::clamp(threads, 1, std::max(1, p.dh / 16));
-    if (threads == 1) {
-        build_rows(p, 0, p.dh);
-    } else {
-        std::vector<std::thread> pool;
-        for (int t = 1; t < threads; ++t)
-            pool.emplace_back(build_rows, std::cref(p),
-                              static_cast<int>(int64_t(p.dh) * t / threads),
-                              static_cast<int>(int64_t(p.dh) * (t + 1) / threads));
-        build_rows(p, 0, p.dh / threads);
-        for (auto& th : pool)
-            th.join();
-    }
+    const int threads = std::clamp(thread_count(options.threads), 1, std::max(1, p.dh / 16));
+    run_on_threads(threads, [&](int t) {
+        build_rows(p, static_cast<int>(int64_t(p.dh) * t / threads),
+                   static_cast<int>(int64_t(p.dh) * (t + 1) / threads));
+    });
 
     std::vector<double> scratch(static_cast<size_t>(p.dh) + 1);
     d.total = build_1d(row_mass.data(), p.dh, d.table.data(),

@@ -1,4 +1,5 @@
 #include "env_sampling.h"
+#include "parallel.h"
 
 #include "error.h"
 #include "kernels/sampler.h"
@@ -103,20 +104,14 @@ std::vector<EnvSampleRecord> sample_env_host_sequence(const EnvMap& env, int sam
                                                       int threads) {
     const etk::EtkEnvMap desc = env.desc();
     std::vector<EnvSampleRecord> out(n);
-    if (threads <= 0)
-        threads = std::max(1u, std::thread::hardware_concurrency());
+    threads = thread_count(threads);
     auto work = [&](int t) {
         const int begin = static_cast<int>(static_cast<int64_t>(n) * t / threads);
         const int end = static_cast<int>(static_cast<int64_t>(n) * (t + 1) / threads);
         for (int i = begin; i < end; ++i)
             out[i] = record(env, desc, etk::etk_sample_pair(sampler, seed, stream, first + i, 0));
     };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t)
-        pool.emplace_back(work, t);
-    work(0);
-    for (auto& th : pool)
-        th.join();
+    run_on_threads(threads, work);
     return out;
 }
 

@@ -1,4 +1,5 @@
 #include "light_render.h"
+#include "parallel.h"
 
 #include "kernels/directional_lights.h"
 #include "timer.h"
@@ -94,15 +95,7 @@ void LightSetRenderer::render_sample(uint32_t sample_index) {
         }
         shadow_rays += shadows;
     };
-    int threads = threads_ > 0
-                      ? threads_
-                      : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t)
-        pool.emplace_back(work);
-    work();
-    for (auto& t : pool)
-        t.join();
+    run_on_threads(thread_count(threads_), [&](int) { work(); });
     ++samples_;
     stats_.samples_per_pixel = samples_;
     stats_.camera_rays += uint64_t(width) * height;

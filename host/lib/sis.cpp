@@ -1,4 +1,5 @@
 #include "sis.h"
+#include "parallel.h"
 
 #include "error.h"
 #include "timer.h"
@@ -38,20 +39,12 @@ glm::dvec3 map_power(const EnvMap& env) {
 
 namespace {
 template <typename F> void parallel_rows(int rows, int threads, F&& f) {
-    if (threads <= 0)
-        threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    threads = std::min(threads, rows);
+    threads = std::min(thread_count(threads), rows);
     std::atomic<int> next{0};
-    auto work = [&] {
+    run_on_threads(threads, [&](int) {
         for (int r; (r = next.fetch_add(1)) < rows;)
             f(r);
-    };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t)
-        pool.emplace_back(work);
-    work();
-    for (auto& t : pool)
-        t.join();
+    });
 }
 } // namespace
 

@@ -1,4 +1,5 @@
 #include "wavefront_cpu.h"
+#include "parallel.h"
 
 #include "timer.h"
 
@@ -73,7 +74,7 @@ void render_tile(Lane& lane, const etk::EtkScene& S, etk::EtkParams p, int first
 WavefrontCPU::WavefrontCPU(const SceneArrays& arrays, const etk::EtkParams& params, int threads,
                            int tile)
     : arrays_(arrays), params_(params), pixels_(params.width * params.height) {
-    threads_ = threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
+    threads_ = thread_count(threads);
     tile_ = tile > 0 ? tile : 1024;
     film_.assign(pixels_, etk::make_float4(0, 0, 0, 0));
 }
@@ -97,12 +98,7 @@ void WavefrontCPU::render_sample(uint32_t sample_index) {
             render_tile(lanes[t], S, p, first, std::min(tile_, pixels_ - first), film_.data());
         }
     };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads_; ++t)
-        pool.emplace_back(work, t);
-    work(0);
-    for (auto& th : pool)
-        th.join();
+    run_on_threads(threads_, work);
     if (stats_.stage_seconds.empty())
         for (const char* n : kStageNames)
             stats_.stage_seconds.emplace_back(n, 0.0);

@@ -10,6 +10,7 @@
 //            sampling, each work-item / loop iteration summing `per_item` consecutive samples'
 //            radiance and pdf, so the output is small and both sides measure sampling.
 #include "bench_maps.h"
+#include "parallel.h"
 #include "env_sampling.h"
 #include "envmap.h"
 #include "kernels/sampler.h"
@@ -123,12 +124,7 @@ void native_reduce(const Fixture& f, uint32_t first, int n, int per_item, int th
             out[item] = acc;
         }
     };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t)
-        pool.emplace_back(work, t);
-    work(0);
-    for (auto& th : pool)
-        th.join();
+    et::run_on_threads(threads, work);
 }
 
 double total_radiance(const std::vector<Sum4>& v) {
