@@ -1,5 +1,7 @@
 #include "test_data.h"
 
+#include "data_path.h"
+
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -11,14 +13,7 @@ namespace fs = std::filesystem;
 namespace ett {
 
 std::string data_dir() {
-    std::vector<std::string> candidates;
-    if (const char* env = std::getenv("ENVTRACE_DATA"); env && *env) {
-        std::stringstream ss(env);
-        std::string d;
-        while (std::getline(ss, d, ':'))
-            if (!d.empty())
-                candidates.push_back(d);
-    }
+    std::vector<std::string> candidates = et::data_search_path();
     candidates.push_back(ENVTRACE_TEST_DATA_DIR);
     std::error_code ec;
     for (const auto& d : candidates)

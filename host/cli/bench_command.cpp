@@ -10,6 +10,7 @@
 // Finally, the cost of drawing the environment-map samples of one frame, timed on its own (see
 // tools/bench/README.md, "Environment-sampling share").
 #include "commands.h"
+#include "json_file.h"
 #include "parallel.h"
 #include "error.h"
 #include "opencl_runtime.h"
@@ -642,14 +643,7 @@ void run(const BenchArgs& a, const Globals& g) {
             {"insitu_uniform_saving_native", insitu ? to_json(insitu_cpu) : json()},
             {"insitu_uniform_saving_opencl", insitu ? to_json(insitu_cl) : json()},
             {"checksum", sink}};
-        const std::string tmp = a.json_file + ".tmp";
-        {
-            std::ofstream f(tmp);
-            if (!f)
-                throw Error(a.json_file + ": cannot write");
-            f << j.dump(2) << "\n";
-        }
-        fs::rename(tmp, a.json_file);
+        write_json_file(a.json_file, j, 2);
         std::printf("wrote %s\n", a.json_file.c_str());
     }
 }

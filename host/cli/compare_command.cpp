@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "json_file.h"
 #include "error.h"
 #include "image_metrics.h"
 
@@ -39,14 +40,7 @@ void run(const CompareArgs& args) {
                          {"l2", e.l2},
                          {"mean", e.mean_a},
                          {"reference_mean", e.mean_b}};
-        const std::string tmp = args.json + ".tmp";
-        {
-            std::ofstream f(tmp);
-            if (!f)
-                throw Error(args.json + ": cannot write");
-            f << j.dump(2) << "\n";
-        }
-        std::filesystem::rename(tmp, args.json);
+        write_json_file(args.json, j, 2);
     }
 }
 

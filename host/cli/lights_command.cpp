@@ -42,17 +42,10 @@ void run(const LightsArgs& a) {
                 set.selection_seconds, set.total_seconds());
     std::printf("wrote %s\n", a.output.c_str());
     if (!a.plot.empty()) {
-        std::vector<float> display = tone_map(env.image);
-        const int radius = std::max(1, env.image.width / 256);
-        const float colour[3] = {1.0f, 0.15f, 0.1f};
-        for (const auto& l : set.lights) {
-            etk::float3 d = etk::etk_world_to_env(
-                env.desc(), etk::make_float3(l.direction.x, l.direction.y, l.direction.z));
-            etk::float2 uv = etk::etk_dir_to_latlong(d);
-            draw_dot(display, env.image.width, env.image.height, uv.x, uv.y, radius, colour);
-        }
-        write_image(a.plot, env.image.width, env.image.height, 3, display,
-                    {{"Software", "envtrace " ENVTRACE_VERSION}});
+        std::vector<std::array<float, 3>> dirs;
+        for (const auto& l : set.lights)
+            dirs.push_back({float(l.direction.x), float(l.direction.y), float(l.direction.z)});
+        write_direction_plot(a.plot, env, dirs);
         std::printf("wrote %s\n", a.plot.c_str());
     }
 }

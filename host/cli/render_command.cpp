@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "json_file.h"
 #include "error.h"
 #include "image_io.h"
 #include "preview.h"
@@ -205,6 +206,10 @@ void run(const RenderArgs& a, const Globals& g) {
         done, render_s, mrays, (unsigned long long)s.camera_rays,
         (unsigned long long)s.continuation_rays, (unsigned long long)s.shadow_rays,
         double(done) * scene.width * scene.height / render_s, render_s / std::max(1, done));
+    if (s.nonfinite_samples > 0)
+        warn(a.scene + ": " + std::to_string(s.nonfinite_samples) +
+             " samples were not finite and counted as zero (a renderer bug: please "
+             "report the scene)");
     std::printf("%s time per stage:", a.backend == "cpu" ? "thread" : "device");
     for (const auto& [name, t] : s.stage_seconds)
         std::printf(" %s %.3fs", name.c_str(), t);
@@ -229,6 +234,7 @@ void run(const RenderArgs& a, const Globals& g) {
         j["sampler"] = st.sampler;
         j["render_seconds"] = render_s;
         j["seconds_per_spp"] = render_s / std::max(1, done);
+        j["nonfinite_samples"] = s.nonfinite_samples;
         j["rays"] = {{"camera", s.camera_rays},
                      {"continuation", s.continuation_rays},
                      {"shadow", s.shadow_rays}};
@@ -243,14 +249,7 @@ void run(const RenderArgs& a, const Globals& g) {
         j["environment_build_seconds"] = scene.env.build_seconds;
         for (const auto& [name, t] : s.stage_seconds)
             j["stage_seconds"][name] = t;
-        std::string tmp = a.stats_file + ".tmp";
-        {
-            std::ofstream f(tmp);
-            if (!f)
-                throw Error(a.stats_file + ": cannot write");
-            f << j.dump(2) << "\n";
-        }
-        fs::rename(tmp, a.stats_file);
+        write_json_file(a.stats_file, j, 2);
     }
 }
 

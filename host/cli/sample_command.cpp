@@ -3,6 +3,7 @@
 #include "error.h"
 #include "kernels/sampler.h"
 #include "preview.h"
+#include "scene_arrays.h"
 #include "timer.h"
 
 #include <cstdio>
@@ -17,14 +18,6 @@ struct SampleArgs {
     unsigned seed = 1;
     float blur = 0.5f;
 };
-
-int parse_sampler(const std::string& name) {
-    if (name == "sobol")
-        return ETK_SAMPLER_SOBOL;
-    if (name == "random")
-        return ETK_SAMPLER_RANDOM;
-    throw Error("unknown sampler '" + name + "' (use sobol or random)");
-}
 
 void run(const SampleArgs& a, const Globals& g) {
     DistributionOptions opt;
@@ -49,19 +42,11 @@ void run(const SampleArgs& a, const Globals& g) {
     if (!env.dist.has_light())
         std::printf("the map emits no light: no samples to draw\n");
 
-    std::vector<float> display = tone_map(env.image);
-    const int radius = std::max(1, env.image.width / 256);
-    const float colour[3] = {1.0f, 0.15f, 0.1f};
-    for (const auto& s : samples) {
-        if (!(s.pdf > 0.0f))
-            continue;
-        etk::float3 d =
-            etk::etk_world_to_env(env.desc(), etk::make_float3(s.dir[0], s.dir[1], s.dir[2]));
-        etk::float2 uv = etk::etk_dir_to_latlong(d);
-        draw_dot(display, env.image.width, env.image.height, uv.x, uv.y, radius, colour);
-    }
-    write_image(a.output, env.image.width, env.image.height, 3, display,
-                {{"Software", "envtrace " ENVTRACE_VERSION}});
+    std::vector<std::array<float, 3>> dirs;
+    for (const auto& s : samples)
+        if (s.pdf > 0.0f)
+            dirs.push_back({s.dir[0], s.dir[1], s.dir[2]});
+    write_direction_plot(a.output, env, dirs);
     std::printf("wrote %s\n", a.output.c_str());
 }
 

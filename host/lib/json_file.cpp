@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 
 namespace et {
 
@@ -41,6 +42,26 @@ nlohmann::json read_json_file(const std::string& path) {
             what = what.substr(colon + 2);
         throw Error(path + ":" + std::to_string(line) + ":" + std::to_string(col) +
                     ": malformed JSON: " + what);
+    }
+}
+
+void write_json_file(const std::string& path, const nlohmann::json& j, int indent) {
+    namespace fs = std::filesystem;
+    const std::string tmp = path + ".tmp" + std::to_string(::getpid());
+    std::error_code ec;
+    {
+        std::ofstream f(tmp);
+        if (f)
+            f << j.dump(indent) << "\n";
+        if (!f) {
+            fs::remove(tmp, ec);
+            throw Error(path + ": cannot write");
+        }
+    }
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw Error(path + ": cannot write: " + ec.message());
     }
 }
 

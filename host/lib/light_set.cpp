@@ -111,16 +111,7 @@ void write_lights(const std::string& path, const LightSet& set) {
            {"selection_seconds", set.selection_seconds},
            {"total_seconds", set.total_seconds()},
            {"lights", lights}};
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream f(tmp);
-        if (!f)
-            throw Error(path + ": cannot write");
-        f << j.dump(1) << "\n";
-        if (!f)
-            throw Error(path + ": write failed");
-    }
-    std::filesystem::rename(tmp, path);
+    write_json_file(path, j, 1);
 }
 
 LightSet read_lights(const std::string& path) {

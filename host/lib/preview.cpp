@@ -1,6 +1,7 @@
 #include "preview.h"
 
 #include "env_distribution.h"
+#include "envmap.h"
 
 #include <algorithm>
 #include <cmath>
@@ -44,6 +45,21 @@ void draw_dot(std::vector<float>& display, int width, int height, float u, float
             for (int c = 0; c < 3; ++c)
                 px[c] = inside ? colour[c] : 0.0f;
         }
+}
+
+void write_direction_plot(const std::string& path, const EnvMap& env,
+                          const std::vector<std::array<float, 3>>& directions) {
+    std::vector<float> display = tone_map(env.image);
+    const int radius = std::max(1, env.image.width / 256);
+    const float colour[3] = {1.0f, 0.15f, 0.1f};
+    const etk::EtkEnvMap desc = env.desc();
+    for (const auto& d : directions) {
+        const etk::float2 uv = etk::etk_dir_to_latlong(
+            etk::etk_world_to_env(desc, etk::make_float3(d[0], d[1], d[2])));
+        draw_dot(display, env.image.width, env.image.height, uv.x, uv.y, radius, colour);
+    }
+    write_image(path, env.image.width, env.image.height, 3, display,
+                {{"Software", "envtrace " ENVTRACE_VERSION}});
 }
 
 } // namespace et

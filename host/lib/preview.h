@@ -2,6 +2,8 @@
 #pragma once
 #include "image_io.h"
 
+#include <array>
+#include <string>
 #include <vector>
 
 namespace et {
@@ -14,5 +16,11 @@ std::vector<float> tone_map(const RgbImage& img, float exposure = 0.0f);
 // display image, wrapping horizontally.
 void draw_dot(std::vector<float>& display, int width, int height, float u, float v, int radius,
               const float colour[3]);
+
+// The map tone-mapped with a dot at each world-space direction (turned into map space by the
+// map's rotation), written to `path`: the paper's Figure 6 for samples, Figure 8 for lights.
+struct EnvMap;
+void write_direction_plot(const std::string& path, const EnvMap& env,
+                          const std::vector<std::array<float, 3>>& directions);
 
 } // namespace et
