@@ -26,7 +26,8 @@
 #define ETK_Q_ESCAPED 1
 #define ETK_Q_SHADE 2
 #define ETK_Q_SHADOW 3
-#define ETK_Q_COUNT 4
+#define ETK_Q_NONFINITE 4 // samples dropped by etk_accumulate: should stay 0
+#define ETK_Q_COUNT 5
 
 ETK_BEGIN
 
@@ -275,12 +276,16 @@ ETK_FN void etk_shadow(EtkPaths P, EtkQueues Q, EtkScene S, int q) {
     }
 }
 
-// Stage 6: the pass's path radiance into the film (sum over passes).
-ETK_FN void etk_accumulate(EtkPaths P, ETK_GLOBAL float4* film, int i) {
+// Stage 6: the pass's path radiance into the film (sum over passes). A non-finite sample counts
+// as zero rather than poisoning the pixel, and is counted: the host reports any, and the tests
+// require none.
+ETK_FN void etk_accumulate(EtkPaths P, EtkQueues Q, ETK_GLOBAL float4* film, int i) {
     int pixel = P.pixel[i];
     float3 L = etk_xyz(P.radiance[i]);
-    if (!(isfinite(L.x) && isfinite(L.y) && isfinite(L.z)))
-        L = make_float3(0.0f, 0.0f, 0.0f); // never let one bad sample poison a pixel
+    if (!(isfinite(L.x) && isfinite(L.y) && isfinite(L.z))) {
+        ETK_ATOMIC_INC(Q.counters + ETK_Q_NONFINITE);
+        L = make_float3(0.0f, 0.0f, 0.0f);
+    }
     film[pixel] = etk_f4(etk_xyz(film[pixel]) + L, film[pixel].w + 1.0f);
 }
 

@@ -20,35 +20,36 @@
     EtkQueues Q = {ray_in, ray_out, escaped, shade, shadow, counters};                             \
     int i = get_global_id(0);                                                                      \
     if (i >= n)                                                                                    \
-        return;
+        return
 
 __kernel void generate(ETK_KERNEL_ARGS) {
-    ETK_UNPACK(void) S;
+    ETK_UNPACK;
+    (void)S;
     etk_generate(P, Q, params, i);
 }
 
 __kernel void intersect(ETK_KERNEL_ARGS) {
-    ETK_UNPACK
+    ETK_UNPACK;
     etk_intersect(P, Q, S, params, i);
 }
 
 __kernel void escaped_rays(ETK_KERNEL_ARGS) {
-    ETK_UNPACK
+    ETK_UNPACK;
     etk_escaped(P, Q, S, params, i);
 }
 
 __kernel void shade_hits(ETK_KERNEL_ARGS) {
-    ETK_UNPACK
+    ETK_UNPACK;
     etk_shade(P, Q, S, params, i);
 }
 
 __kernel void trace_shadows(ETK_KERNEL_ARGS) {
-    ETK_UNPACK
+    ETK_UNPACK;
     etk_shadow(P, Q, S, i);
 }
 
 __kernel void accumulate(ETK_KERNEL_ARGS) {
-    ETK_UNPACK(void) S;
-    (void)Q;
-    etk_accumulate(P, film, i);
+    ETK_UNPACK;
+    (void)S;
+    etk_accumulate(P, Q, film, i);
 }

@@ -104,6 +104,8 @@ inline RenderResult render(const et::Scene& scene, const std::string& backend, i
         prev.swap(cur);
     }
     out.mean = r->image();
+    // The film drops non-finite samples instead of writing NaN; none may occur.
+    EXPECT_EQ(r->stats().nonfinite_samples, 0u) << backend << ": non-finite samples dropped";
     out.var.assign(n, 0.0);
     if (variance && spp > 1)
         for (size_t i = 0; i < n; ++i)

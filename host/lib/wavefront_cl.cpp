@@ -129,6 +129,9 @@ void WavefrontCL::render_sample(uint32_t sample_index) {
                 swap = !swap;
             }
             launch(ACCUMULATE, n);
+            uint32_t c[ETK_Q_COUNT]; // the last bounce zeroed them: this is accumulate's count
+            read_counters(c);
+            stats_.nonfinite_samples += c[ETK_Q_NONFINITE];
         }
         queue_.finish();
     } catch (const cl::Error& e) {

@@ -20,7 +20,7 @@ struct Lane {
     std::vector<int> pixel, queue_a, queue_b, escaped, shade, shadow;
     uint32_t counters[ETK_Q_COUNT];
     double stage_seconds[STAGES] = {};
-    uint64_t camera = 0, continuation = 0, shadow_rays = 0;
+    uint64_t camera = 0, continuation = 0, shadow_rays = 0, nonfinite = 0;
 
     explicit Lane(int n)
         : ray_o(n), ray_d(n), beta(n), radiance(n), hit(n), shadow_o(n), shadow_d(n), shadow_L(n),
@@ -66,7 +66,8 @@ void render_tile(Lane& lane, const etk::EtkScene& S, etk::EtkParams p, int first
         rays = static_cast<int>(lane.counters[ETK_Q_RAY_OUT]);
         swap = !swap;
     }
-    run_stage(lane, ACCUMULATE, n, [&](int i) { etk::etk_accumulate(P, film, i); });
+    run_stage(lane, ACCUMULATE, n, [&](int i) { etk::etk_accumulate(P, Q, film, i); });
+    lane.nonfinite += lane.counters[ETK_Q_NONFINITE];
 }
 
 } // namespace
@@ -106,6 +107,7 @@ void WavefrontCPU::render_sample(uint32_t sample_index) {
         stats_.camera_rays += l.camera;
         stats_.continuation_rays += l.continuation;
         stats_.shadow_rays += l.shadow_rays;
+        stats_.nonfinite_samples += l.nonfinite;
         for (int s = 0; s < STAGES; ++s)
             stats_.stage_seconds[s].second += l.stage_seconds[s];
     }
