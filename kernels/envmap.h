@@ -51,17 +51,27 @@ ETK_FN float3 etk_env_lookup_uv(ETK_GLOBAL const float* texels, int w, int h, fl
 }
 
 // Radiance arriving from world direction d.
-ETK_FN float3 etk_env_radiance(ETK_GLOBAL const float* texels, EtkEnvMap env, float3 d) {
-    float2 uv = etk_dir_to_latlong(etk_world_to_env(env, d));
-    return etk_env_lookup_uv(texels, env.tex_w, env.tex_h, uv) * env.scale;
+// Map coordinates of world direction d. Callers needing both radiance and density of one
+// direction compute this once and use the _uv forms (the inverse mapping costs two atan2).
+ETK_FN float2 etk_env_uv(EtkEnvMap env, float3 d) {
+    return etk_dir_to_latlong(etk_world_to_env(env, d));
 }
 
-// Solid-angle density of sampling world direction d.
-ETK_FN float etk_env_pdf(ETK_GLOBAL const float* dist, EtkEnvMap env, float3 d) {
+ETK_FN float3 etk_env_radiance_uv(ETK_GLOBAL const float* texels, EtkEnvMap env, float2 uv) {
+    return etk_env_lookup_uv(texels, env.tex_w, env.tex_h, uv) * env.scale;
+}
+ETK_FN float3 etk_env_radiance(ETK_GLOBAL const float* texels, EtkEnvMap env, float3 d) {
+    return etk_env_radiance_uv(texels, env, etk_env_uv(env, d));
+}
+
+// Solid-angle density of sampling world direction d (at map coordinates uv).
+ETK_FN float etk_env_pdf_uv(ETK_GLOBAL const float* dist, EtkEnvMap env, float2 uv) {
     if (!env.has_light)
         return 0.0f;
-    float2 uv = etk_dir_to_latlong(etk_world_to_env(env, d));
     return etk_latlong_pdf_to_solid_angle(etk_pdf_2d(dist, env.dist_w, env.dist_h, uv), uv.y);
+}
+ETK_FN float etk_env_pdf(ETK_GLOBAL const float* dist, EtkEnvMap env, float3 d) {
+    return etk_env_pdf_uv(dist, env, etk_env_uv(env, d));
 }
 
 typedef struct {

@@ -5,7 +5,7 @@
 
 static void store_sample(__global const float* texels, EtkEnvMap env, EtkEnvSample s, int i,
                          __global float* out, __global int* cells) {
-    float3 L = etk_env_radiance(texels, env, s.dir);
+    float3 L = etk_env_radiance_uv(texels, env, s.uv);
     __global float* o = out + 8 * i;
     o[0] = s.dir.x;
     o[1] = s.dir.y;

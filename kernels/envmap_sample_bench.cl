@@ -16,7 +16,7 @@ __kernel void envmap_sample_reduce(__global const float* dist, __global const fl
     for (int i = begin; i < end; ++i) {
         float2 xi = etk_sample_pair(sampler, seed, stream, first + (uint)i, 0u);
         EtkEnvSample s = etk_env_sample(dist, env, xi);
-        float3 L = etk_env_radiance(texels, env, s.dir);
+        float3 L = etk_env_radiance_uv(texels, env, s.uv);
         acc += (float4)(L.x, L.y, L.z, s.pdf);
     }
     if (begin < n)

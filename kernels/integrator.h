@@ -174,16 +174,16 @@ ETK_FN void etk_intersect(EtkPaths P, EtkQueues Q, EtkScene S, EtkParams p, int 
 ETK_FN void etk_escaped(EtkPaths P, EtkQueues Q, EtkScene S, EtkParams p, int q) {
     int slot = Q.escaped[q];
     float4 d = P.ray_d[slot];
-    float3 dir = etk_xyz(d);
+    float2 uv = etk_env_uv(p.env, etk_xyz(d));
     float w = 1.0f;
     if (d.w >= 0.0f) { // made by a non-delta BSDF sample
         if (p.strategy == ETK_STRATEGY_MIS)
-            w = etk_mis_weight(p.heuristic, d.w, etk_env_pdf(S.env_dist, p.env, dir));
+            w = etk_mis_weight(p.heuristic, d.w, etk_env_pdf_uv(S.env_dist, p.env, uv));
         else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
     }
     if (w > 0.0f) {
-        float3 L = etk_env_radiance(S.env_texels, p.env, dir) * w;
+        float3 L = etk_env_radiance_uv(S.env_texels, p.env, uv) * w;
         float4 r = P.radiance[slot];
         P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.beta[slot]) * L, 0.0f);
     }
@@ -211,13 +211,16 @@ ETK_FN void etk_shade(EtkPaths P, EtkQueues Q, EtkScene S, EtkParams p, int q) {
     if (p.strategy != ETK_STRATEGY_BSDF && !etk_bsdf_is_delta(m)) {
         float2 u = etk_dims(p, pixel, pair);
         float3 wi_world;
+        float2 light_uv; // map coordinates of the light direction
         float pdf_light;
         if (p.strategy == ETK_STRATEGY_UNIFORM) {
             wi_world = etk_sample_uniform_sphere(u);
+            light_uv = etk_env_uv(p.env, wi_world);
             pdf_light = 0.25f * ETK_INV_PI;
         } else {
             EtkEnvSample ls = etk_env_sample(S.env_dist, p.env, u);
             wi_world = ls.dir;
+            light_uv = ls.uv;
             pdf_light = ls.pdf;
         }
         float3 wi = etk_to_local(wi_world, t, b, ns);
@@ -226,7 +229,7 @@ ETK_FN void etk_shade(EtkPaths P, EtkQueues Q, EtkScene S, EtkParams p, int q) {
             float w = p.strategy == ETK_STRATEGY_MIS
                           ? etk_mis_weight(p.heuristic, pdf_light, etk_bsdf_pdf(m, wo, wi))
                           : 1.0f;
-            float3 L = etk_env_radiance(S.env_texels, p.env, wi_world);
+            float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
             float3 c = beta * f * L * (wi.z * w / pdf_light);
             if (etk_max3(c) > 0.0f) {
                 int k = (int)ETK_ATOMIC_INC(Q.counters + ETK_Q_SHADOW);

@@ -284,7 +284,7 @@ double native_env_sampling(const Prepared& p, const std::vector<etk::uint>& hits
                 const etk::EtkEnvSample s = etk::etk_env_sample(dist, prm.env, u);
                 acc += s.pdf;
                 if (mode == 2) {
-                    const etk::float3 L = etk::etk_env_radiance(texels, prm.env, s.dir);
+                    const etk::float3 L = etk::etk_env_radiance_uv(texels, prm.env, s.uv);
                     acc += L.x + L.y + L.z;
                 }
             }

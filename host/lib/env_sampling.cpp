@@ -13,7 +13,7 @@ namespace {
 
 EnvSampleRecord record(const EnvMap& env, const etk::EtkEnvMap& desc, etk::float2 xi) {
     etk::EtkEnvSample s = etk::etk_env_sample(env.dist.table.data(), desc, xi);
-    etk::float3 L = etk::etk_env_radiance(env.image.rgb.data(), desc, s.dir);
+    etk::float3 L = etk::etk_env_radiance_uv(env.image.rgb.data(), desc, s.uv);
     return EnvSampleRecord{{s.dir.x, s.dir.y, s.dir.z}, s.pdf, {L.x, L.y, L.z}, 0.0f, s.row, s.col};
 }
 

@@ -46,7 +46,7 @@ LightSet make_lights_ours(const EnvMap& env, int n, uint32_t seed, bool voronoi_
         DirectionalLight l;
         l.direction = glm::normalize(glm::vec3(s.dir.x, s.dir.y, s.dir.z));
         if (s.pdf > 0.0f) {
-            const etk::float3 L = etk::etk_env_radiance(texels, desc, s.dir);
+            const etk::float3 L = etk::etk_env_radiance_uv(texels, desc, s.uv);
             l.power = glm::dvec3(L.x, L.y, L.z) / (double(n) * s.pdf);
         }
         sum += l.power;

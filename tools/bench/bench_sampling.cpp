@@ -115,7 +115,7 @@ void native_reduce(const Fixture& f, uint32_t first, int n, int per_item, int th
             for (int i = begin; i < end; ++i) {
                 etk::float2 xi = etk::etk_sample_pair(kSampler, kSeed, 0u, first + i, 0u);
                 etk::EtkEnvSample s = etk::etk_env_sample(dist, desc, xi);
-                etk::float3 L = etk::etk_env_radiance(texels, desc, s.dir);
+                etk::float3 L = etk::etk_env_radiance_uv(texels, desc, s.uv);
                 acc.x += L.x;
                 acc.y += L.y;
                 acc.z += L.z;
