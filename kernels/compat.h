@@ -20,6 +20,24 @@
 // Reserves a slot in a work queue.
 #define ETK_ATOMIC_INC(p) atomic_inc(p)
 #define ETK_ATOMIC_PTR volatile __global uint*
+// Vector geometry spelled out as the host spells it: the built-ins may sum in another order or
+// normalise through rsqrt, and the back ends are meant to round identically.
+static inline float etk_dot3(float3 a, float3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static inline float3 etk_cross3(float3 a, float3 b) {
+    return (float3)(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline float etk_length3(float3 a) {
+    return sqrt(etk_dot3(a, a));
+}
+static inline float3 etk_normalize3(float3 a) {
+    return a / etk_length3(a);
+}
+#define dot(a, b) etk_dot3((a), (b))
+#define cross(a, b) etk_cross3((a), (b))
+#define length(a) etk_length3(a)
+#define normalize(a) etk_normalize3(a)
 
 #else // C++ host
 
