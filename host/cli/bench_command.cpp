@@ -10,14 +10,14 @@
 // Finally, the cost of drawing the environment-map samples of one frame, timed on its own (see
 // tools/bench/README.md, "Environment-sampling share").
 #include "commands.h"
-#include "json_file.h"
-#include "parallel.h"
-#include "error.h"
-#include "opencl_runtime.h"
-#include "renderer.h"
-#include "scene.h"
-#include "scene_arrays.h"
-#include "timer.h"
+#include "util/json_file.h"
+#include "util/parallel.h"
+#include "util/error.h"
+#include "opencl/opencl_runtime.h"
+#include "render/renderer.h"
+#include "load/scene.h"
+#include "prepare/device_scene.h"
+#include "util/timer.h"
 
 #include <nlohmann/json.hpp>
 

@@ -1,7 +1,7 @@
 #include "commands.h"
-#include "json_file.h"
-#include "error.h"
-#include "image_metrics.h"
+#include "util/json_file.h"
+#include "util/error.h"
+#include "image/image_metrics.h"
 
 #include <nlohmann/json.hpp>
 

@@ -1,5 +1,5 @@
 #include "commands.h"
-#include "opencl_runtime.h"
+#include "opencl/opencl_runtime.h"
 
 #include <iostream>
 

@@ -1,9 +1,9 @@
 #include "commands.h"
-#include "error.h"
-#include "image_io.h"
+#include "util/error.h"
+#include "image/image_io.h"
 #include "kernels/latlong.h"
-#include "light_set.h"
-#include "preview.h"
+#include "prepare/light_set.h"
+#include "image/preview.h"
 
 #include <cstdio>
 

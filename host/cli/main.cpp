@@ -1,7 +1,7 @@
 // envtrace: Monte Carlo rendering with natural illumination.
 #include "commands.h"
-#include "error.h"
-#include "opencl_runtime.h"
+#include "util/error.h"
+#include "opencl/opencl_runtime.h"
 
 #include <iostream>
 

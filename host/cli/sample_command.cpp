@@ -1,10 +1,10 @@
 #include "commands.h"
-#include "env_sampling.h"
-#include "error.h"
+#include "render/env_sampling.h"
+#include "util/error.h"
 #include "kernels/sampler.h"
-#include "preview.h"
-#include "scene_arrays.h"
-#include "timer.h"
+#include "image/preview.h"
+#include "prepare/device_scene.h"
+#include "util/timer.h"
 
 #include <cstdio>
 #include <iostream>

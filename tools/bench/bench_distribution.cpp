@@ -1,7 +1,7 @@
 // Distribution build time (paper, Section 3.4 precompute) on one core: the optimised
 // build_env_distribution next to the original implementation, measured side by side in one run.
 #include "bench_maps.h"
-#include "env_distribution.h"
+#include "load/env_distribution.h"
 
 #include <benchmark/benchmark.h>
 

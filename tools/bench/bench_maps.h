@@ -1,10 +1,10 @@
 // Environment maps for the benchmarks: real maps from the shared data directory, the procedural
 // sky, and an 8192x4096 map made in memory by upsampling a real 1k map (never written to disk).
 #pragma once
-#include "data_path.h"
-#include "image_io.h"
+#include "util/data_path.h"
+#include "image/image_io.h"
 #include "kernels/envmap.h"
-#include "sky.h"
+#include "load/sky.h"
 
 #include <cstdio>
 #include <cstdlib>

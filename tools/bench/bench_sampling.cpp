@@ -10,11 +10,11 @@
 //            sampling, each work-item / loop iteration summing `per_item` consecutive samples'
 //            radiance and pdf, so the output is small and both sides measure sampling.
 #include "bench_maps.h"
-#include "parallel.h"
-#include "env_sampling.h"
-#include "envmap.h"
+#include "util/parallel.h"
+#include "render/env_sampling.h"
+#include "load/environment_map.h"
 #include "kernels/sampler.h"
-#include "opencl_runtime.h"
+#include "opencl/opencl_runtime.h"
 
 #include <benchmark/benchmark.h>
 

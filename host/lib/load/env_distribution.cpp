@@ -1,0 +1,276 @@
+#include "load/env_distribution.h"
+#include "util/parallel.h"
+
+#include "kernels/piecewise_constant.h"
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+// One streaming pass over the map, a row at a time: luminance into a wrap-padded row, the
+// horizontal filter into a ring of 2r+1 filtered rows, the vertical filter (clamped at the poles)
+// straight into the conditional-density rows of the table, then sin(theta) and the row's CDF
+// while the row is still in cache. The only full-size buffer is the table itself. The arithmetic
+// (operands, order of the float sums) is that of the straightforward separable filter and area
+// resample, so the densities are bit-identical to it; the double prefix sums run as several
+// independent chains and agree to double rounding (see prefix_sums).
+
+namespace et {
+namespace {
+
+// The bilinear cell-mean taps [1 6 1]/8 convolved with a truncated, normalised Gaussian.
+std::vector<float> filter_taps(float sigma) {
+    std::vector<float> g{1.0f};
+    if (sigma > 0.0f) {
+        int r = std::max(1, static_cast<int>(std::ceil(3.0f * sigma)));
+        g.assign(2 * r + 1, 0.0f);
+        double sum = 0.0;
+        for (int i = -r; i <= r; ++i)
+            sum += g[i + r] = std::exp(-0.5f * i * i / (sigma * sigma));
+        for (float& x : g)
+            x = static_cast<float>(x / sum);
+    }
+    const float box[3] = {0.125f, 0.75f, 0.125f};
+    std::vector<float> taps(g.size() + 2, 0.0f);
+    for (size_t i = 0; i < g.size(); ++i)
+        for (int j = 0; j < 3; ++j)
+            taps[i + j] += g[i] * box[j];
+    return taps;
+}
+
+// Area-weighted resampling weights from n input cells to m output cells over the same interval.
+struct Span {
+    int first;
+    std::vector<float> weights;
+};
+std::vector<Span> area_weights(int n, int m) {
+    std::vector<Span> spans(m);
+    const double scale = static_cast<double>(n) / m;
+    for (int o = 0; o < m; ++o) {
+        double a = o * scale, b = (o + 1) * scale;
+        int i0 = static_cast<int>(std::floor(a)), i1 = std::min(n, static_cast<int>(std::ceil(b)));
+        spans[o].first = i0;
+        for (int i = i0; i < i1; ++i)
+            spans[o].weights.push_back(
+                static_cast<float>((std::min(b, i + 1.0) - std::max(a, double(i))) / scale));
+    }
+    return spans;
+}
+
+// Independent accumulation chains for the double prefix sums: a single chain is bound by the
+// latency of a double add (about 4 cycles per element), several chains run in parallel.
+constexpr int kChains = 8;
+
+// local[i + 1] = sum of f over [segment start, i] for kChains contiguous segments of n / kChains
+// elements and a short tail; seg_offset[j] = sum of f before segment j (kChains + 2 entries).
+// Returns the sum of f. Every partial sum is exact to double rounding of float inputs.
+double prefix_sums(const float* f, int n, double* local, double* seg_offset) {
+    const int len = n / kChains;
+    double acc[kChains] = {};
+    for (int i = 0; i < len; ++i)
+        for (int j = 0; j < kChains; ++j) {
+            acc[j] += f[j * len + i];
+            local[j * len + i + 1] = acc[j];
+        }
+    double tail = 0.0;
+    for (int i = kChains * len; i < n; ++i) {
+        tail += f[i];
+        local[i + 1] = tail;
+    }
+    double run = 0.0;
+    for (int j = 0; j < kChains; ++j) {
+        seg_offset[j] = run;
+        run += acc[j];
+    }
+    seg_offset[kChains] = run;
+    run += tail;
+    seg_offset[kChains + 1] = run;
+    return run;
+}
+
+// build_piecewise_constant_1d with pdf allowed to alias f, using scratch of n + 1 doubles.
+double build_1d(const float* f, int n, float* pdf, float* cdf, double* local) {
+    double seg_offset[kChains + 2];
+    const double sum = prefix_sums(f, n, local, seg_offset);
+    cdf[0] = 0.0f;
+    if (!(sum > 0.0)) {
+        // No mass: a linear CDF keeps the binary search well defined; densities stay zero.
+        for (int i = 0; i < n; ++i) {
+            pdf[i] = 0.0f;
+            cdf[i + 1] = static_cast<float>(i + 1) / n;
+        }
+        cdf[n] = 1.0f;
+        return 0.0;
+    }
+    const double inv = 1.0 / sum;
+    const float density_scale = static_cast<float>(n * inv);
+    const int len = n / kChains;
+    for (int j = 0; j <= kChains; ++j) {
+        const int begin = j * len, end = j < kChains ? begin + len : n;
+        const double off = seg_offset[j];
+        for (int i = begin; i < end; ++i) {
+            pdf[i] = f[i] * density_scale;
+            cdf[i + 1] = static_cast<float>((off + local[i + 1]) * inv);
+        }
+    }
+    // Float rounding of a monotone double sequence is monotone; pin the end exactly.
+    cdf[n] = 1.0f;
+    return sum;
+}
+
+// Everything that depends only on the map and the options, shared by the worker threads.
+struct Plan {
+    const RgbImage* image;
+    int w, h, dw, dh, r, k;
+    std::vector<float> taps;
+    bool resampled;
+    std::vector<Span> sx, sy;
+    float* cond_pdf;
+    float* cond_cdf;
+    float* row_mass;
+};
+
+// Works on distribution rows [o0, o1): filters the input rows they need, writes their densities
+// and CDFs and their masses. Rows are independent, so ranges can run on separate threads.
+void build_rows(const Plan& p, int o0, int o1) {
+    if (o0 >= o1)
+        return;
+    const int w = p.w, h = p.h, dw = p.dw, dh = p.dh, r = p.r, k = p.k;
+    const float* taps = p.taps.data();
+    const float* rgb = p.image->rgb.data();
+
+    // Input rows needed: the area spans of the output rows (all of [o0, o1) without resampling).
+    int y0 = o0, y1 = o1;
+    if (p.resampled) {
+        y0 = p.sy[o0].first;
+        y1 = p.sy[o1 - 1].first + static_cast<int>(p.sy[o1 - 1].weights.size());
+    }
+
+    std::vector<float> pad(static_cast<size_t>(w) + 2 * r);
+    std::vector<float> ring(static_cast<size_t>(k) * w);
+    std::vector<float> vrow(p.resampled ? w : 0), hres(p.resampled ? dw : 0);
+    std::vector<double> scratch(static_cast<size_t>(std::max(w, dw)) + 1);
+    int next = std::max(0, y0 - r); // next input row to filter horizontally into the ring
+
+    // Horizontal pass of input row sy (wraps around in phi) into its ring slot.
+    auto filter_row = [&](int sy) {
+        const float* src = rgb + 3 * static_cast<size_t>(sy) * w;
+        float* lum = pad.data() + r;
+        for (int x = 0; x < w; ++x)
+            lum[x] = luminance(src + 3 * x);
+        for (int x = 0; x < r; ++x) {
+            pad[x] = lum[((x - r) % w + w) % w];
+            pad[w + r + x] = lum[x % w];
+        }
+        float* out = &ring[static_cast<size_t>(sy % k) * w];
+        std::fill(out, out + w, 0.0f);
+        for (int t = 0; t < k; ++t) {
+            const float wt = taps[t];
+            const float* s = pad.data() + t;
+            for (int x = 0; x < w; ++x)
+                out[x] += wt * s[x];
+        }
+    };
+
+    // The sin(theta)-weighted function of distribution row o, in place, then its tables.
+    auto finish_row = [&](int o, float* fr) {
+        const float sin_theta = std::sin(static_cast<float>(M_PI) * (o + 0.5f) / dh);
+        for (int x = 0; x < dw; ++x)
+            fr[x] = std::max(0.0f, fr[x]) * sin_theta; // max: filters never go negative, NaN-safe
+        p.row_mass[o] = static_cast<float>(
+            build_1d(fr, dw, fr, p.cond_cdf + static_cast<size_t>(o) * (dw + 1), scratch.data()));
+    };
+
+    int o_next = o0; // resampled case: first output row not yet finished
+    for (int y = y0; y < y1; ++y) {
+        for (; next <= std::min(y + r, h - 1); ++next)
+            filter_row(next);
+        // Vertical pass (clamped at the poles).
+        float* dst = p.resampled ? vrow.data() : p.cond_pdf + static_cast<size_t>(y) * dw;
+        std::fill(dst, dst + w, 0.0f);
+        for (int t = 0; t < k; ++t) {
+            const int sy = std::clamp(y + t - r, 0, h - 1);
+            const float wt = taps[t];
+            const float* src = &ring[static_cast<size_t>(sy % k) * w];
+            for (int x = 0; x < w; ++x)
+                dst[x] += wt * src[x];
+        }
+        if (!p.resampled) {
+            finish_row(y, dst);
+            continue;
+        }
+        // Area resample: across the row, then accumulated into the output rows whose span holds
+        // input row y, in increasing y as a row-by-row vertical pass would.
+        for (int x = 0; x < dw; ++x) {
+            const Span& s = p.sx[x];
+            float acc = 0.0f;
+            for (size_t i = 0; i < s.weights.size(); ++i)
+                acc += s.weights[i] * vrow[s.first + i];
+            hres[x] = acc;
+        }
+        for (int o = o_next; o < o1 && p.sy[o].first <= y; ++o) {
+            const Span& s = p.sy[o];
+            const int i = y - s.first;
+            if (i >= static_cast<int>(s.weights.size()))
+                continue;
+            const float wt = s.weights[i];
+            float* out = p.cond_pdf + static_cast<size_t>(o) * dw;
+            for (int x = 0; x < dw; ++x)
+                out[x] += wt * hres[x];
+        }
+        // Output rows whose span ends at or before y + 1 are complete.
+        while (o_next < o1 &&
+               p.sy[o_next].first + static_cast<int>(p.sy[o_next].weights.size()) <= y + 1) {
+            finish_row(o_next, p.cond_pdf + static_cast<size_t>(o_next) * dw);
+            ++o_next;
+        }
+    }
+    for (; o_next < o1 && p.resampled; ++o_next)
+        finish_row(o_next, p.cond_pdf + static_cast<size_t>(o_next) * dw);
+}
+
+} // namespace
+
+double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf) {
+    std::vector<double> scratch(static_cast<size_t>(std::max(n, 0)) + 1);
+    return build_1d(f, n, pdf, cdf, scratch.data());
+}
+
+EnvDistribution build_env_distribution(const RgbImage& image, const DistributionOptions& options) {
+    Plan p;
+    p.image = &image;
+    p.w = image.width;
+    p.h = image.height;
+    p.dw = options.width > 0 ? options.width : p.w;
+    p.dh = options.height > 0 ? options.height : p.h;
+    p.taps = filter_taps(options.blur_sigma);
+    p.k = static_cast<int>(p.taps.size());
+    p.r = p.k / 2;
+    p.resampled = p.dw != p.w || p.dh != p.h;
+    if (p.resampled) {
+        p.sx = area_weights(p.w, p.dw);
+        p.sy = area_weights(p.h, p.dh);
+    }
+
+    EnvDistribution d;
+    d.width = p.dw;
+    d.height = p.dh;
+    d.table.assign(etk::etk_dist2d_size(p.dw, p.dh), 0.0f);
+    p.cond_pdf = d.table.data() + etk::etk_dist2d_conditional_pdf(p.dh);
+    p.cond_cdf = d.table.data() + etk::etk_dist2d_conditional_cdf(p.dw, p.dh);
+    std::vector<float> row_mass(p.dh);
+    p.row_mass = row_mass.data();
+
+    const int threads = std::clamp(thread_count(options.threads), 1, std::max(1, p.dh / 16));
+    run_on_threads(threads, [&](int t) {
+        build_rows(p, static_cast<int>(int64_t(p.dh) * t / threads),
+                   static_cast<int>(int64_t(p.dh) * (t + 1) / threads));
+    });
+
+    std::vector<double> scratch(static_cast<size_t>(p.dh) + 1);
+    d.total = build_1d(row_mass.data(), p.dh, d.table.data(),
+                       d.table.data() + etk::etk_dist2d_marginal_cdf(p.dh), scratch.data());
+    return d;
+}
+
+} // namespace et

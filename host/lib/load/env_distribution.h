@@ -1,0 +1,38 @@
+// Environment map -> sampling distribution (paper, Section 3.4), as flat tables ready to upload.
+#pragma once
+#include "image/image_io.h"
+
+#include <vector>
+
+namespace et {
+
+struct DistributionOptions {
+    int width = 0, height = 0; // 0: the map's resolution
+    float blur_sigma = 0.5f;   // Gaussian blur of luminance, in texels; 0 disables it
+    int threads = 1;           // rows built on this many threads (0: all cores); same result
+};
+
+struct EnvDistribution {
+    int width = 0, height = 0; // cells: columns over u (phi), rows over v (theta)
+    std::vector<float> table;  // layout of kernels/piecewise_constant.h
+    double total = 0.0;        // sum of the sin-weighted function: 0 means no light
+    bool has_light() const { return total > 0.0; }
+};
+
+// The function sampled for each cell is the exact mean, over the cell, of the bilinearly
+// interpolated luminance (a [1 6 1]/8 filter in each direction, so the density is positive
+// wherever the radiance lookup is), optionally blurred by a Gaussian of blur_sigma texels,
+// area-resampled to the distribution resolution and weighted by sin(theta) at the row centre.
+// Texels must already be finite and non-negative (see envmap.h).
+EnvDistribution build_env_distribution(const RgbImage& image, const DistributionOptions& options);
+
+// Rec. 709 luminance.
+inline float luminance(const float* rgb) {
+    return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+}
+
+// The 1D building block: density and CDF (n+1 entries) of f, as in the paper's Figure 2.
+// Returns the sum of f.
+double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf);
+
+} // namespace et

@@ -1,0 +1,88 @@
+#include "load/environment_map.h"
+
+#include "util/error.h"
+#include "util/timer.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace et {
+
+etk::EtkEnvMap EnvMap::desc() const {
+    etk::EtkEnvMap d;
+    d.tex_w = image.width;
+    d.tex_h = image.height;
+    d.dist_w = dist.width;
+    d.dist_h = dist.height;
+    d.scale = scale;
+    const double a = rotation_degrees * M_PI / 180.0;
+    d.rot_cos = static_cast<float>(std::cos(a));
+    d.rot_sin = static_cast<float>(std::sin(a));
+    d.has_light = dist.has_light() && scale > 0.0f ? 1 : 0;
+    return d;
+}
+
+SanitizeReport sanitize_texels(RgbImage& image) {
+    SanitizeReport r;
+    for (size_t p = 0, n = image.rgb.size() / 3; p < n; ++p) {
+        float* t = &image.rgb[3 * p];
+        bool bad = false, neg = false;
+        for (int c = 0; c < 3; ++c) {
+            if (!std::isfinite(t[c])) {
+                t[c] = 0.0f;
+                bad = true;
+            } else if (t[c] < 0.0f) {
+                t[c] = 0.0f;
+                neg = true;
+            }
+        }
+        r.non_finite += bad;
+        r.negative += neg && !bad;
+    }
+    return r;
+}
+
+EnvMap make_envmap(std::string name, RgbImage image, const DistributionOptions& options) {
+    EnvMap env;
+    env.name = std::move(name);
+    env.image = std::move(image);
+    SanitizeReport r = sanitize_texels(env.image);
+    if (r.non_finite + r.negative > 0)
+        warn(env.name + ": " + std::to_string(r.non_finite) + " non-finite and " +
+             std::to_string(r.negative) +
+             " negative texels set to zero (they are ignored for lighting and sampling)");
+    if (env.image.width != 2 * env.image.height)
+        warn(env.name + ": " + std::to_string(env.image.width) + "x" +
+             std::to_string(env.image.height) +
+             " is not a 2:1 lat-long map; it is stretched over the sphere as it is");
+    if (options.width < 0 || options.height < 0 || options.width > 65536 || options.height > 65536)
+        throw Error("distribution resolution " + std::to_string(options.width) + "x" +
+                    std::to_string(options.height) + " is out of range");
+    Timer t;
+    env.dist = build_env_distribution(env.image, options);
+    env.build_seconds = t.seconds();
+    if (!env.dist.has_light())
+        warn(env.name + ": the map is black everywhere; it emits no light");
+    return env;
+}
+
+EnvMap load_envmap(const std::string& path, const DistributionOptions& options) {
+    Timer t;
+    RgbImage img = read_rgb_image(path);
+    double load = t.seconds();
+    EnvMap env = make_envmap(path, std::move(img), options);
+    env.load_seconds = load;
+    return env;
+}
+
+void parse_resolution(const std::string& text, int& width, int& height) {
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
+        w < 1 || h < 1 || w > 65536 || h > 65536)
+        throw Error("resolution '" + text + "' is not WIDTHxHEIGHT (e.g. 512x256, 1 to 65536)");
+    width = w;
+    height = h;
+}
+
+} // namespace et

@@ -1,0 +1,198 @@
+#include "opencl/opencl_runtime.h"
+
+#include "util/error.h"
+#include "opencl/kernel_sources.h"
+#include "util/timer.h"
+
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace et {
+namespace {
+
+const char* kInstallHint =
+    "install an OpenCL driver and the ICD loader, e.g. on Debian/Ubuntu: "
+    "apt-get install pocl-opencl-icd ocl-icd-libopencl1 (tools/setup does this)";
+
+// Two independent 64-bit FNV-1a hashes: a 128-bit cache key.
+std::string cache_key(const std::string& text) {
+    uint64_t a = 0xcbf29ce484222325ull, b = 0x84222325cbf29ce4ull;
+    for (unsigned char c : text) {
+        a = (a ^ c) * 0x100000001b3ull;
+        b = (b ^ c) * 0x00000100000001b3ull + 0x9e3779b97f4a7c15ull;
+    }
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%016llx%016llx", (unsigned long long)a, (unsigned long long)b);
+    return buf;
+}
+
+std::string build_log(const cl::Program& program, const cl::Device& device) {
+    try {
+        return program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device);
+    } catch (const cl::Error&) {
+        return "(no build log)";
+    }
+}
+
+} // namespace
+
+std::string cl_error_name(cl_int code) {
+    switch (code) {
+#define ET_CASE(x)                                                                                 \
+    case x:                                                                                        \
+        return #x " (" + std::to_string(code) + ")";
+        ET_CASE(CL_DEVICE_NOT_FOUND)
+        ET_CASE(CL_OUT_OF_RESOURCES)
+        ET_CASE(CL_OUT_OF_HOST_MEMORY)
+        ET_CASE(CL_MEM_OBJECT_ALLOCATION_FAILURE)
+        ET_CASE(CL_BUILD_PROGRAM_FAILURE)
+        ET_CASE(CL_INVALID_VALUE)
+        ET_CASE(CL_INVALID_BUFFER_SIZE)
+        ET_CASE(CL_INVALID_KERNEL_ARGS)
+        ET_CASE(CL_INVALID_ARG_SIZE)
+        ET_CASE(CL_INVALID_WORK_GROUP_SIZE)
+        ET_CASE(CL_INVALID_BINARY)
+        ET_CASE(CL_PLATFORM_NOT_FOUND_KHR)
+#undef ET_CASE
+    default:
+        return "OpenCL error " + std::to_string(code);
+    }
+}
+
+std::vector<DeviceEntry> list_devices() {
+    std::vector<cl::Platform> platforms;
+    try {
+        cl::Platform::get(&platforms);
+    } catch (const cl::Error& e) {
+        if (e.err() != CL_PLATFORM_NOT_FOUND_KHR)
+            throw Error(std::string("cannot list OpenCL platforms: ") + cl_error_name(e.err()));
+    }
+    if (platforms.empty())
+        throw Error(std::string("no OpenCL platform found: ") + kInstallHint);
+    std::vector<DeviceEntry> out;
+    for (auto& p : platforms) {
+        std::vector<cl::Device> devices;
+        try {
+            p.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+        } catch (const cl::Error&) {
+            continue; // a platform without devices
+        }
+        for (auto& d : devices) {
+            DeviceEntry e;
+            e.platform = p;
+            e.device = d;
+            e.platform_name =
+                p.getInfo<CL_PLATFORM_NAME>() + " " + p.getInfo<CL_PLATFORM_VERSION>();
+            e.device_name = d.getInfo<CL_DEVICE_NAME>();
+            e.device_version = d.getInfo<CL_DEVICE_VERSION>();
+            e.driver_version = d.getInfo<CL_DRIVER_VERSION>();
+            e.compute_units = static_cast<int>(d.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
+            out.push_back(std::move(e));
+        }
+    }
+    if (out.empty())
+        throw Error(std::string("OpenCL platforms exist but none has a device: ") + kInstallHint);
+    return out;
+}
+
+ClRuntime::ClRuntime(int device_index) {
+    auto devices = list_devices();
+    if (device_index < 0 || device_index >= static_cast<int>(devices.size()))
+        throw Error("--device " + std::to_string(device_index) + " does not exist: there " +
+                    (devices.size() == 1 ? "is 1 device"
+                                         : "are " + std::to_string(devices.size()) + " devices") +
+                    " (see 'envtrace devices')");
+    entry_ = devices[device_index];
+    try {
+        context_ = cl::Context(entry_.device);
+        queue_ = cl::CommandQueue(context_, entry_.device);
+    } catch (const cl::Error& e) {
+        throw Error("cannot open OpenCL device '" + entry_.device_name +
+                    "': " + cl_error_name(e.err()));
+    }
+}
+
+std::string ClRuntime::cache_dir() {
+    if (const char* d = std::getenv("ENVTRACE_CACHE_DIR"); d && *d)
+        return d;
+    if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d)
+        return std::string(d) + "/envtrace";
+    if (const char* d = std::getenv("HOME"); d && *d)
+        return std::string(d) + "/.cache/envtrace";
+    return (fs::temp_directory_path() / "envtrace-cache").string();
+}
+
+cl::Program ClRuntime::build(const std::string& file, const std::string& options,
+                             ProgramBuildInfo* info) {
+    return build_source(file, expand_kernel_source(file), options, info);
+}
+
+cl::Program ClRuntime::build_source(const std::string& file, const std::string& source,
+                                    const std::string& options, ProgramBuildInfo* info) {
+    Timer timer;
+    const std::string full_options = "-cl-std=CL1.2 " + options;
+    const std::string key =
+        cache_key(source + '\0' + full_options + '\0' + entry_.platform_name + '\0' +
+                  entry_.device_name + '\0' + entry_.driver_version + '\0' + entry_.device_version);
+    const fs::path cached =
+        fs::path(cache_dir()) / (fs::path(file).stem().string() + "-" + key + ".bin");
+    ProgramBuildInfo local;
+    ProgramBuildInfo& bi = info ? *info : local;
+    bi.cache_file = cached.string();
+
+    // Warm path: a cached binary for exactly this source, options and device.
+    std::error_code ec;
+    if (fs::exists(cached, ec)) {
+        std::ifstream in(cached, std::ios::binary);
+        std::vector<unsigned char> bin((std::istreambuf_iterator<char>(in)),
+                                       std::istreambuf_iterator<char>());
+        try {
+            cl::Program program(context_, {entry_.device}, cl::Program::Binaries{bin});
+            program.build({entry_.device}, full_options.c_str());
+            bi.from_cache = true;
+            bi.seconds = timer.seconds();
+            return program;
+        } catch (const cl::Error&) {
+            fs::remove(cached, ec); // stale or corrupt: rebuild from source
+        }
+    }
+
+    cl::Program program(context_, source);
+    try {
+        program.build({entry_.device}, full_options.c_str());
+    } catch (const cl::Error& e) {
+        throw Error("OpenCL program kernels/" + file + " failed to build on '" +
+                    entry_.device_name + "' (" + cl_error_name(e.err()) + "):\n" +
+                    build_log(program, entry_.device));
+    }
+    // Store the binary atomically; a cache that cannot be written only costs time.
+    try {
+        auto binaries = program.getInfo<CL_PROGRAM_BINARIES>();
+        if (!binaries.empty() && !binaries[0].empty()) {
+            fs::create_directories(cached.parent_path(), ec);
+            fs::path tmp = cached;
+            tmp += ".tmp" + std::to_string(getpid());
+            {
+                std::ofstream out(tmp, std::ios::binary);
+                out.write(reinterpret_cast<const char*>(binaries[0].data()),
+                          static_cast<std::streamsize>(binaries[0].size()));
+            }
+            fs::rename(tmp, cached, ec);
+            if (ec)
+                fs::remove(tmp, ec);
+        }
+    } catch (const cl::Error&) {
+    }
+    bi.from_cache = false;
+    bi.seconds = timer.seconds();
+    return program;
+}
+
+} // namespace et

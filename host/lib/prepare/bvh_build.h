@@ -1,0 +1,27 @@
+// Bounding volume hierarchy over a triangle soup: binned SAH build, flattened to the layout the
+// kernels traverse (kernels/bvh.h).
+#pragma once
+#include "kernels/compat.h"
+#include "load/scene.h"
+
+#include <vector>
+
+namespace et {
+
+struct Bvh {
+    std::vector<etk::float4> nodes; // four per inner node (kernels/bvh.h)
+    std::vector<int> order; // triangle order: flattened triangle i is soup triangle order[i]
+    int depth = 0;
+    double build_seconds = 0.0;
+    double sah_cost = 0.0; // expected cost: traversal 1, triangle test 1, relative to the root area
+    int node_count() const { return static_cast<int>(nodes.size() / 4); } // inner nodes
+};
+
+// Leaves hold at most `max_leaf` triangles; depth stays below the kernels' stack size.
+Bvh build_bvh(const TriangleSoup& soup, int max_leaf = 4);
+
+// Triangles in BVH order as the kernels read them: v0, e1, e2 (three float4 each); one all-zero
+// triangle for an empty soup (device buffers cannot be empty).
+std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup, const std::vector<int>& order);
+
+} // namespace et

@@ -1,0 +1,156 @@
+#include "prepare/light_set.h"
+
+#include "util/error.h"
+#include "util/json_file.h"
+#include "kernels/envmap.h"
+#include "kernels/sampler.h"
+#include "util/timer.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace et {
+namespace {
+
+glm::vec3 to_world(const EnvMap& env, const glm::dvec3& d) {
+    const etk::float3 w =
+        etk::etk_env_to_world(env.desc(), etk::make_float3(float(d.x), float(d.y), float(d.z)));
+    return glm::normalize(glm::vec3(w.x, w.y, w.z));
+}
+
+} // namespace
+
+LightSet make_lights_ours(const EnvMap& env, int n, uint32_t seed, bool voronoi_power) {
+    if (n < 1)
+        throw Error("need at least one light");
+    if (!env.dist.has_light())
+        throw Error(env.name + ": the map emits no light: no lights to make");
+    LightSet set;
+    set.method = "ours";
+    set.power_rule = voronoi_power ? "voronoi" : "share";
+    set.map = env.name;
+    set.precompute_seconds = env.build_seconds;
+    Timer timer;
+    const etk::EtkEnvMap desc = env.desc();
+    const float* dist = env.dist.table.data();
+    const float* texels = env.image.rgb.data();
+    std::vector<glm::dvec3> map_dirs;
+    glm::dvec3 sum(0.0);
+    for (int k = 0; k < n; ++k) {
+        const etk::float2 u =
+            etk::etk_sample_pair(ETK_SAMPLER_SOBOL, seed, 0u, static_cast<uint32_t>(k), 0u);
+        const etk::EtkEnvSample s = etk::etk_env_sample(dist, desc, u);
+        DirectionalLight l;
+        l.direction = glm::normalize(glm::vec3(s.dir.x, s.dir.y, s.dir.z));
+        if (s.pdf > 0.0f) {
+            const etk::float3 L = etk::etk_env_radiance_uv(texels, desc, s.uv);
+            l.power = glm::dvec3(L.x, L.y, L.z) / (double(n) * s.pdf);
+        }
+        sum += l.power;
+        const etk::float3 m = etk::etk_world_to_env(desc, s.dir);
+        map_dirs.push_back(glm::normalize(glm::dvec3(m.x, m.y, m.z)));
+        set.lights.push_back(l);
+    }
+    set.map_power = map_power(env);
+    if (voronoi_power) {
+        VoronoiStrata v = voronoi_strata(env, map_dirs);
+        for (int k = 0; k < n; ++k) {
+            set.lights[k].power = v.power[k];
+            set.lights[k].solid_angle = v.solid_angle[k];
+        }
+    } else {
+        for (int c = 0; c < 3; ++c) {
+            const double f = sum[c] > 0.0 ? set.map_power[c] / sum[c] : 0.0;
+            for (auto& l : set.lights)
+                l.power[c] *= f;
+        }
+    }
+    set.selection_seconds = timer.seconds();
+    return set;
+}
+
+LightSet make_lights_sis(const EnvMap& env, int n, const SisOptions& options) {
+    SisOptions o = options;
+    o.samples = n;
+    SisResult r = build_sis(env, o);
+    LightSet set;
+    set.method = "sis";
+    set.power_rule = "voronoi";
+    set.map = env.name;
+    set.precompute_seconds = r.seconds;
+    set.map_power = map_power(env);
+    for (size_t k = 0; k < r.strata.points.size(); ++k) {
+        DirectionalLight l;
+        l.direction = to_world(env, r.strata.points[k]);
+        l.power = r.strata.power[k];
+        l.solid_angle = r.strata.solid_angle[k];
+        set.lights.push_back(l);
+    }
+    return set;
+}
+
+void write_lights(const std::string& path, const LightSet& set) {
+    using nlohmann::json;
+    json lights = json::array();
+    for (const auto& l : set.lights) {
+        json j{{"direction", {l.direction.x, l.direction.y, l.direction.z}},
+               {"power", {l.power.x, l.power.y, l.power.z}}};
+        if (l.solid_angle > 0.0)
+            j["solid_angle"] = l.solid_angle;
+        lights.push_back(j);
+    }
+    json j{{"method", set.method},
+           {"power_rule", set.power_rule},
+           {"map", set.map},
+           {"count", set.lights.size()},
+           {"map_power", {set.map_power.x, set.map_power.y, set.map_power.z}},
+           {"precompute_seconds", set.precompute_seconds},
+           {"selection_seconds", set.selection_seconds},
+           {"total_seconds", set.total_seconds()},
+           {"lights", lights}};
+    write_json_file(path, j, 1);
+}
+
+LightSet read_lights(const std::string& path) {
+    const nlohmann::json j = read_json_file(path);
+    LightSet set;
+    auto vec = [&](const nlohmann::json& v, const char* what, size_t i) {
+        if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
+            !v[2].is_number())
+            throw Error(path + ": light " + std::to_string(i) + ": '" + what +
+                        "' must be an array of three numbers");
+        return glm::dvec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    };
+    if (!j.is_object() || !j.contains("lights") || !j["lights"].is_array())
+        throw Error(path + ": not a light set (expected an object with a 'lights' array)");
+    set.method = j.value("method", "");
+    set.power_rule = j.value("power_rule", "");
+    set.map = j.value("map", "");
+    size_t i = 0;
+    for (const auto& l : j["lights"]) {
+        if (!l.is_object() || !l.contains("direction") || !l.contains("power"))
+            throw Error(path + ": light " + std::to_string(i) + " needs 'direction' and 'power'");
+        DirectionalLight d;
+        const glm::dvec3 dir = vec(l["direction"], "direction", i);
+        const double len = glm::length(dir);
+        if (!(len > 0.0) || !std::isfinite(len))
+            throw Error(path + ": light " + std::to_string(i) + ": zero or non-finite direction");
+        d.direction = glm::vec3(dir / len);
+        d.power = vec(l["power"], "power", i);
+        for (int c = 0; c < 3; ++c)
+            if (!(d.power[c] >= 0.0) || !std::isfinite(d.power[c]))
+                throw Error(path + ": light " + std::to_string(i) +
+                            ": power must be finite and non-negative");
+        d.solid_angle = l.value("solid_angle", 0.0);
+        set.lights.push_back(d);
+        ++i;
+    }
+    if (set.lights.empty())
+        throw Error(path + ": the light set is empty");
+    return set;
+}
+
+} // namespace et

@@ -1,0 +1,49 @@
+// `envtrace compare` from the command line: metrics of known images, a non-zero exit with a
+// one-line message naming both sizes on a size mismatch, and on a missing file.
+#include "image/image_io.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+namespace {
+
+// Runs envtrace with `args`; returns the exit status and fills the combined output.
+int run_cli(const std::string& args, std::string& out) {
+    const std::string cmd = std::string(ENVTRACE_EXE) + " " + args + " 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p)
+        return -1;
+    char buf[512];
+    out.clear();
+    while (fgets(buf, sizeof buf, p))
+        out += buf;
+    const int status = pclose(p);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(CompareCli, MetricsSizeMismatchAndMissingFile) {
+    const std::string dir = ett::scratch_dir("compare_cli");
+    et::write_image(dir + "/a.exr", 4, 2, 3, std::vector<float>(24, 2.0f));
+    et::write_image(dir + "/b.exr", 4, 2, 3, std::vector<float>(24, 1.0f));
+    et::write_image(dir + "/c.exr", 3, 3, 3, std::vector<float>(27, 1.0f));
+    std::string out;
+    ASSERT_EQ(run_cli("compare " + dir + "/a.exr " + dir + "/b.exr --json " + dir + "/m.json", out),
+              0)
+        << out;
+    EXPECT_NE(out.find("l2 1\n"), std::string::npos) << out;
+    EXPECT_NE(out.find("rmse 1\n"), std::string::npos) << out;
+    std::ifstream j(dir + "/m.json");
+    EXPECT_TRUE(j.good());
+
+    EXPECT_EQ(run_cli("compare " + dir + "/a.exr " + dir + "/c.exr", out), 1);
+    EXPECT_NE(out.find("4x2"), std::string::npos) << out;
+    EXPECT_NE(out.find("3x3"), std::string::npos) << out;
+    EXPECT_EQ(run_cli("compare " + dir + "/a.exr " + dir + "/missing.exr", out), 1);
+    EXPECT_NE(out.find("missing.exr"), std::string::npos) << out;
+}
+
+} // namespace

@@ -1,0 +1,313 @@
+// Bad scene input through the CLI (build/envtrace run as a child process): every case ends in
+// either a render (exit 0, a finite EXR, possibly warnings) or a clear one-line error and exit
+// status 1 — never a signal, a hang (60 s limit), a NaN pixel, or an output file (or temporary)
+// left behind by a failed run.
+#include "image/image_io.h"
+#include "cli_run.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using ett::CliRun;
+
+CliRun run_cli(const std::vector<std::string>& args, const std::string& dir) {
+    return ett::run_envtrace(args, dir);
+}
+
+// Image files (final or temporary) in dir.
+std::vector<std::string> images_in(const std::string& dir) {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string n = e.path().filename().string();
+        for (const char* ext : {".exr", ".png", ".hdr", ".pfm", ".tmp"})
+            if (n.find(ext) != std::string::npos && e.is_regular_file())
+                out.push_back(n);
+    }
+    return out;
+}
+
+// The error line: "envtrace: error: ..." exactly once, naming `must_name`.
+void expect_clean_error(const CliRun& r, const std::string& must_name, const std::string& dir) {
+    ASSERT_FALSE(r.timed_out) << "hung";
+    ASSERT_TRUE(r.exited()) << "killed by signal " << WTERMSIG(r.status) << "; stderr: " << r.err;
+    EXPECT_EQ(r.code(), 1) << r.err;
+    const size_t at = r.err.find("envtrace: error: ");
+    ASSERT_NE(at, std::string::npos) << r.err;
+    const std::string line = r.err.substr(at, r.err.find('\n', at) - at);
+    EXPECT_EQ(r.err.find("envtrace: error: ", at + 1), std::string::npos) << r.err;
+    EXPECT_NE(line.find(must_name), std::string::npos)
+        << "does not name " << must_name << ": " << line;
+    EXPECT_TRUE(images_in(dir).empty()) << "left behind: " << images_in(dir)[0];
+}
+
+// Exit 0 and a finite, non-negative EXR of w x h.
+void expect_render(const CliRun& r, const std::string& exr, int w, int h) {
+    ASSERT_FALSE(r.timed_out) << "hung";
+    ASSERT_TRUE(r.exited()) << "killed by signal " << WTERMSIG(r.status) << "; stderr: " << r.err;
+    ASSERT_EQ(r.code(), 0) << r.err;
+    const et::RgbImage img = et::read_rgb_image(exr);
+    EXPECT_EQ(img.width, w);
+    EXPECT_EQ(img.height, h);
+    for (float v : img.rgb)
+        ASSERT_TRUE(std::isfinite(v) && v >= 0.0f) << exr << ": " << v;
+}
+
+std::string constant_map(const std::string& dir) {
+    const std::string path = dir + "/maps/const.exr"; // a subfolder: dir holds only outputs
+    fs::create_directories(dir + "/maps");
+    if (!fs::exists(path))
+        et::write_image(path, 16, 8, 3, std::vector<float>(16 * 8 * 3, 0.5f));
+    return path;
+}
+
+// A small valid scene with `shapes` (a JSON array) and `extra` top-level members.
+std::string scene_json(const std::string& dir, const std::string& shapes,
+                       const std::string& extra = "", const std::string& film = "[8, 6]") {
+    return R"({
+  "camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
+  "film": {"width": )" +
+           film.substr(1, film.find(',') - 1) + R"(, "height": )" +
+           film.substr(film.find(',') + 1, film.size() - film.find(',') - 2) + R"(},
+  "environment": {"map": ")" +
+           constant_map(dir) + R"("},
+  "materials": {"m": {"type": "diffuse", "albedo": 0.7}},
+  "shapes": )" +
+           shapes + extra + "\n}\n";
+}
+
+void write_file(const std::string& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+}
+
+std::vector<std::string> render_args(const std::string& scene, const std::string& out) {
+    return {"render", scene, "--spp", "1", "--max-depth", "3", "--backend", "cpu", "-o", out};
+}
+
+TEST(SceneBadInput, MalformedJsonNamesLineAndColumn) {
+    const std::string dir = ett::scratch_dir("scene-malformed");
+    write_file(dir + "/s.json",
+               "{\n  \"camera\": {\"eye\": [0, 1, 4],\n    \"fov\": 40,,\n  }\n}\n");
+    const CliRun r = run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir);
+    expect_clean_error(r, dir + "/s.json:3:", dir);
+    EXPECT_NE(r.err.find("malformed JSON"), std::string::npos) << r.err;
+    // Truncated file, and a non-object document.
+    write_file(dir + "/t.json", "{\"camera\": {\"eye\": [0, 1");
+    expect_clean_error(run_cli(render_args(dir + "/t.json", dir + "/out.exr"), dir),
+                       dir + "/t.json:1:", dir);
+    write_file(dir + "/a.json", "[1, 2, 3]");
+    expect_clean_error(run_cli(render_args(dir + "/a.json", dir + "/out.exr"), dir),
+                       dir + "/a.json", dir);
+}
+
+TEST(SceneBadInput, UnknownKeysWarnByName) {
+    const std::string dir = ett::scratch_dir("scene-unknown");
+    std::string text = scene_json(dir, R"([{"type": "sphere", "radius": 0.5, "colour": "red"}])",
+                                  R"(, "camra": {"eye": [0, 0, 0]})");
+    write_file(dir + "/s.json", text);
+    const CliRun r = run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir);
+    expect_render(r, dir + "/out.exr", 8, 6);
+    EXPECT_NE(r.err.find("warning"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("'camra'"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("'colour'"), std::string::npos) << r.err;
+}
+
+TEST(SceneBadInput, MissingFiles) {
+    const std::string dir = ett::scratch_dir("scene-missing");
+    expect_clean_error(run_cli(render_args(dir + "/nope.json", dir + "/out.exr"), dir),
+                       dir + "/nope.json", dir);
+    fs::create_directories(dir + "/folder.json");
+    expect_clean_error(run_cli(render_args(dir + "/folder.json", dir + "/out.exr"), dir),
+                       dir + "/folder.json", dir);
+    // A missing mesh, a missing map.
+    write_file(dir + "/mesh.json",
+               scene_json(dir, R"([{"type": "mesh", "file": ")" + dir + R"(/gone.obj"}])"));
+    expect_clean_error(run_cli(render_args(dir + "/mesh.json", dir + "/out.exr"), dir), "gone.obj",
+                       dir);
+    std::string text = scene_json(dir, "[]");
+    text.replace(text.find(constant_map(dir)), constant_map(dir).size(), dir + "/gone.hdr");
+    write_file(dir + "/map.json", text);
+    expect_clean_error(run_cli(render_args(dir + "/map.json", dir + "/out.exr"), dir), "gone.hdr",
+                       dir);
+}
+
+TEST(SceneBadInput, UnreadableFiles) {
+    const std::string dir = ett::scratch_dir("scene-unreadable");
+    // Unreadable scene and mesh (root reads anything: then they must render).
+    write_file(dir + "/locked.json", scene_json(dir, "[]"));
+    write_file(dir + "/locked.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write_file(dir + "/uses_locked.json",
+               scene_json(dir, R"([{"type": "mesh", "file": ")" + dir + R"(/locked.obj"}])"));
+    chmod((dir + "/locked.json").c_str(), 0);
+    chmod((dir + "/locked.obj").c_str(), 0);
+    if (access((dir + "/locked.json").c_str(), R_OK) == 0) {
+        expect_render(run_cli(render_args(dir + "/locked.json", dir + "/out.exr"), dir),
+                      dir + "/out.exr", 8, 6);
+        GTEST_SKIP() << "running as root: chmod 000 does not stop reads (rendered instead)";
+    }
+    expect_clean_error(run_cli(render_args(dir + "/locked.json", dir + "/out.exr"), dir),
+                       "locked.json", dir);
+    expect_clean_error(run_cli(render_args(dir + "/uses_locked.json", dir + "/out.exr"), dir),
+                       "locked.obj", dir);
+}
+
+// Every OBJ of the tinyobjloader and assimp regression corpora as a mesh: render a tiny image
+// or reject the file with a message naming it.
+TEST(SceneBadInput, EveryEdgeCaseObj) {
+    int rendered = 0, rejected = 0;
+    for (const char* corpus : {"edge-cases/obj-tinyobjloader", "edge-cases/obj-assimp"}) {
+        const std::string src = ett::data_file(corpus);
+        if (src.empty())
+            GTEST_SKIP() << corpus << " not found: set ENVTRACE_DATA to ../shared/data";
+        const std::string dir = ett::scratch_dir("scene-obj");
+        for (const auto& e : fs::directory_iterator(src)) {
+            if (e.path().extension() != ".obj")
+                continue;
+            const std::string obj = e.path().string();
+            SCOPED_TRACE(obj);
+            write_file(dir + "/s.json",
+                       scene_json(dir, R"([{"type": "mesh", "file": ")" + obj + R"("}])"));
+            const CliRun r = run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir);
+            ASSERT_FALSE(r.timed_out) << "hung";
+            ASSERT_TRUE(r.exited()) << "signal " << WTERMSIG(r.status) << ": " << r.err;
+            if (r.code() == 0) {
+                expect_render(r, dir + "/out.exr", 8, 6);
+                ++rendered;
+                fs::remove(dir + "/out.exr");
+                fs::remove(dir + "/out.png");
+            } else {
+                expect_clean_error(r, e.path().filename().string(), dir);
+                ++rejected;
+            }
+        }
+    }
+    std::printf("edge-case OBJ files: %d rendered, %d rejected with a message\n", rendered,
+                rejected);
+    EXPECT_GT(rendered, 40);
+}
+
+TEST(SceneBadInput, DegenerateAndNanTrianglesAreSkippedWithAWarning) {
+    const std::string dir = ett::scratch_dir("scene-degenerate");
+    write_file(dir + "/bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv nan 0 0\nv inf 1 1\n"
+                                 "v 1e30 1e30 1e30\nv -1e30 -1e30 1e30\nv 1e30 -1e30 -1e30\n"
+                                 "f 1 2 3\n"  // fine
+                                 "f 1 2 4\n"  // collinear
+                                 "f 1 1 3\n"  // repeated vertex
+                                 "f 5 2 3\n"  // NaN
+                                 "f 6 2 3\n"  // infinite
+                                 "f 7 8 9\n"  // finite coordinates, infinite area
+                                 "f 1 2 99\n" // index out of range
+    );
+    write_file(dir + "/s.json",
+               scene_json(dir, R"([{"type": "mesh", "file": ")" + dir + R"(/bad.obj"}])"));
+    for (const char* backend : {"cpu", "opencl"}) {
+        std::vector<std::string> args = render_args(dir + "/s.json", dir + "/out.exr");
+        args[7] = backend;
+        const CliRun r = run_cli(args, dir);
+        expect_render(r, dir + "/out.exr", 8, 6);
+        EXPECT_NE(r.err.find("skipped"), std::string::npos) << r.err;
+    }
+}
+
+TEST(SceneBadInput, EmptySceneRendersTheMap) {
+    // Regression: an empty scene used to hang (the empty BVH's root looped on itself).
+    const std::string dir = ett::scratch_dir("scene-empty");
+    write_file(dir + "/s.json", scene_json(dir, "[]"));
+    for (const char* backend : {"cpu", "opencl"}) {
+        std::vector<std::string> args = render_args(dir + "/s.json", dir + "/out.exr");
+        args[7] = backend;
+        const CliRun r = run_cli(args, dir);
+        expect_render(r, dir + "/out.exr", 8, 6);
+        EXPECT_NE(r.err.find("no geometry"), std::string::npos) << r.err;
+        for (float v : et::read_rgb_image(dir + "/out.exr").rgb)
+            EXPECT_NEAR(v, 0.5f, 1e-6f); // the constant map seen directly
+    }
+    // No "shapes" key at all.
+    std::string text = scene_json(dir, "[]");
+    text.replace(text.find("\"shapes\": []"), 12, "\"output\": \"x.exr\"");
+    write_file(dir + "/noshapes.json", text);
+    expect_render(run_cli(render_args(dir + "/noshapes.json", dir + "/out.exr"), dir),
+                  dir + "/out.exr", 8, 6);
+}
+
+TEST(SceneBadInput, AbsurdFilmSizes) {
+    const std::string dir = ett::scratch_dir("scene-film");
+    for (const char* film : {"[0, 6]", "[-8, 6]", "[8, 0]", "[1e9, 6]", "[8, 1e9]", "[1e40, 1]"}) {
+        SCOPED_TRACE(film);
+        write_file(dir + "/s.json", scene_json(dir, "[]", "", film));
+        const CliRun r = run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir);
+        expect_clean_error(r, dir + "/s.json", dir);
+        EXPECT_TRUE(r.err.find("width") != std::string::npos ||
+                    r.err.find("height") != std::string::npos)
+            << r.err;
+    }
+    std::string text = scene_json(dir, "[]");
+    text.replace(text.find("\"width\": 8"), 10, "\"width\": \"wide\"");
+    write_file(dir + "/s.json", text);
+    expect_clean_error(run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir), "width", dir);
+    // The smallest film works.
+    write_file(dir + "/s.json", scene_json(dir, "[]", "", "[1, 1]"));
+    expect_render(run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir), dir + "/out.exr", 1,
+                  1);
+}
+
+TEST(SceneBadInput, CameraInsideGeometryRenders) {
+    const std::string dir = ett::scratch_dir("scene-inside");
+    std::string text = scene_json(
+        dir, R"([{"type": "sphere", "center": [0, 1, 4], "radius": 2, "material": "m"}])");
+    write_file(dir + "/s.json", text);
+    for (const char* backend : {"cpu", "opencl"}) {
+        std::vector<std::string> args = render_args(dir + "/s.json", dir + "/out.exr");
+        args[7] = backend;
+        expect_render(run_cli(args, dir), dir + "/out.exr", 8, 6);
+        // Inside a closed sphere nothing of the map is seen (two-sided surfaces): all black.
+        for (float v : et::read_rgb_image(dir + "/out.exr").rgb)
+            EXPECT_EQ(v, 0.0f);
+    }
+    // Eye at the target, and up along the view: rejected.
+    text.replace(text.find("\"target\": [0, 0.3, 0]"), 21, "\"target\": [0, 1, 4]  ");
+    write_file(dir + "/same.json", text);
+    fs::remove(dir + "/out.exr");
+    fs::remove(dir + "/out.png");
+    expect_clean_error(run_cli(render_args(dir + "/same.json", dir + "/out.exr"), dir), "camera",
+                       dir);
+}
+
+TEST(SceneBadInput, BadOutputPathsLeaveNothing) {
+    const std::string dir = ett::scratch_dir("scene-output");
+    write_file(dir + "/s.json", scene_json(dir, "[]"));
+    expect_clean_error(run_cli(render_args(dir + "/s.json", dir + "/no/such/dir/out.exr"), dir),
+                       "no/such/dir", dir);
+    expect_clean_error(run_cli(render_args(dir + "/s.json", dir + "/out.txt"), dir), "out.txt",
+                       dir);
+    // The destination is a folder: the render runs, the final rename fails; the temporary file
+    // must be gone and the folder untouched.
+    fs::create_directories(dir + "/taken.exr");
+    const CliRun r = run_cli(render_args(dir + "/s.json", dir + "/taken.exr"), dir);
+    expect_clean_error(r, "taken.exr", dir);
+    EXPECT_TRUE(fs::is_directory(dir + "/taken.exr"));
+    // A read-only folder (not for root).
+    fs::create_directories(dir + "/ro");
+    chmod((dir + "/ro").c_str(), 0555);
+    if (access((dir + "/ro").c_str(), W_OK) != 0) {
+        expect_clean_error(run_cli(render_args(dir + "/s.json", dir + "/ro/out.exr"), dir),
+                           "ro/out", dir);
+        EXPECT_TRUE(images_in(dir + "/ro").empty());
+    }
+    chmod((dir + "/ro").c_str(), 0755);
+}
+
+} // namespace

@@ -1,0 +1,112 @@
+// Kernel sources embedded with #line markers, build errors that name kernels/FILE:LINE, and the
+// on-disk program-binary cache (keyed by source and options; a corrupt entry is rebuilt).
+#include "opencl/kernel_sources.h"
+#include "opencl/opencl_runtime.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Points ENVTRACE_CACHE_DIR at a fresh folder for the test's lifetime.
+class ScopedCacheDir {
+  public:
+    explicit ScopedCacheDir(const std::string& name) : dir_(ett::scratch_dir(name)) {
+        const char* old = std::getenv("ENVTRACE_CACHE_DIR");
+        had_ = old != nullptr;
+        if (had_)
+            old_ = old;
+        setenv("ENVTRACE_CACHE_DIR", dir_.c_str(), 1);
+    }
+    ~ScopedCacheDir() {
+        if (had_)
+            setenv("ENVTRACE_CACHE_DIR", old_.c_str(), 1);
+        else
+            unsetenv("ENVTRACE_CACHE_DIR");
+    }
+    const std::string& dir() const { return dir_; }
+
+  private:
+    std::string dir_, old_;
+    bool had_ = false;
+};
+
+const char* kGood = "#line 1 \"kernels/probe.cl\"\n"
+                    "__kernel void probe(__global float* x) { x[get_global_id(0)] *= 2.0f; }\n";
+
+} // namespace
+
+TEST(KernelSources, IncludesExpandOnceWithLineMarkers) {
+    const std::string src = et::expand_kernel_source("envmap_sample.cl");
+    EXPECT_NE(src.find("#line 1 \"kernels/envmap_sample.cl\""), std::string::npos);
+    EXPECT_NE(src.find("#line 1 \"kernels/compat.h\""), std::string::npos);
+    EXPECT_NE(src.find("#line 1 \"kernels/envmap.h\""), std::string::npos);
+    // compat.h is included by several headers but expanded once.
+    const std::string marker = "#line 1 \"kernels/compat.h\"";
+    EXPECT_EQ(src.find(marker), src.rfind(marker));
+    // After an include, the including file's numbering resumes on its next line.
+    EXPECT_NE(src.find("#line 4 \"kernels/envmap_sample.cl\""), std::string::npos);
+    EXPECT_EQ(src.find("#include \""), std::string::npos) << "an include was left unexpanded";
+    EXPECT_THROW(et::expand_kernel_source("no_such_kernel.cl"), et::Error);
+}
+
+TEST(OpenClRuntime, BuildErrorNamesKernelFileAndLine) {
+    ScopedCacheDir cache("cl-build-error");
+    const std::string broken = "#line 1 \"kernels/broken.cl\"\n"
+                               "__kernel void k(__global float* x) {\n"
+                               "    x[0] = undefined_identifier;\n"
+                               "}\n";
+    try {
+        ett::runtime().build_source("broken.cl", broken);
+        FAIL() << "a broken program built";
+    } catch (const et::Error& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("kernels/broken.cl failed to build"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("kernels/broken.cl:2:"), std::string::npos)
+            << "the compiler log should point at line 2 of kernels/broken.cl:\n"
+            << msg;
+    }
+    EXPECT_TRUE(fs::is_empty(cache.dir())) << "a failed build must not leave a cache entry";
+}
+
+TEST(OpenClRuntime, BinaryCacheIsKeyedBySourceAndOptionsAndSurvivesCorruption) {
+    ScopedCacheDir cache("cl-cache");
+    et::ClRuntime& rt = ett::runtime();
+    et::ProgramBuildInfo cold, warm, other_options, other_source, after_corruption;
+    rt.build_source("probe.cl", kGood, "", &cold);
+    EXPECT_FALSE(cold.from_cache);
+    ASSERT_TRUE(fs::exists(cold.cache_file)) << cold.cache_file;
+
+    rt.build_source("probe.cl", kGood, "", &warm);
+    EXPECT_TRUE(warm.from_cache);
+    EXPECT_EQ(warm.cache_file, cold.cache_file);
+
+    rt.build_source("probe.cl", kGood, "-DSOMETHING=1", &other_options);
+    EXPECT_FALSE(other_options.from_cache);
+    EXPECT_NE(other_options.cache_file, cold.cache_file);
+
+    rt.build_source("probe.cl", std::string(kGood) + "\n// changed\n", "", &other_source);
+    EXPECT_FALSE(other_source.from_cache);
+    EXPECT_NE(other_source.cache_file, cold.cache_file);
+
+    // Garbage in the cache: rebuilt from source, and the program still runs.
+    {
+        std::ofstream f(cold.cache_file, std::ios::binary | std::ios::trunc);
+        f << "not a program binary";
+    }
+    cl::Program p = rt.build_source("probe.cl", kGood, "", &after_corruption);
+    EXPECT_FALSE(after_corruption.from_cache);
+    cl::Kernel k(p, "probe");
+    float v[4] = {1, 2, 3, 4};
+    cl::Buffer b(rt.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof v, v);
+    k.setArg(0, b);
+    rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(4));
+    rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, sizeof v, v);
+    EXPECT_EQ(v[3], 8.0f);
+}

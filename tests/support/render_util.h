@@ -1,0 +1,156 @@
+// Helpers of the renderer tests: scenes built in code, renders through either back end with the
+// per-pixel sample variance measured from the passes, and statistics on images.
+//
+// Variance: Renderer::image() is the running mean, so pass k's own sample is
+// k * mean_k - (k - 1) * mean_(k-1). With the random sampler the passes are independent and
+// var / n is the variance of the pixel mean; with Sobol' the passes are stratified, so the same
+// figure over-estimates it (a conservative threshold).
+#pragma once
+#include "render/renderer.h"
+#include "load/scene.h"
+#include "prepare/device_scene.h"
+#include "test_data.h"
+
+#include <glm/glm.hpp>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace ett {
+
+// Appends a UV sphere of `segments` x segments/2 quads (two triangles each); flat shading
+// normals unless `smooth`.
+inline void add_sphere(et::TriangleSoup& soup, glm::vec3 c, float r, int segments, bool smooth,
+                       int material) {
+    const int rings = segments / 2;
+    auto point = [&](int i, int j) {
+        const double th = M_PI * i / rings, ph = 2 * M_PI * j / segments;
+        return glm::vec3(float(std::sin(th) * std::cos(ph)), float(std::cos(th)),
+                         float(std::sin(th) * std::sin(ph)));
+    };
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const glm::vec3 a = point(i, j), b = point(i, j + 1), d = point(i + 1, j),
+                            e = point(i + 1, j + 1);
+            for (const auto& tri : {std::vector<glm::vec3>{a, b, e}, {a, e, d}}) {
+                glm::vec3 p[3] = {c + r * tri[0], c + r * tri[1], c + r * tri[2]};
+                glm::vec3 n[3] = {tri[0], tri[1], tri[2]};
+                et::add_triangle(soup, p, smooth ? n : nullptr, material);
+            }
+        }
+}
+
+// Appends the square of half-size h centred at c whose front faces along n.
+inline void add_square(et::TriangleSoup& soup, glm::vec3 c, glm::vec3 n, float h, int material) {
+    n = glm::normalize(n);
+    const glm::vec3 helper = std::fabs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+    const glm::vec3 t = glm::normalize(glm::cross(helper, n)), b = glm::cross(n, t);
+    const glm::vec3 q[4] = {c + h * (-t - b), c + h * (t - b), c + h * (t + b), c + h * (-t + b)};
+    glm::vec3 a[3] = {q[0], q[1], q[2]}, d[3] = {q[0], q[2], q[3]};
+    et::add_triangle(soup, a, nullptr, material);
+    et::add_triangle(soup, d, nullptr, material);
+}
+
+inline et::Material diffuse(float albedo) {
+    et::Material m;
+    m.type = 0; // ETK_MAT_DIFFUSE
+    m.albedo = glm::vec3(albedo);
+    return m;
+}
+
+inline et::Scene base_scene(int w, int h, et::EnvMap env) {
+    et::Scene s;
+    s.width = w;
+    s.height = h;
+    s.env = std::move(env);
+    s.settings.sampler = "random";
+    return s;
+}
+
+struct RenderResult {
+    std::vector<float> mean; // RGB per pixel
+    std::vector<double> var; // sample variance of one pass, per pixel and channel
+    int spp = 0;
+    // Variance of the mean of pixel channel i.
+    double var_mean(size_t i) const { return var[i] / spp; }
+};
+
+// Renders `spp` passes; measures the per-pass variance when `variance` (one image() read per
+// pass).
+inline RenderResult render(const et::Scene& scene, const std::string& backend, int spp,
+                           bool variance = true) {
+    const et::SceneArrays arrays = et::build_scene_arrays(scene);
+    const etk::EtkParams params = et::make_params(scene, arrays);
+    et::RendererOptions o;
+    o.backend = backend;
+    o.threads = 2;
+    auto r = et::make_renderer(o, arrays, params);
+    RenderResult out;
+    out.spp = spp;
+    const size_t n = static_cast<size_t>(scene.width) * scene.height * 3;
+    std::vector<double> sum(n, 0.0), sum2(n, 0.0);
+    std::vector<float> prev(n, 0.0f);
+    for (int k = 0; k < spp; ++k) {
+        r->render_sample(static_cast<uint32_t>(k));
+        if (!variance)
+            continue;
+        std::vector<float> cur = r->image();
+        for (size_t i = 0; i < n; ++i) {
+            const double x = double(cur[i]) * (k + 1) - double(prev[i]) * k;
+            sum[i] += x;
+            sum2[i] += x * x;
+        }
+        prev.swap(cur);
+    }
+    out.mean = r->image();
+    // The film drops non-finite samples instead of writing NaN; none may occur.
+    EXPECT_EQ(r->stats().nonfinite_samples, 0u) << backend << ": non-finite samples dropped";
+    out.var.assign(n, 0.0);
+    if (variance && spp > 1)
+        for (size_t i = 0; i < n; ++i)
+            out.var[i] = std::max(0.0, (sum2[i] - sum[i] * sum[i] / spp) / (spp - 1));
+    return out;
+}
+
+inline double image_mean(const std::vector<float>& img) {
+    double s = 0.0;
+    for (float v : img)
+        s += v;
+    return img.empty() ? 0.0 : s / img.size();
+}
+
+// Two independent renders of the same expectation: z = (a - b) / sqrt(var_a / n_a + var_b /
+// n_b) per pixel channel. For correct estimators mean z^2 is ~1 and |z| > 4 is rare (6e-5 for
+// a Gaussian; more with the heavy tails of a poorly matched strategy, whose per-pass variance
+// from a few hundred passes is itself noisy). The image means are compared with the summed
+// variance.
+struct Agreement {
+    double mean_z2 = 0.0, max_abs_z = 0.0, frac_over_4 = 0.0;
+    double mean_a = 0.0, mean_b = 0.0, mean_z = 0.0; // mean_z: of the image means
+};
+
+inline Agreement agreement(const RenderResult& a, const RenderResult& b) {
+    Agreement g;
+    const size_t n = a.mean.size();
+    double var_sum = 0.0;
+    int over = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const double v = a.var_mean(i) + b.var_mean(i);
+        var_sum += v;
+        const double d = double(a.mean[i]) - b.mean[i];
+        // Float rounding floor for zero-variance pixels (the background seen directly).
+        const double sd = std::sqrt(v) + 1e-6 * (std::fabs(a.mean[i]) + 1e-6);
+        const double z = d / sd;
+        g.mean_z2 += z * z / n;
+        g.max_abs_z = std::max(g.max_abs_z, std::fabs(z));
+        over += std::fabs(z) > 4;
+    }
+    g.frac_over_4 = double(over) / n;
+    g.mean_a = image_mean(a.mean);
+    g.mean_b = image_mean(b.mean);
+    g.mean_z = (g.mean_a - g.mean_b) / (std::sqrt(var_sum) / n + 1e-9);
+    return g;
+}
+
+} // namespace ett
