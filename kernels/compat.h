@@ -19,6 +19,7 @@
 #define make_float4(a, b, c, d) ((float4)((a), (b), (c), (d)))
 // Reserves a slot in a work queue.
 #define ETK_ATOMIC_INC(p) atomic_inc(p)
+#define ETK_ATOMIC_ADD(p, v) atomic_add((p), (v))
 #define ETK_ATOMIC_PTR volatile __global uint*
 // Vector geometry spelled out as the host spells it: the built-ins may sum in another order or
 // normalise through rsqrt, and the back ends are meant to round identically.
@@ -51,6 +52,7 @@ static inline float3 etk_normalize3(float3 a) {
 #define ETK_GLOBAL
 #define ETK_UINT_MAX 0xffffffffu
 #define ETK_ATOMIC_INC(p) __atomic_fetch_add((p), 1u, __ATOMIC_RELAXED)
+#define ETK_ATOMIC_ADD(p, v) __atomic_fetch_add((p), (v), __ATOMIC_RELAXED)
 #define ETK_ATOMIC_PTR uint*
 
 namespace etk {

@@ -1,20 +1,19 @@
 // Direct lighting from a finite set of directional lights, and from SIS strata (Agarwal et al.
-// 2003): the per-light evaluation shared by the host loop (host/lib/light_render.cpp) and any
-// kernel that includes it. Kept apart from integrator.h on purpose: the wavefront stages trace
-// one shadow ray per path, these estimators trace one per light.
+// 2003): the per-light evaluation that the shade stages of integrator.h use (shade_lights sums
+// every light of the set at a hit; shade_hits with ETK_STRATEGY_SIS draws one stratum).
 //
 // A directional light k carries E_k = the integral of L over the directions it stands for (the
 // map's power in its share, W m^-2): it adds f(wo, wi_k) E_k cos(theta_k) V(wi_k) to a point.
-// The camera ray and the surface set-up are the path tracer's own (etk_camera_dir and
-// etk_surface_at in integrator.h), so these renders and the path tracer's agree pixel for pixel.
+// The camera ray and the surface set-up are the path tracer's own (surface.h), so these renders
+// and the path tracer's agree pixel for pixel.
 #ifndef ETK_DIRECTIONAL_LIGHTS_H
 #define ETK_DIRECTIONAL_LIGHTS_H
 #include "bsdf.h"
 #include "bvh.h"
 #include "compat.h"
 #include "envmap.h"
-#include "integrator.h"
 #include "sampler.h"
+#include "surface.h"
 #include "trig.h"
 
 ETK_BEGIN
@@ -31,15 +30,10 @@ ETK_FN float3 etk_dl_unshadowed(EtkSurface s, float3 wi_world, float3 E) {
     return etk_bsdf_eval(s.m, s.wo, wi) * E * wi.z;
 }
 
-// The full contribution of one light: unshadowed term times visibility (one any-hit ray).
-ETK_FN float3 etk_dl_light(EtkScene S, EtkSurface s, float3 wi_world, float3 E) {
-    float3 c = etk_dl_unshadowed(s, wi_world, E);
-    if (!(etk_max3(c) > 0.0f))
-        return make_float3(0.0f, 0.0f, 0.0f);
+// Whether nothing blocks the direction wi_world from the surface (one any-hit ray).
+ETK_FN int etk_dl_visible(EtkScene S, EtkSurface s, float3 wi_world) {
     EtkHit h;
-    if (etk_bvh_traverse(S.nodes, S.tris, s.origin, wi_world, 3.0e38f, 1, &h))
-        return make_float3(0.0f, 0.0f, 0.0f);
-    return c;
+    return !etk_bvh_traverse(S.nodes, S.tris, s.origin, wi_world, 3.0e38f, 1, &h);
 }
 
 // A direction uniformly distributed (in solid angle) over the texels of one stratum of a

@@ -1,55 +1,30 @@
-// The wavefront path tracer: one small kernel per stage (integrator.h holds the stages, shared
-// with the native back end). Every kernel takes the same argument list, so the host sets it once;
-// each runs over exactly the live entries of its queue (global size rounded up to the fixed
+// The wavefront path tracer: one kernel per stage, generated from the stage list (ETK_STAGES in
+// path_state.h; integrator.h holds the stages, shared with the native back end). Every kernel
+// takes the same argument list, expanded from the same declarations, so the host sets it once;
+// each runs over exactly the live entries of its queue (global size rounded up to the
 // work-group size, the tail returning at once).
 #include "integrator.h"
 
+#define ETK_ARG_CONST(type, name) __global const type *name,
+#define ETK_ARG(type, name) __global type *name,
+#define ETK_ARG_QUEUE(name) __global int *name,
 #define ETK_KERNEL_ARGS                                                                            \
-    __global const float4 *nodes, __global const float4 *tris, __global const float4 *normals,     \
-        __global const int *tri_material, __global const float4 *materials,                        \
-        __global const float *env_dist, __global const float *env_texels, __global float4 *ray_o,  \
-        __global float4 *ray_d, __global float4 *beta, __global float4 *radiance,                  \
-        __global float4 *hit, __global float4 *shadow_o, __global float4 *shadow_d,                \
-        __global float4 *shadow_L, __global int *pixel, __global const int *ray_in,                \
-        __global int *ray_out, __global int *escaped, __global int *shade, __global int *shadow,   \
-        volatile __global uint *counters, __global float4 *film, EtkParams params, int n
+    ETK_SCENE_BUFFERS(ETK_ARG_CONST)                                                               \
+    ETK_PATH_FIELDS(ETK_ARG)                                                                       \
+    ETK_QUEUES(ETK_ARG_QUEUE)                                                                      \
+    ETK_FILM_FIELDS(ETK_ARG) volatile __global uint *counters, EtkParams params, int n
 
-#define ETK_UNPACK                                                                                 \
-    EtkScene S = {nodes, tris, normals, tri_material, materials, env_dist, env_texels};            \
-    EtkPaths P = {ray_o, ray_d, beta, radiance, hit, shadow_o, shadow_d, shadow_L, pixel};         \
-    EtkQueues Q = {ray_in, ray_out, escaped, shade, shadow, counters};                             \
-    int i = get_global_id(0);                                                                      \
-    if (i >= n)                                                                                    \
-        return
+#define ETK_NAME(type, name) name,
+#define ETK_QUEUE_NAME(name) name,
+#define ETK_STAGE_KERNEL(name, fn)                                                                 \
+    __kernel void name(ETK_KERNEL_ARGS) {                                                          \
+        EtkScene S = {ETK_SCENE_BUFFERS(ETK_NAME)};                                                \
+        EtkPaths P = {ETK_PATH_FIELDS(ETK_NAME)};                                                  \
+        EtkQueues Q = {ETK_QUEUES(ETK_QUEUE_NAME) counters};                                       \
+        EtkFilm F = {ETK_FILM_FIELDS(ETK_NAME)};                                                   \
+        int i = get_global_id(0);                                                                  \
+        if (i < n)                                                                                 \
+            fn(S, P, Q, F, params, i);                                                             \
+    }
 
-__kernel void generate(ETK_KERNEL_ARGS) {
-    ETK_UNPACK;
-    (void)S;
-    etk_generate(P, Q, params, i);
-}
-
-__kernel void intersect(ETK_KERNEL_ARGS) {
-    ETK_UNPACK;
-    etk_intersect(P, Q, S, params, i);
-}
-
-__kernel void escaped_rays(ETK_KERNEL_ARGS) {
-    ETK_UNPACK;
-    etk_escaped(P, Q, S, params, i);
-}
-
-__kernel void shade_hits(ETK_KERNEL_ARGS) {
-    ETK_UNPACK;
-    etk_shade(P, Q, S, params, i);
-}
-
-__kernel void trace_shadows(ETK_KERNEL_ARGS) {
-    ETK_UNPACK;
-    etk_shadow(P, Q, S, i);
-}
-
-__kernel void accumulate(ETK_KERNEL_ARGS) {
-    ETK_UNPACK;
-    (void)S;
-    etk_accumulate(P, Q, film, i);
-}
+ETK_STAGES(ETK_STAGE_KERNEL)

@@ -5,9 +5,9 @@
 #include "image/preview.h"
 #include "load/scene.h"
 #include "prepare/device_scene.h"
+#include "prepare/light_set.h"
 #include "util/timer.h"
 #include "render/renderer.h"
-#include "render/light_render.h"
 #include "prepare/sis.h"
 
 #include <nlohmann/json.hpp>
@@ -74,26 +74,51 @@ class Progress {
     int last_decile_ = 0;
 };
 
-void run(const RenderArgs& a, const Globals& g) {
-    Timer total;
-    Scene scene = load_scene(a.scene);
-    auto& st = scene.settings;
+// The command line over the scene's settings: parsed once into typed values.
+RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSettings st) {
+    const std::string cli = "command line";
     if (a.spp > 0)
         st.spp = a.spp;
     if (a.max_depth > 0)
         st.max_depth = a.max_depth;
     if (!a.strategy.empty())
-        st.strategy = a.strategy;
+        st.strategy = parse_strategy(a.strategy, cli);
     if (!a.heuristic.empty())
-        st.heuristic = a.heuristic;
+        st.heuristic = parse_heuristic(a.heuristic, cli);
     if (!a.sampler.empty())
-        st.sampler = a.sampler;
+        st.sampler = parse_sampler(a.sampler, cli);
     if (a.seed >= 0)
         st.seed = static_cast<uint32_t>(a.seed);
     if (a.time_limit >= 0)
         st.time_limit = a.time_limit;
     if (a.paths >= 0)
         st.paths = a.paths;
+    st.backend = parse_backend(a.backend, cli);
+    st.device = g.device;
+    st.threads = a.threads;
+    st.sis_samples = a.sis_samples;
+    st.lights = a.lights;
+    if (!st.lights.empty()) {
+        if (st.strategy == Strategy::sis)
+            throw Error("--lights and --strategy sis exclude each other");
+        st.strategy = Strategy::lights;
+    }
+    const bool direct_only = st.strategy == Strategy::sis || st.strategy == Strategy::lights;
+    if (direct_only && st.max_depth != 1) {
+        warn("--lights and --strategy sis render direct lighting only: using --max-depth 1");
+        st.max_depth = 1;
+    }
+    if (st.strategy == Strategy::sis && st.time_limit <= 0 && st.spp % st.sis_samples != 0)
+        throw Error("--strategy sis visits one stratum per sample: --spp (" +
+                    std::to_string(st.spp) + ") must be a multiple of --sis-samples (" +
+                    std::to_string(st.sis_samples) + ")");
+    return st;
+}
+
+void run(const RenderArgs& a, const Globals& g) {
+    Timer total;
+    Scene scene = load_scene(a.scene);
+    const RenderSettings st = settings_for(a, g, scene.settings);
     std::string out = !a.output.empty()       ? a.output
                       : !scene.output.empty() ? scene.output
                                               : fs::path(a.scene).stem().string() + ".exr";
@@ -104,67 +129,42 @@ void run(const RenderArgs& a, const Globals& g) {
     if (!dir.empty() && !fs::is_directory(dir, ec))
         throw Error(exr_name + ": cannot write: folder '" + dir.string() + "' does not exist");
 
-    // Directional lights and SIS sum over a set of directions per shading point: a native loop
-    // of their own (light_render.h) instead of the wavefront back ends.
-    const bool use_sis = st.strategy == "sis", use_lights = !a.lights.empty();
-    if (use_sis && use_lights)
-        throw Error("--lights and --strategy sis exclude each other");
-    if ((use_sis || use_lights) && st.max_depth != 1) {
-        warn("--lights and --strategy sis render direct lighting only: using --max-depth 1");
-        st.max_depth = 1;
-    }
-    if (use_sis && st.time_limit <= 0 && st.spp % a.sis_samples != 0)
-        throw Error("--strategy sis visits one stratum per sample: --spp (" +
-                    std::to_string(st.spp) + ") must be a multiple of --sis-samples (" +
-                    std::to_string(a.sis_samples) + ")");
-    if (use_sis)
-        st.strategy = "light"; // for make_params; the SIS loop ignores it
-    SceneArrays arrays = build_scene_arrays(scene);
-    etk::EtkParams params = make_params(scene, arrays);
-    if (use_sis)
-        st.strategy = "sis";
+    // Directional lights and SIS strata: the light directions the shade stages sum or draw.
     LightSet light_set;
     SisResult sis;
-    if (use_lights) {
-        light_set = read_lights(a.lights);
-        std::printf("light set %s: %zu directional lights (%s)\n", a.lights.c_str(),
+    if (st.strategy == Strategy::lights) {
+        light_set = read_lights(st.lights);
+        std::printf("light set %s: %zu directional lights (%s)\n", st.lights.c_str(),
                     light_set.lights.size(), light_set.method.c_str());
-        st.strategy = "lights";
     }
-    if (use_sis) {
+    if (st.strategy == Strategy::sis) {
         SisOptions so;
-        so.samples = a.sis_samples;
+        so.samples = st.sis_samples;
         sis = build_sis(scene.env, so);
-        std::printf("SIS: %d strata (per level:", a.sis_samples);
+        std::printf("SIS: %d strata (per level:", st.sis_samples);
         for (int n : sis.level_samples)
             std::printf(" %d", n);
         std::printf(") precomputed in %.3f s\n", sis.seconds);
     }
+    const DeviceScene ds =
+        prepare_device_scene(std::move(scene), st, &light_set.lights, &sis.strata);
     std::printf("scene %s: %zu triangles, BVH %d nodes (depth %d, SAH cost %.1f) in %.1f ms; "
                 "environment %dx%d, distribution in %.2f ms\n",
-                a.scene.c_str(), scene.triangles.size(), arrays.bvh.node_count(), arrays.bvh.depth,
-                arrays.bvh.sah_cost, arrays.bvh.build_seconds * 1e3, scene.env.image.width,
-                scene.env.image.height, scene.env.build_seconds * 1e3);
+                a.scene.c_str(), ds.triangle_count, ds.bvh.nodes, ds.bvh.depth, ds.bvh.sah_cost,
+                ds.bvh.build_seconds * 1e3, ds.map_width, ds.map_height,
+                ds.map_build_seconds * 1e3);
 
-    RendererOptions ro;
-    ro.backend = a.backend;
-    ro.device = g.device;
-    ro.paths = st.paths;
-    ro.threads = a.threads;
     ProgramBuildInfo build;
-    std::unique_ptr<Renderer> renderer_ptr =
-        use_lights ? std::make_unique<LightSetRenderer>(arrays, params, light_set.lights, a.threads)
-        : use_sis  ? std::make_unique<LightSetRenderer>(arrays, params, sis.strata, a.threads)
-                   : make_renderer(ro, arrays, params, &build);
+    std::unique_ptr<Renderer> renderer_ptr = make_renderer(ds, &build);
     Renderer& renderer = *renderer_ptr;
-    if (a.backend == "opencl" && !use_sis && !use_lights)
+    if (st.backend == Backend::opencl)
         std::printf("OpenCL program build %.3f s (%s)\n", build.seconds,
                     build.from_cache ? "cached binary" : "compiled");
     std::printf(
         "backend %s: %dx%d, %s spp, depth %d, strategy %s, sampler %s, %d paths in flight\n",
-        renderer.name().c_str(), scene.width, scene.height,
+        renderer.name().c_str(), ds.width(), ds.height(),
         st.time_limit > 0 ? "time-limited" : std::to_string(st.spp).c_str(), st.max_depth,
-        st.strategy.c_str(), st.sampler.c_str(), renderer.paths());
+        name_of(st.strategy), name_of(st.sampler), renderer.paths());
     std::fflush(stdout);
 
     Progress progress(st.spp, st.time_limit);
@@ -184,20 +184,20 @@ void run(const RenderArgs& a, const Globals& g) {
 
     std::vector<std::pair<std::string, std::string>> meta = {
         {"envtrace:spp", std::to_string(done)},
-        {"envtrace:strategy", st.strategy},
-        {"envtrace:mis_heuristic", st.heuristic},
-        {"envtrace:sampler", st.sampler},
+        {"envtrace:strategy", name_of(st.strategy)},
+        {"envtrace:mis_heuristic", name_of(st.heuristic)},
+        {"envtrace:sampler", name_of(st.sampler)},
         {"envtrace:seed", std::to_string(st.seed)},
         {"envtrace:max_depth", std::to_string(st.max_depth)},
         {"envtrace:render_seconds", std::to_string(render_s)},
         {"envtrace:backend", renderer.name()},
-        {"envtrace:lights", a.lights},
+        {"envtrace:lights", st.lights},
         {"envtrace:sis_seconds", std::to_string(sis.seconds)},
         {"Software", "envtrace " ENVTRACE_VERSION},
     };
-    write_image(exr_name, scene.width, scene.height, 3, img, meta);
-    RgbImage film{scene.width, scene.height, img};
-    write_image(png_name, scene.width, scene.height, 3, tone_map(film, 1.0f));
+    write_image(exr_name, ds.width(), ds.height(), 3, img, meta);
+    RgbImage film{ds.width(), ds.height(), img};
+    write_image(png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
 
     const double mrays = s.rays() / render_s * 1e-6;
     std::printf(
@@ -205,12 +205,12 @@ void run(const RenderArgs& a, const Globals& g) {
         "%.3g samples/s, %.4f s/spp\n",
         done, render_s, mrays, (unsigned long long)s.camera_rays,
         (unsigned long long)s.continuation_rays, (unsigned long long)s.shadow_rays,
-        double(done) * scene.width * scene.height / render_s, render_s / std::max(1, done));
+        double(done) * ds.width() * ds.height() / render_s, render_s / std::max(1, done));
     if (s.nonfinite_samples > 0)
         warn(a.scene + ": " + std::to_string(s.nonfinite_samples) +
              " samples were not finite and counted as zero (a renderer bug: please "
              "report the scene)");
-    std::printf("%s time per stage:", a.backend == "cpu" ? "thread" : "device");
+    std::printf("%s time per stage:", st.backend == Backend::cpu ? "thread" : "device");
     for (const auto& [name, t] : s.stage_seconds)
         std::printf(" %s %.3fs", name.c_str(), t);
     std::printf("\nwrote %s and %s (total %.2f s)\n", exr_name.c_str(), png_name.c_str(),
@@ -220,18 +220,18 @@ void run(const RenderArgs& a, const Globals& g) {
         nlohmann::json j;
         j["scene"] = a.scene;
         j["backend"] = renderer.name();
-        j["width"] = scene.width;
-        j["height"] = scene.height;
+        j["width"] = ds.width();
+        j["height"] = ds.height();
         j["spp"] = done;
         j["max_depth"] = st.max_depth;
-        j["strategy"] = st.strategy;
-        if (use_lights)
-            j["lights"] = {{"file", a.lights}, {"count", light_set.lights.size()}};
-        if (use_sis)
-            j["sis"] = {{"samples", a.sis_samples},
+        j["strategy"] = name_of(st.strategy);
+        if (st.strategy == Strategy::lights)
+            j["lights"] = {{"file", st.lights}, {"count", light_set.lights.size()}};
+        if (st.strategy == Strategy::sis)
+            j["sis"] = {{"samples", st.sis_samples},
                         {"precompute_seconds", sis.seconds},
                         {"level_samples", sis.level_samples}};
-        j["sampler"] = st.sampler;
+        j["sampler"] = name_of(st.sampler);
         j["render_seconds"] = render_s;
         j["seconds_per_spp"] = render_s / std::max(1, done);
         j["nonfinite_samples"] = s.nonfinite_samples;
@@ -239,14 +239,14 @@ void run(const RenderArgs& a, const Globals& g) {
                      {"continuation", s.continuation_rays},
                      {"shadow", s.shadow_rays}};
         j["mrays_per_second"] = mrays;
-        j["samples_per_second"] = double(done) * scene.width * scene.height / render_s;
+        j["samples_per_second"] = double(done) * ds.width() * ds.height() / render_s;
         j["program_build_seconds"] = build.seconds;
         j["program_from_cache"] = build.from_cache;
-        j["bvh"] = {{"nodes", arrays.bvh.node_count()},
-                    {"depth", arrays.bvh.depth},
-                    {"sah_cost", arrays.bvh.sah_cost},
-                    {"build_seconds", arrays.bvh.build_seconds}};
-        j["environment_build_seconds"] = scene.env.build_seconds;
+        j["bvh"] = {{"nodes", ds.bvh.nodes},
+                    {"depth", ds.bvh.depth},
+                    {"sah_cost", ds.bvh.sah_cost},
+                    {"build_seconds", ds.bvh.build_seconds}};
+        j["environment_build_seconds"] = ds.map_build_seconds;
         for (const auto& [name, t] : s.stage_seconds)
             j["stage_seconds"][name] = t;
         write_json_file(a.stats_file, j, 2);
@@ -269,23 +269,23 @@ void add_render_command(CLI::App& app, Globals& g) {
         ->check(CLI::Range(1, 1000));
     cmd->add_option("--strategy", a->strategy,
                     "light | bsdf | mis | uniform | sis (structured importance sampling, native)")
-        ->check(CLI::IsMember({"light", "bsdf", "mis", "uniform", "sis"}));
+        ->check(CLI::IsMember(strategy_names()));
     cmd->add_option("--sis-samples", a->sis_samples,
                     "SIS strata (one shadow ray per sample; --spp a multiple of it)")
         ->check(CLI::Range(1, 1 << 16));
     cmd->add_option("--lights", a->lights,
                     "Render with this directional light set ('envtrace lights'), natively");
     cmd->add_option("--mis-heuristic", a->heuristic, "balance | power")
-        ->check(CLI::IsMember({"balance", "power"}));
+        ->check(CLI::IsMember(heuristic_names()));
     cmd->add_option("--sampler", a->sampler, "sobol | random")
-        ->check(CLI::IsMember({"sobol", "random"}));
+        ->check(CLI::IsMember(sampler_names()));
     cmd->add_option("--seed", a->seed, "Sampler seed")->check(CLI::Range(0LL, 4294967295LL));
     cmd->add_option("--paths", a->paths, "Paths in flight (0: the whole film, capped by memory)")
         ->check(CLI::Range(0, 1 << 26));
     cmd->add_option("--stats", a->stats_file, "Write the render summary as JSON");
     cmd->add_option("--backend", a->backend,
                     "opencl (default) or cpu (native C++, same kernels/ sources)")
-        ->check(CLI::IsMember({"opencl", "cpu"}));
+        ->check(CLI::IsMember(backend_names()));
     cmd->add_option("--threads", a->threads, "Native back end threads (0: all cores)")
         ->check(CLI::Range(0, 1024));
     cmd->callback([a, &g] { run(*a, g); });

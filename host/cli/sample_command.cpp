@@ -34,7 +34,7 @@ void run(const SampleArgs& a, const Globals& g) {
     ProgramBuildInfo build;
     EnvSamplerCL sampler(rt, env, &build);
     Timer t;
-    auto samples = sampler.sample_sequence(parse_sampler(a.sampler), a.seed, 0, 0, a.count);
+    auto samples = sampler.sample_sequence(static_cast<int>(parse_sampler(a.sampler, "--sampler")), a.seed, 0, 0, a.count);
     const double sample_s = t.seconds();
     std::printf("device %s: program build %.3f s (%s), %d samples in %.2f ms\n",
                 rt.device().device_name.c_str(), build.seconds,

@@ -32,7 +32,7 @@ et::Scene furnace_scene(bool smooth, int segments, int depth, const std::string&
     s.materials.push_back(ett::diffuse(1.0f));
     ett::add_sphere(s.triangles, glm::vec3(0.0f), 1.0f, segments, smooth, 0);
     s.settings.max_depth = depth;
-    s.settings.strategy = strategy;
+    s.settings.strategy = et::parse_strategy(strategy, "test");
     s.settings.seed = 7;
     return s;
 }

@@ -77,7 +77,7 @@ TEST_P(SpotTest, WhitePlaneFacingTheSpotReadsIrradianceOverPi) {
     s.camera.up = std::fabs(d.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
     s.camera.fov_deg = 30.0f; // the square fills the view
     s.settings.max_depth = 1;
-    s.settings.strategy = strategy;
+    s.settings.strategy = et::parse_strategy(strategy, "test");
     s.settings.seed = 3;
     const ett::RenderResult r = ett::render(s, backend, 16);
     double sum = 0.0;

@@ -32,7 +32,7 @@ et::Scene scene(const et::EnvMap& env, const std::string& strategy, int depth, u
     s.camera.eye = {0.0f, 1.2f, 3.2f};
     s.camera.target = {0.0f, 0.45f, 0.0f};
     s.camera.fov_deg = 40.0f;
-    s.settings.strategy = strategy;
+    s.settings.strategy = et::parse_strategy(strategy, "test");
     s.settings.max_depth = depth;
     s.settings.seed = seed;
     return s;

@@ -4,7 +4,7 @@
 // unoccluded plane match their closed forms.
 #include "image/image_metrics.h"
 #include "kernels/directional_lights.h"
-#include "render/light_render.h"
+#include "render/renderer.h"
 #include "prepare/light_set.h"
 #include "render_util.h"
 #include "prepare/sis.h"
@@ -221,11 +221,14 @@ TEST(LightRender, DirectionalLightsOnAPlaneMatchTheClosedForm) {
     glm::dvec3 expect(0.0);
     for (const auto& l : set.lights)
         expect += l.power * double(std::max(0.0f, l.direction.y)) * (albedo / M_PI);
-    const et::SceneArrays arrays = et::build_scene_arrays(scene);
-    et::LightSetRenderer r(arrays, et::make_params(scene, arrays), set.lights, 2);
-    r.render_sample(0);
-    r.render_sample(1);
-    const std::vector<float> img = r.image();
+    et::RenderSettings st = scene.settings;
+    st.strategy = et::Strategy::lights;
+    st.backend = et::Backend::cpu;
+    const et::DeviceScene ds = et::prepare_device_scene(scene, st, &set.lights);
+    auto r = et::make_renderer(ds);
+    r->render_sample(0);
+    r->render_sample(1);
+    const std::vector<float> img = r->image();
     for (size_t i = 0; i < img.size(); ++i)
         ASSERT_NEAR(img[i], expect[i % 3], 1e-4 * expect[i % 3] + 1e-7) << "value " << i;
 }
@@ -239,11 +242,14 @@ TEST(LightRender, SisOnAConstantMapIsUnbiased) {
     o.samples = 16;
     const et::SisResult sis = et::build_sis(env, o);
     et::Scene scene = plane_scene(std::move(env), albedo);
-    const et::SceneArrays arrays = et::build_scene_arrays(scene);
-    et::LightSetRenderer r(arrays, et::make_params(scene, arrays), sis.strata, 2);
+    et::RenderSettings st = scene.settings;
+    st.strategy = et::Strategy::sis;
+    st.backend = et::Backend::cpu;
+    const et::DeviceScene ds = et::prepare_device_scene(scene, st, nullptr, &sis.strata);
+    auto r = et::make_renderer(ds);
     for (uint32_t s = 0; s < 64; ++s)
-        r.render_sample(s);
-    const std::vector<float> img = r.image();
+        r->render_sample(s);
+    const std::vector<float> img = r->image();
     double sum = 0.0, sum2 = 0.0;
     for (size_t i = 1; i < img.size(); i += 3) {
         sum += img[i];

@@ -69,8 +69,8 @@ TEST_P(Backends, DepthOneEqualUpToRounding) {
         GTEST_SKIP() << "meshes/bunny_5k.obj not found";
     et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
     s.settings.max_depth = 1;
-    s.settings.sampler = "sobol";
-    s.settings.strategy = "mis";
+    s.settings.sampler = et::SamplerKind::sobol;
+    s.settings.strategy = et::Strategy::mis;
     s.settings.seed = 11;
     const int spp = 16;
     const auto cl = ett::render(s, "opencl", spp, false);
@@ -106,8 +106,8 @@ TEST_P(Backends, DepthFiveAgreeStatistically) {
         GTEST_SKIP() << "meshes/bunny_5k.obj not found";
     et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
     s.settings.max_depth = 5;
-    s.settings.sampler = "random";
-    s.settings.strategy = "mis";
+    s.settings.sampler = et::SamplerKind::random;
+    s.settings.strategy = et::Strategy::mis;
     const int spp = 128;
     s.settings.seed = 21;
     const auto cl = ett::render(s, "opencl", spp);

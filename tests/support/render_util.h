@@ -64,7 +64,7 @@ inline et::Scene base_scene(int w, int h, et::EnvMap env) {
     s.width = w;
     s.height = h;
     s.env = std::move(env);
-    s.settings.sampler = "random";
+    s.settings.sampler = et::SamplerKind::random;
     return s;
 }
 
@@ -80,12 +80,11 @@ struct RenderResult {
 // pass).
 inline RenderResult render(const et::Scene& scene, const std::string& backend, int spp,
                            bool variance = true) {
-    const et::SceneArrays arrays = et::build_scene_arrays(scene);
-    const etk::EtkParams params = et::make_params(scene, arrays);
-    et::RendererOptions o;
-    o.backend = backend;
-    o.threads = 2;
-    auto r = et::make_renderer(o, arrays, params);
+    et::RenderSettings st = scene.settings;
+    st.backend = et::parse_backend(backend, "test");
+    st.threads = 2;
+    const et::DeviceScene ds = et::prepare_device_scene(scene, st);
+    auto r = et::make_renderer(ds);
     RenderResult out;
     out.spp = spp;
     const size_t n = static_cast<size_t>(scene.width) * scene.height * 3;

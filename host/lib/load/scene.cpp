@@ -181,9 +181,12 @@ Scene load_scene(const std::string& path) {
         auto& st = scene.settings;
         st.spp = static_cast<int>(rr.number(s, "spp", st.spp, 1, 1 << 24));
         st.max_depth = static_cast<int>(rr.number(s, "max_depth", st.max_depth, 1, 1000));
-        st.strategy = rr.get<std::string>(s, "strategy", st.strategy);
-        st.heuristic = rr.get<std::string>(s, "heuristic", st.heuristic);
-        st.sampler = rr.get<std::string>(s, "sampler", st.sampler);
+        if (s.contains("strategy"))
+            st.strategy = parse_strategy(rr.get<std::string>(s, "strategy", ""), rr.where);
+        if (s.contains("heuristic"))
+            st.heuristic = parse_heuristic(rr.get<std::string>(s, "heuristic", ""), rr.where);
+        if (s.contains("sampler"))
+            st.sampler = parse_sampler(rr.get<std::string>(s, "sampler", ""), rr.where);
         st.seed = rr.get<uint32_t>(s, "seed", st.seed);
         st.time_limit = rr.number(s, "time_limit", 0.0f, 0.0f, 1e7f);
         st.paths = static_cast<int>(rr.number(s, "paths", 0, 0, 1 << 26));

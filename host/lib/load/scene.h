@@ -3,6 +3,7 @@
 // (scenes/README.md documents the format).
 #pragma once
 #include "load/environment_map.h"
+#include "load/render_settings.h"
 
 #include <glm/glm.hpp>
 
@@ -22,18 +23,6 @@ struct Material {
 struct Camera {
     glm::vec3 eye{0, 1, 4}, target{0, 0, 0}, up{0, 1, 0};
     float fov_deg = 40.0f; // vertical
-};
-
-struct RenderSettings {
-    int spp = 16;
-    int max_depth = 1;
-    std::string strategy = "mis";    // light | bsdf | mis | uniform
-    std::string heuristic = "power"; // balance | power
-    std::string sampler = "sobol";   // sobol | random
-    uint32_t seed = 1;
-    double time_limit = 0.0; // seconds; 0: none
-    int rr_depth = 3;
-    int paths = 0; // paths in flight; 0: the film, capped by memory
 };
 
 struct TriangleSoup {

@@ -1,81 +1,17 @@
 #include "prepare/device_scene.h"
 
+#include "prepare/bvh_build.h"
 #include "util/error.h"
 
 #include <cstring>
 
 namespace et {
+namespace {
 
-int parse_strategy(const std::string& s) {
-    if (s == "light")
-        return ETK_STRATEGY_LIGHT;
-    if (s == "bsdf")
-        return ETK_STRATEGY_BSDF;
-    if (s == "mis")
-        return ETK_STRATEGY_MIS;
-    if (s == "uniform")
-        return ETK_STRATEGY_UNIFORM;
-    throw Error("unknown strategy '" + s + "' (use light, bsdf, mis or uniform)");
-}
+// Secondary rays start this far off the surface, relative to the coordinates' magnitude.
+constexpr float kRayEpsilon = 2e-4f;
 
-int parse_heuristic(const std::string& s) {
-    if (s == "balance")
-        return ETK_HEURISTIC_BALANCE;
-    if (s == "power")
-        return ETK_HEURISTIC_POWER;
-    throw Error("unknown MIS heuristic '" + s + "' (use balance or power)");
-}
-
-int parse_sampler(const std::string& s) {
-    if (s == "sobol")
-        return ETK_SAMPLER_SOBOL;
-    if (s == "random")
-        return ETK_SAMPLER_RANDOM;
-    throw Error("unknown sampler '" + s + "' (use sobol or random)");
-}
-
-SceneArrays build_scene_arrays(const Scene& scene) {
-    SceneArrays a;
-    a.env = &scene.env;
-    a.bvh = build_bvh(scene.triangles);
-    a.tris = flatten_triangles(scene.triangles, a.bvh.order);
-    const size_t n = a.bvh.order.size();
-    a.normals.resize(3 * n);
-    a.tri_material.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-        const int t = a.bvh.order[i];
-        for (int k = 0; k < 3; ++k) {
-            const glm::vec3& v = scene.triangles.normals[3 * t + k];
-            a.normals[3 * i + k] = etk::make_float4(v.x, v.y, v.z, 0.0f);
-        }
-        a.tri_material[i] = scene.triangles.material[t];
-    }
-    if (n == 0)
-        a.normals.resize(3), a.tri_material.resize(1), a.tris.resize(3);
-    for (const auto& m : scene.materials) {
-        uint32_t type = static_cast<uint32_t>(m.type);
-        float type_bits;
-        std::memcpy(&type_bits, &type, 4);
-        a.materials.push_back(etk::make_float4(m.albedo.x, m.albedo.y, m.albedo.z, type_bits));
-        a.materials.push_back(
-            etk::make_float4(m.specular.x, m.specular.y, m.specular.z, m.roughness));
-    }
-    if (a.materials.empty())
-        a.materials.resize(2);
-    // Secondary rays start this far (relative to the coordinates' magnitude) off the surface.
-    a.ray_epsilon = 2e-4f;
-    return a;
-}
-
-etk::EtkScene scene_view(const SceneArrays& a) {
-    return etk::EtkScene{a.bvh.nodes.data(),     a.tris.data(),      a.normals.data(),
-                         a.tri_material.data(),  a.materials.data(), a.env->dist.table.data(),
-                         a.env->image.rgb.data()};
-}
-
-etk::EtkParams make_params(const Scene& scene, const SceneArrays& arrays) {
-    etk::EtkParams p{};
-    p.env = scene.env.desc();
+void set_camera(const Scene& scene, etk::EtkParams& p) {
     const Camera& c = scene.camera;
     glm::vec3 f = glm::normalize(c.target - c.eye);
     glm::vec3 r = glm::normalize(glm::cross(f, c.up));
@@ -90,16 +26,112 @@ etk::EtkParams make_params(const Scene& scene, const SceneArrays& arrays) {
         p.right[k] = r[k];
         p.up[k] = u[k];
     }
+}
+
+void add_triangles(const Scene& scene, DeviceScene& d) {
+    Bvh bvh = build_bvh(scene.triangles);
+    d.tris = flatten_triangles(scene.triangles, bvh.order);
+    const size_t n = bvh.order.size();
+    d.normals.resize(3 * n);
+    d.tri_material.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        const int t = bvh.order[i];
+        for (int k = 0; k < 3; ++k) {
+            const glm::vec3& v = scene.triangles.normals[3 * t + k];
+            d.normals[3 * i + k] = etk::make_float4(v.x, v.y, v.z, 0.0f);
+        }
+        d.tri_material[i] = scene.triangles.material[t];
+    }
+    if (n == 0) // one all-zero triangle (flatten_triangles) that nothing hits
+        d.normals.resize(3), d.tri_material.resize(1);
+    d.bvh.nodes = bvh.node_count();
+    d.bvh.depth = bvh.depth;
+    d.bvh.sah_cost = bvh.sah_cost;
+    d.bvh.build_seconds = bvh.build_seconds;
+    d.nodes = std::move(bvh.nodes);
+    d.triangle_count = n;
+}
+
+void add_materials(const Scene& scene, DeviceScene& d) {
+    for (const auto& m : scene.materials) {
+        uint32_t type = static_cast<uint32_t>(m.type);
+        float type_bits;
+        std::memcpy(&type_bits, &type, 4);
+        d.materials.push_back(etk::make_float4(m.albedo.x, m.albedo.y, m.albedo.z, type_bits));
+        d.materials.push_back(
+            etk::make_float4(m.specular.x, m.specular.y, m.specular.z, m.roughness));
+    }
+    if (d.materials.empty())
+        d.materials.resize(2);
+}
+
+void add_lights(const std::vector<DirectionalLight>& lights, DeviceScene& d) {
+    for (const auto& l : lights) {
+        d.lights.push_back(etk::make_float4(l.direction.x, l.direction.y, l.direction.z, 0.0f));
+        d.lights.push_back(
+            etk::make_float4(float(l.power.x), float(l.power.y), float(l.power.z), 0.0f));
+    }
+    d.params.light_count = static_cast<int>(lights.size());
+}
+
+void add_strata(const VoronoiStrata& v, DeviceScene& d) {
+    for (const auto& p : v.power) {
+        d.lights.push_back(etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
+        d.lights.push_back(etk::make_float4(float(p.x), float(p.y), float(p.z), 0.0f));
+    }
+    d.strata_texels = v.texels;
+    d.strata_begin = v.begin;
+    d.strata_cdf = v.cdf;
+    d.params.light_count = static_cast<int>(v.power.size());
+    d.params.strata_width = v.width;
+    d.params.strata_height = v.height;
+}
+
+} // namespace
+
+etk::EtkScene DeviceScene::view() const {
+#define ET_DATA(type, name) name.data(),
+    return etk::EtkScene{ETK_SCENE_BUFFERS(ET_DATA)};
+#undef ET_DATA
+}
+
+DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
+                                 const std::vector<DirectionalLight>* lights,
+                                 const VoronoiStrata* sis) {
+    DeviceScene d;
+    d.settings = st;
+    d.scene_path = scene.path;
+    etk::EtkParams& p = d.params;
+    p.env = scene.env.desc();
+    set_camera(scene, p);
     p.width = scene.width;
     p.height = scene.height;
-    p.max_depth = scene.settings.max_depth;
-    p.rr_depth = scene.settings.rr_depth;
-    p.strategy = parse_strategy(scene.settings.strategy);
-    p.heuristic = parse_heuristic(scene.settings.heuristic);
-    p.sampler = parse_sampler(scene.settings.sampler);
-    p.seed = scene.settings.seed;
-    p.ray_epsilon = arrays.ray_epsilon;
-    return p;
+    p.max_depth = st.max_depth;
+    p.rr_depth = st.rr_depth;
+    p.strategy = static_cast<int>(st.strategy);
+    p.heuristic = static_cast<int>(st.heuristic);
+    p.sampler = static_cast<int>(st.sampler);
+    p.seed = st.seed;
+    p.ray_epsilon = kRayEpsilon;
+    add_triangles(scene, d);
+    add_materials(scene, d);
+    if (st.strategy == Strategy::lights) {
+        if (!lights)
+            throw Error("the light-set strategy needs a light set");
+        add_lights(*lights, d);
+    }
+    if (st.strategy == Strategy::sis) {
+        if (!sis || sis->power.empty())
+            throw Error("the SIS strategy needs its strata");
+        add_strata(*sis, d);
+    }
+    d.map_name = scene.env.name;
+    d.map_width = scene.env.image.width;
+    d.map_height = scene.env.image.height;
+    d.map_build_seconds = scene.env.build_seconds;
+    d.env_dist = std::move(scene.env.dist.table);
+    d.env_texels = std::move(scene.env.image.rgb);
+    return d;
 }
 
 } // namespace et

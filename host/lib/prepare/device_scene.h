@@ -1,33 +1,48 @@
-// Host precompute -> flat arrays: everything the integrator stages read, in the layouts of
-// kernels/integrator.h, ready to upload or to hand to the native back end.
+// Preparation's product: everything the devices read, owned here, in the layouts of
+// kernels/path_state.h (one vector per scene buffer, named as the buffer) plus the per-pass
+// parameters. Both back ends render from it; the OpenCL one uploads the vectors as they are.
 #pragma once
-#include "prepare/bvh_build.h"
 #include "kernels/integrator.h"
 #include "load/scene.h"
+#include "prepare/light_set.h"
+#include "prepare/sis.h"
 
-#include <string>
 #include <vector>
 
 namespace et {
 
-struct SceneArrays {
-    Bvh bvh;
-    std::vector<etk::float4> tris, normals, materials;
-    std::vector<int> tri_material;
-    const EnvMap* env = nullptr;
-    float ray_epsilon = 1e-4f;
+using etk::float4;
+
+struct DeviceScene {
+#define ET_SCENE_VECTOR(type, name) std::vector<type> name;
+    ETK_SCENE_BUFFERS(ET_SCENE_VECTOR)
+#undef ET_SCENE_VECTOR
+    etk::EtkParams params{}; // camera, film, environment, settings; sample index set per pass
+    RenderSettings settings;
+    std::string scene_path, map_name;
+    size_t triangle_count = 0;
+    int map_width = 0, map_height = 0;
+    double map_build_seconds = 0.0;
+    struct {
+        int nodes = 0, depth = 0;
+        double sah_cost = 0.0, build_seconds = 0.0;
+    } bvh;
+
+    int width() const {
+        return params.width;
+    }
+    int height() const {
+        return params.height;
+    }
+    // The buffers as the stages take them on the host (the native back end).
+    etk::EtkScene view() const;
 };
 
-SceneArrays build_scene_arrays(const Scene& scene);
-
-// The arrays as the integrator stages take them on the host (the native back end).
-etk::EtkScene scene_view(const SceneArrays& arrays);
-
-int parse_strategy(const std::string& s);
-int parse_heuristic(const std::string& s);
-int parse_sampler(const std::string& s);
-
-// Per-pass parameters (the sample index and first pixel are set per pass).
-etk::EtkParams make_params(const Scene& scene, const SceneArrays& arrays);
+// Builds the BVH and the flat arrays. The scene is taken by value: move it in when it is no
+// longer needed, and the map's texels and distribution move rather than copy. Light sets and
+// SIS strata (settings.strategy lights / sis) come from `lights` or `sis`.
+DeviceScene prepare_device_scene(Scene scene, const RenderSettings& settings,
+                                 const std::vector<DirectionalLight>* lights = nullptr,
+                                 const VoronoiStrata* sis = nullptr);
 
 } // namespace et

@@ -1,10 +1,15 @@
-// A back end that renders a prepared scene one sample per pixel at a time: the OpenCL wavefront
-// (wavefront_cl.h) or the native C++ one (wavefront_cpu.h), both running kernels/integrator.h.
+// The renderer: a prepared scene, a back end (OpenCL or native) and the film. Each pass adds
+// one sample to every pixel by running the one bounce schedule (schedule.h) on the back end.
+// Path tracing, SIS and directional light sets are all this renderer; the strategy in the
+// scene's settings picks the stages.
 #pragma once
 #include "opencl/opencl_runtime.h"
 #include "prepare/device_scene.h"
+#include "render/film.h"
+#include "render/schedule.h"
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,33 +21,40 @@ struct RenderStats {
     uint64_t nonfinite_samples = 0; // dropped by the film; anything but 0 is a bug
     int samples_per_pixel = 0;
     double seconds = 0.0;
-    // Time per stage (seconds): device time from profiling events for OpenCL, wall time natively.
+    // Time per stage (seconds): device time from profiling events for OpenCL, thread time natively.
     std::vector<std::pair<std::string, double>> stage_seconds;
     uint64_t rays() const { return camera_rays + continuation_rays + shadow_rays; }
 };
 
+// Makes the back end for a film (the native one renders into it in place).
+using DeviceFactory = std::function<std::unique_ptr<WavefrontDevice>(Film& film)>;
+
 class Renderer {
   public:
-    virtual ~Renderer() = default;
+    // `scene` must outlive the renderer.
+    Renderer(const DeviceScene& scene, const DeviceFactory& make_device);
     // Adds one sample to every pixel (index `sample_index` of each pixel's sequence).
-    virtual void render_sample(uint32_t sample_index) = 0;
+    void render_sample(uint32_t sample_index);
+    // The film so far (read back from the device).
+    const Film& film();
+    // Continues from a film of the same size (sums of an earlier, interrupted render).
+    void resume(const Film& film);
     // Mean radiance per pixel (RGB, row-major, row 0 at the top).
-    virtual std::vector<float> image() = 0;
-    virtual const RenderStats& stats() = 0;
-    virtual int paths() const = 0;
-    virtual std::string name() const = 0;
+    std::vector<float> image() { return film().mean(); }
+    const RenderStats& stats();
+    int paths() const { return device_->lanes() * device_->wave_size(); }
+    std::string name() const { return device_->name(); }
+
+  private:
+    const DeviceScene& scene_;
+    Film film_; // declared before device_: the native back end writes into it
+    std::unique_ptr<WavefrontDevice> device_;
+    RenderStats stats_;
 };
 
-struct RendererOptions {
-    std::string backend = "opencl"; // opencl | cpu
-    int device = 0;                 // OpenCL device index
-    int paths = 0;                  // paths in flight; 0: the film, capped by memory
-    int threads = 0;                // native threads; 0: all cores
-};
-
-// `build` receives the OpenCL program build time (untouched for the native back end).
-std::unique_ptr<Renderer> make_renderer(const RendererOptions& options, const SceneArrays& arrays,
-                                        const etk::EtkParams& params,
+// The renderer for scene.settings (back end, device, paths in flight, threads). `build`
+// receives the OpenCL program build time (untouched for the native back end).
+std::unique_ptr<Renderer> make_renderer(const DeviceScene& scene,
                                         ProgramBuildInfo* build = nullptr);
 
 } // namespace et

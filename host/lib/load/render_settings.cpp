@@ -1,0 +1,92 @@
+#include "load/render_settings.h"
+
+#include "util/error.h"
+
+namespace et {
+namespace {
+
+template <typename E> struct Named {
+    E value;
+    const char* name;
+};
+constexpr Named<Strategy> kStrategies[] = {
+    {Strategy::light, "light"},     {Strategy::bsdf, "bsdf"}, {Strategy::mis, "mis"},
+    {Strategy::uniform, "uniform"}, {Strategy::sis, "sis"},   {Strategy::lights, "lights"}};
+constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::balance, "balance"},
+                                               {MisHeuristic::power, "power"}};
+constexpr Named<SamplerKind> kSamplers[] = {{SamplerKind::sobol, "sobol"},
+                                            {SamplerKind::random, "random"}};
+constexpr Named<Backend> kBackends[] = {{Backend::opencl, "opencl"}, {Backend::cpu, "cpu"}};
+
+template <typename E, size_t N> const char* name_in(const Named<E> (&table)[N], E v) {
+    for (const auto& n : table)
+        if (n.value == v)
+            return n.name;
+    return "?";
+}
+
+template <typename E, size_t N>
+std::vector<std::string> names_in(const Named<E> (&table)[N], size_t count = N) {
+    std::vector<std::string> out;
+    for (size_t i = 0; i < count; ++i)
+        out.push_back(table[i].name);
+    return out;
+}
+
+template <typename E, size_t N>
+E parse_in(const Named<E> (&table)[N], const std::string& s, const std::string& what,
+           const char* kind, size_t count = N) {
+    for (size_t i = 0; i < count; ++i)
+        if (s == table[i].name)
+            return table[i].value;
+    std::string choices;
+    for (size_t i = 0; i < count; ++i)
+        choices += (i ? ", " : "") + std::string(table[i].name);
+    const std::string shown = s.size() > 40 ? s.substr(0, 40) + "..." : s;
+    throw Error(what + ": unknown " + kind + " '" + shown + "' (use " + choices + ")");
+}
+
+constexpr size_t kUserStrategies = 5; // all but "lights"
+
+} // namespace
+
+const char* name_of(Strategy v) {
+    return name_in(kStrategies, v);
+}
+const char* name_of(MisHeuristic v) {
+    return name_in(kHeuristics, v);
+}
+const char* name_of(SamplerKind v) {
+    return name_in(kSamplers, v);
+}
+const char* name_of(Backend v) {
+    return name_in(kBackends, v);
+}
+
+Strategy parse_strategy(const std::string& s, const std::string& what) {
+    return parse_in(kStrategies, s, what, "strategy", kUserStrategies);
+}
+MisHeuristic parse_heuristic(const std::string& s, const std::string& what) {
+    return parse_in(kHeuristics, s, what, "MIS heuristic");
+}
+SamplerKind parse_sampler(const std::string& s, const std::string& what) {
+    return parse_in(kSamplers, s, what, "sampler");
+}
+Backend parse_backend(const std::string& s, const std::string& what) {
+    return parse_in(kBackends, s, what, "back end");
+}
+
+std::vector<std::string> strategy_names() {
+    return names_in(kStrategies, kUserStrategies);
+}
+std::vector<std::string> heuristic_names() {
+    return names_in(kHeuristics);
+}
+std::vector<std::string> sampler_names() {
+    return names_in(kSamplers);
+}
+std::vector<std::string> backend_names() {
+    return names_in(kBackends);
+}
+
+} // namespace et

@@ -1,0 +1,62 @@
+// How to render, as typed values: parsed once (scene file, then command line) and read by the
+// renderer factory and the device parameters. Each enum's names live in one table here, used to
+// parse, to print and to list the choices in --help.
+#pragma once
+#include "kernels/params.h"
+#include "kernels/sampler.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace et {
+
+enum class Strategy : int {
+    light = ETK_STRATEGY_LIGHT,
+    bsdf = ETK_STRATEGY_BSDF,
+    mis = ETK_STRATEGY_MIS,
+    uniform = ETK_STRATEGY_UNIFORM,
+    sis = ETK_STRATEGY_SIS,
+    lights = ETK_STRATEGY_LIGHTS, // a directional light set (--lights), never named by a user
+};
+enum class MisHeuristic : int { balance = ETK_HEURISTIC_BALANCE, power = ETK_HEURISTIC_POWER };
+enum class SamplerKind : int { random = ETK_SAMPLER_RANDOM, sobol = ETK_SAMPLER_SOBOL };
+enum class Backend : int { opencl, cpu };
+
+const char* name_of(Strategy v);
+const char* name_of(MisHeuristic v);
+const char* name_of(SamplerKind v);
+const char* name_of(Backend v);
+
+// Throws et::Error "`what`: unknown strategy 'x' (use light, bsdf, ...)".
+Strategy parse_strategy(const std::string& s, const std::string& what);
+MisHeuristic parse_heuristic(const std::string& s, const std::string& what);
+SamplerKind parse_sampler(const std::string& s, const std::string& what);
+Backend parse_backend(const std::string& s, const std::string& what);
+
+// The names a user may give (for the command line's choices).
+std::vector<std::string> strategy_names(); // without "lights", which --lights selects
+std::vector<std::string> heuristic_names();
+std::vector<std::string> sampler_names();
+std::vector<std::string> backend_names();
+
+struct RenderSettings {
+    // From the scene's "render" block, overridden by the command line.
+    int spp = 16;
+    int max_depth = 1;
+    Strategy strategy = Strategy::mis;
+    MisHeuristic heuristic = MisHeuristic::power;
+    SamplerKind sampler = SamplerKind::sobol;
+    uint32_t seed = 1;
+    double time_limit = 0.0; // seconds; 0: none
+    int rr_depth = 3;
+    int paths = 0; // paths in flight; 0: the film, capped by memory
+    // From the command line only.
+    Backend backend = Backend::opencl;
+    int device = 0;       // OpenCL device index
+    int threads = 0;      // native threads; 0: all cores
+    int sis_samples = 64; // SIS strata (Strategy::sis)
+    std::string lights;   // directional light set file (Strategy::lights)
+};
+
+} // namespace et

@@ -1,0 +1,47 @@
+// The OpenCL back end: the kernels of kernels/wavefront.cl, one per stage, over device buffers
+// allocated and bound from the declarations of kernels/path_state.h. One lane: waves of up to
+// `paths` pixels run one after another on one command queue.
+#pragma once
+#include "opencl/opencl_runtime.h"
+#include "prepare/device_scene.h"
+#include "render/film.h"
+#include "render/schedule.h"
+
+#include <memory>
+
+namespace et {
+
+class ClDevice : public WavefrontDevice, public StageExecutor {
+  public:
+    // paths: paths in flight (0: the film, capped by the device's memory).
+    ClDevice(std::unique_ptr<ClRuntime> rt, const DeviceScene& scene, int paths,
+             ProgramBuildInfo* build = nullptr);
+
+    std::string name() const override { return "opencl"; }
+    int lanes() const override { return 1; }
+    int wave_size() const override { return paths_; }
+    StageExecutor& lane(int) override { return *this; }
+    void run_lanes(const std::function<void(int)>& f) override;
+    void finish() override;
+    void download_film(Film& film) override;
+    void upload_film(const Film& film) override;
+    std::vector<std::pair<std::string, double>> stage_seconds() override;
+
+    void bind_queues(bool swapped) override;
+    void reset_counters() override;
+    void read_counters(uint32_t* counters) override;
+    void launch(int stage, int n, const etk::EtkParams& params) override;
+
+  private:
+    std::unique_ptr<ClRuntime> rt_;
+    int pixels_, paths_;
+    cl::CommandQueue queue_;
+    cl::Program program_;
+    std::vector<cl::Kernel> kernels_; // by ETK_STAGE_*
+    std::vector<cl::Buffer> args_;    // by ETK_ARG_* (buffers only)
+    cl::Buffer queue_a_, queue_b_;    // bound to ray_in / ray_out
+    std::vector<double> seconds_;     // per stage: finished launches
+    std::vector<std::pair<int, cl::Event>> pending_;
+};
+
+} // namespace et

@@ -1,0 +1,108 @@
+#include "render/executor_cpu.h"
+
+#include "util/parallel.h"
+#include "util/timer.h"
+
+#include <algorithm>
+
+namespace et {
+
+// One thread's wavefront: path state and queues for `wave` paths, expanded from
+// kernels/path_state.h.
+class CpuDevice::Lane : public StageExecutor {
+  public:
+    Lane(const DeviceScene& scene, Film& film, int wave)
+        : scene_(scene.view()), film_(film.view()), queue_a_(wave), queue_b_(wave) {
+#define ET_LANE_ALLOC(type, name) name##_.resize(wave);
+        ETK_PATH_FIELDS(ET_LANE_ALLOC)
+#undef ET_LANE_ALLOC
+#define ET_LANE_VIEW(type, name) paths_.name = name##_.data();
+        ETK_PATH_FIELDS(ET_LANE_VIEW)
+#undef ET_LANE_VIEW
+        escaped_.resize(wave);
+        shade_.resize(wave);
+        shadow_.resize(wave);
+        queues_.escaped = escaped_.data();
+        queues_.shade = shade_.data();
+        queues_.shadow = shadow_.data();
+        queues_.counters = counters_;
+    }
+
+    void bind_queues(bool swapped) override {
+        queues_.ray_in = swapped ? queue_b_.data() : queue_a_.data();
+        queues_.ray_out = swapped ? queue_a_.data() : queue_b_.data();
+    }
+    void reset_counters() override {
+        std::fill(counters_, counters_ + etk::ETK_Q_COUNT, 0u);
+    }
+    void read_counters(uint32_t* out) override {
+        std::copy(counters_, counters_ + etk::ETK_Q_COUNT, out);
+    }
+
+    void launch(int stage, int n, const etk::EtkParams& p) override {
+        if (n <= 0)
+            return;
+        Timer t;
+        const etk::EtkScene S = scene_;
+        const etk::EtkPaths P = paths_;
+        const etk::EtkQueues Q = queues_;
+        const etk::EtkFilm F = film_;
+        switch (stage) { // one loop per stage, so each stage function inlines into its loop
+#define ET_STAGE_CASE(kernel, fn)                                                                  \
+    case etk::ETK_STAGE_##kernel:                                                                  \
+        for (int i = 0; i < n; ++i)                                                                \
+            etk::fn(S, P, Q, F, p, i);                                                             \
+        break;
+            ETK_STAGES(ET_STAGE_CASE)
+#undef ET_STAGE_CASE
+        }
+        seconds[stage] += t.seconds();
+    }
+
+    double seconds[etk::ETK_STAGE_COUNT] = {};
+
+  private:
+    etk::EtkScene scene_;
+    etk::EtkFilm film_;
+    etk::EtkPaths paths_{};
+    etk::EtkQueues queues_{};
+#define ET_LANE_VECTOR(type, name) std::vector<type> name##_;
+    ETK_PATH_FIELDS(ET_LANE_VECTOR)
+#undef ET_LANE_VECTOR
+    std::vector<int> queue_a_, queue_b_, escaped_, shade_, shadow_;
+    uint32_t counters_[etk::ETK_Q_COUNT] = {};
+};
+
+CpuDevice::CpuDevice(const DeviceScene& scene, Film& film, int threads, int wave)
+    : wave_(wave > 0 ? wave : 1024) {
+    const int n = thread_count(threads);
+    for (int t = 0; t < n; ++t)
+        lanes_.push_back(std::make_unique<Lane>(scene, film, wave_));
+}
+
+CpuDevice::~CpuDevice() = default;
+
+int CpuDevice::lanes() const {
+    return static_cast<int>(lanes_.size());
+}
+
+StageExecutor& CpuDevice::lane(int k) {
+    return *lanes_[k];
+}
+
+void CpuDevice::run_lanes(const std::function<void(int)>& f) {
+    run_on_threads(lanes(), f);
+}
+
+std::vector<std::pair<std::string, double>> CpuDevice::stage_seconds() {
+    std::vector<std::pair<std::string, double>> out;
+    for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s) {
+        double t = 0.0;
+        for (const auto& l : lanes_)
+            t += l->seconds[s];
+        out.emplace_back(stage_name(s), t);
+    }
+    return out;
+}
+
+} // namespace et

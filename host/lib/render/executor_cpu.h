@@ -1,0 +1,36 @@
+// The native back end: the stages of kernels/integrator.h compiled for the host ISA and run as
+// C++ loops. Each thread is a lane with a small wavefront of its own (path state and queues
+// sized to stay in cache) rendering waves of consecutive pixels, so threads share nothing but
+// the scene and the film, whose waves are disjoint.
+#pragma once
+#include "prepare/device_scene.h"
+#include "render/film.h"
+#include "render/schedule.h"
+
+#include <memory>
+
+namespace et {
+
+class CpuDevice : public WavefrontDevice {
+  public:
+    // threads: 0 for all cores; wave: paths per lane (0: 1024).
+    CpuDevice(const DeviceScene& scene, Film& film, int threads, int wave = 0);
+    ~CpuDevice() override;
+
+    std::string name() const override { return "cpu"; }
+    int lanes() const override;
+    int wave_size() const override { return wave_; }
+    StageExecutor& lane(int k) override;
+    void run_lanes(const std::function<void(int)>& f) override;
+    void finish() override {}
+    void download_film(Film&) override {} // the stages write the host film directly
+    void upload_film(const Film&) override {}
+    std::vector<std::pair<std::string, double>> stage_seconds() override;
+
+  private:
+    class Lane;
+    std::vector<std::unique_ptr<Lane>> lanes_;
+    int wave_;
+};
+
+} // namespace et

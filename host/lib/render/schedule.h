@@ -1,0 +1,66 @@
+// The bounce schedule, written once: generate -> (closest hit -> escaped rays -> shade -> shadow
+// rays) per bounce while rays remain -> film. It drives a StageExecutor, which the OpenCL and the
+// native back ends implement (executor_cl.h, executor_cpu.h), the way pbrt-v4's wavefront
+// integrator drives its per-device launches.
+#pragma once
+#include "kernels/params.h"
+#include "kernels/path_state.h"
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace et {
+
+// The stage names (the OpenCL kernel names), indexed by ETK_STAGE_*.
+const char* stage_name(int stage);
+
+// Runs the stages over a set of paths in flight: path state, queues and counters of its own.
+class StageExecutor {
+  public:
+    virtual ~StageExecutor() = default;
+    // ray_in/ray_out are queue buffers A/B, or B/A when swapped.
+    virtual void bind_queues(bool swapped) = 0;
+    virtual void reset_counters() = 0;
+    virtual void read_counters(uint32_t counters[etk::ETK_Q_COUNT]) = 0;
+    // Runs `stage` over entries 0 .. n-1 of its queue (nothing when n <= 0).
+    virtual void launch(int stage, int n, const etk::EtkParams& params) = 0;
+};
+
+struct RayCounts {
+    uint64_t camera = 0, continuation = 0, shadow = 0;
+    uint64_t nonfinite = 0; // samples dropped by the film; anything but 0 is a bug
+    RayCounts& operator+=(const RayCounts& o);
+};
+
+class Film;
+
+// A back end: one or more executors ("lanes") that can run waves concurrently, and the film.
+class WavefrontDevice {
+  public:
+    virtual ~WavefrontDevice() = default;
+    virtual std::string name() const = 0;
+    virtual int lanes() const = 0;
+    virtual int wave_size() const = 0; // paths in flight per lane
+    virtual StageExecutor& lane(int k) = 0;
+    // Runs f(k) for every lane k, concurrently where the device can.
+    virtual void run_lanes(const std::function<void(int)>& f) = 0;
+    virtual void finish() = 0; // waits until the pass is done
+    // The device's film into `film` / from `film` (resuming); no-ops where they are one.
+    virtual void download_film(Film& film) = 0;
+    virtual void upload_film(const Film& film) = 0;
+    // Time per stage so far: device time for OpenCL, summed thread time natively.
+    virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
+};
+
+// One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
+// the film. Adds the rays traced to `counts`.
+void run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts);
+
+// One pass: sample params.sample_index of every pixel, in waves of the device's size handed
+// to its lanes as they free up.
+RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params);
+
+} // namespace et

@@ -1,0 +1,110 @@
+// The wavefront's data, declared once. Every list below is an X-macro: the structs the stages
+// take (EtkScene, EtkPaths, EtkQueues, EtkFilm), the OpenCL kernel argument list, the host's
+// argument indices, buffer allocation, bytes per path, stage names and queue counters are all
+// expanded from these lists, so adding a field is one line here (and what reads it).
+#ifndef ETK_PATH_STATE_H
+#define ETK_PATH_STATE_H
+#include "compat.h"
+
+// Scene buffers, read-only, one element type each: X(type, name).
+#define ETK_SCENE_BUFFERS(X)                                                                       \
+    X(float4, nodes)      /* BVH: two child boxes per node (bvh.h) */                              \
+    X(float4, tris)       /* v0, e1, e2 per triangle */                                            \
+    X(float4, normals)    /* three vertex normals per triangle */                                  \
+    X(int, tri_material)  /* material index per triangle */                                        \
+    X(float4, materials)  /* two float4 per material (bsdf.h) */                                   \
+    X(float, env_dist)    /* the map's 2D distribution (piecewise_constant.h) */                   \
+    X(float, env_texels)  /* the map's RGB texels */                                               \
+    X(float4, lights)     /* directional lights / SIS strata: direction, power */                  \
+    X(int, strata_texels) /* SIS: texels sorted by stratum */                                      \
+    X(int, strata_begin)  /* SIS: stratum k owns strata_texels[begin[k] .. begin[k+1]) */          \
+    X(float, strata_cdf)  /* SIS: running solid-angle fraction inside each stratum */
+
+// Path state, one element per path in flight: X(type, name).
+#define ETK_PATH_FIELDS(X)                                                                         \
+    X(float4, ray_o)    /* origin; w: depth (surface interactions so far) */                       \
+    X(float4, ray_d)    /* direction; w: pdf of the BSDF sample that made it, < 0 if none */       \
+    X(float4, beta)     /* throughput */                                                           \
+    X(float4, radiance) /* accumulated along the path */                                           \
+    X(float4, hit)      /* t, triangle (int bits), b1, b2 */                                       \
+    X(float4, shadow_o) /* shadow ray origin */                                                    \
+    X(float4, shadow_d) /* shadow ray direction; w: its length */                                  \
+    X(float4, shadow_L) /* tentative contribution of the shadow ray */                             \
+    X(int, pixel)       /* film pixel of the path */
+
+// Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
+// buffers between bounces.
+#define ETK_QUEUES(X) X(ray_in) X(ray_out) X(escaped) X(shade) X(shadow)
+
+// Film, one element per pixel: X(type, name).
+#define ETK_FILM_FIELDS(X)                                                                         \
+    X(float4, film_sum) /* sum of samples (RGB); w: number of samples */                           \
+    X(float4, film_sq)  /* sum of squared samples (RGB): the per-pixel variance */
+
+// Queue counters, bumped atomically: X(name).
+#define ETK_COUNTERS(X)                                                                            \
+    X(RAY_OUT)    /* continuation rays pushed */                                                   \
+    X(ESCAPED)    /* rays that left the scene */                                                   \
+    X(SHADE)      /* rays that hit a surface to shade */                                           \
+    X(SHADOW)     /* shadow rays pushed */                                                         \
+    X(LIGHT_RAYS) /* shadow rays traced inline by shade_lights */                                  \
+    X(NONFINITE)  /* samples dropped by the film: should stay 0 */
+
+// The stages, in schedule order: X(kernel name, stage function). integrator.h defines the
+// functions, all with one signature; the schedule (host/lib/render/schedule.cpp) runs them.
+#define ETK_STAGES(X)                                                                              \
+    X(generate, etk_generate)                                                                      \
+    X(intersect, etk_intersect)                                                                    \
+    X(escaped_rays, etk_escaped)                                                                   \
+    X(shade_hits, etk_shade)                                                                       \
+    X(shade_lights, etk_shade_lights)                                                              \
+    X(trace_shadows, etk_shadow)                                                                   \
+    X(accumulate, etk_accumulate)
+
+ETK_BEGIN
+
+#define ETK_COUNTER_ENUM(name) ETK_Q_##name,
+enum { ETK_COUNTERS(ETK_COUNTER_ENUM) ETK_Q_COUNT };
+#undef ETK_COUNTER_ENUM
+
+#define ETK_STAGE_ENUM(kernel, fn) ETK_STAGE_##kernel,
+enum { ETK_STAGES(ETK_STAGE_ENUM) ETK_STAGE_COUNT };
+#undef ETK_STAGE_ENUM
+
+#define ETK_CONST_MEMBER(type, name) ETK_GLOBAL const type* name;
+#define ETK_MEMBER(type, name) ETK_GLOBAL type* name;
+#define ETK_QUEUE_MEMBER(name) ETK_GLOBAL int* name;
+typedef struct {
+    ETK_SCENE_BUFFERS(ETK_CONST_MEMBER)
+} EtkScene;
+typedef struct {
+    ETK_PATH_FIELDS(ETK_MEMBER)
+} EtkPaths;
+typedef struct {
+    ETK_QUEUES(ETK_QUEUE_MEMBER)
+    ETK_ATOMIC_PTR counters;
+} EtkQueues;
+typedef struct {
+    ETK_FILM_FIELDS(ETK_MEMBER)
+} EtkFilm;
+#undef ETK_CONST_MEMBER
+#undef ETK_MEMBER
+#undef ETK_QUEUE_MEMBER
+
+// Kernel arguments, in this order: scene buffers, path fields, queues, film, counters, params,
+// the queue length. ETK_KERNEL_ARGS (wavefront.cl) and EtkKernelArg (the host) both expand it.
+#define ETK_ARG_INDEX(type, name) ETK_ARG_##name,
+#define ETK_QUEUE_ARG_INDEX(name) ETK_ARG_##name,
+enum {
+    ETK_SCENE_BUFFERS(ETK_ARG_INDEX) ETK_PATH_FIELDS(ETK_ARG_INDEX) ETK_QUEUES(ETK_QUEUE_ARG_INDEX)
+        ETK_FILM_FIELDS(ETK_ARG_INDEX) ETK_ARG_counters,
+    ETK_ARG_params,
+    ETK_ARG_n,
+    ETK_ARG_COUNT
+};
+#undef ETK_ARG_INDEX
+#undef ETK_QUEUE_ARG_INDEX
+
+ETK_END
+
+#endif

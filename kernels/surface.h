@@ -1,0 +1,73 @@
+// What every shading stage starts from: the camera ray of a sample, and the surface at a hit
+// with its shading frame, material and the origin of rays that leave it.
+#ifndef ETK_SURFACE_H
+#define ETK_SURFACE_H
+#include "bsdf.h"
+#include "compat.h"
+#include "bvh.h"
+#include "params.h"
+#include "path_state.h"
+#include "sampler.h"
+
+ETK_BEGIN
+
+ETK_FN float3 etk_xyz(float4 v) {
+    return make_float3(v.x, v.y, v.z);
+}
+ETK_FN float4 etk_f4(float3 v, float w) {
+    return make_float4(v.x, v.y, v.z, w);
+}
+ETK_FN float3 etk_p3(const float* p) {
+    return make_float3(p[0], p[1], p[2]);
+}
+
+ETK_FN float2 etk_dims(EtkParams p, int pixel, uint pair) {
+    return etk_sample_pair(p.sampler, p.seed, (uint)pixel, p.sample_index, pair);
+}
+
+// The camera ray direction of sample p.sample_index of `pixel` (pixel jitter from pair 0).
+ETK_FN float3 etk_camera_dir(EtkParams p, int pixel) {
+    float2 j = etk_dims(p, pixel, 0u);
+    float px = (float)(pixel % p.width) + j.x, py = (float)(pixel / p.width) + j.y;
+    float sx = 2.0f * px / (float)p.width - 1.0f, sy = 1.0f - 2.0f * py / (float)p.height;
+    return normalize(etk_p3(p.forward) + etk_p3(p.right) * sx + etk_p3(p.up) * sy);
+}
+
+// A surface point's shading frame (t, b, ns), the geometric normal facing the viewer, the
+// outgoing direction in the frame, the material and the origin of rays leaving it.
+typedef struct {
+    float3 t, b, ns, ng, origin, wo;
+    EtkMaterial m;
+} EtkSurface;
+
+// The surface at the closest hit h of the ray (o, d). Surfaces are two-sided; the shading
+// normal is flipped to the geometric normal's side.
+ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, EtkHit h) {
+    EtkSurface s;
+    int prim = h.prim;
+    float3 pos = o + d * h.t;
+    float4 e1 = S.tris[3 * prim + 1], e2 = S.tris[3 * prim + 2];
+    float3 ng = normalize(cross(etk_xyz(e1), etk_xyz(e2)));
+    float b0 = 1.0f - h.b1 - h.b2;
+    float3 ns = etk_xyz(S.normals[3 * prim]) * b0 + etk_xyz(S.normals[3 * prim + 1]) * h.b1 +
+                etk_xyz(S.normals[3 * prim + 2]) * h.b2;
+    float nl = length(ns);
+    ns = nl > 0.0f && isfinite(nl) ? ns / nl : ng;
+    float3 wo_world = -d;
+    if (dot(ng, wo_world) < 0.0f)
+        ng = -ng;
+    if (dot(ns, ng) < 0.0f)
+        ns = -ns;
+    etk_make_frame(ns, &s.t, &s.b);
+    s.ns = ns;
+    s.ng = ng;
+    s.wo = etk_to_local(wo_world, s.t, s.b, ns);
+    s.m = etk_material_load(S.materials, S.tri_material[prim]);
+    float scale = fmax(fmax(fabs(pos.x), fabs(pos.y)), fmax(fabs(pos.z), 1.0f));
+    s.origin = pos + ng * (p.ray_epsilon * scale);
+    return s;
+}
+
+ETK_END
+
+#endif
