@@ -11,10 +11,13 @@
 // Scenes: spheres on a ground quad under pisa, and bunny_5k on a quad under grace,
 // royal_esplanade_1k and pedestrian_overpass_1k, written as scene files and loaded by
 // load_scene.
+#include "prepare/light_set.h"
+#include "prepare/sis.h"
 #include "render_util.h"
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <fstream>
 
 namespace {
@@ -120,6 +123,49 @@ TEST_P(Backends, DepthFiveAgreeStatistically) {
     EXPECT_LE(std::fabs(g.mean_z), 5.0);
     EXPECT_LE(g.mean_z2, 1.3);
     EXPECT_LE(g.frac_over_4, 0.005);
+}
+
+// Directional light sets (the shade_lights stage) and SIS (one stratum per sample through the
+// shadow queue) are stages of the same schedule: both back ends give bit-identical films.
+TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
+    const Case c = GetParam();
+    ETT_DATA_FILE(map, std::string("envmaps/") + c.map);
+    if (c.bunny && ett::data_file("meshes/bunny_5k.obj").empty())
+        GTEST_SKIP() << "meshes/bunny_5k.obj not found";
+    const et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
+    const et::LightSet set = et::make_lights_ours(s.env, 24, 1, false);
+    et::SisOptions so;
+    so.samples = 8;
+    const et::SisResult sis = et::build_sis(s.env, so);
+    for (et::Strategy strategy : {et::Strategy::lights, et::Strategy::sis}) {
+        SCOPED_TRACE(et::name_of(strategy));
+        et::Film films[2];
+        uint64_t shadow_rays[2] = {};
+        for (et::Backend b : {et::Backend::opencl, et::Backend::cpu}) {
+            et::RenderSettings st = s.settings;
+            st.strategy = strategy;
+            st.max_depth = 1;
+            st.backend = b;
+            st.threads = 2;
+            const et::DeviceScene ds = et::prepare_device_scene(s, st, &set.lights, &sis.strata);
+            auto r = et::make_renderer(ds);
+            for (uint32_t k = 0; k < 8; ++k)
+                r->render_sample(k);
+            films[static_cast<int>(b)] = r->film();
+            shadow_rays[static_cast<int>(b)] = r->stats().shadow_rays;
+            EXPECT_EQ(r->stats().nonfinite_samples, 0u);
+        }
+        EXPECT_GT(shadow_rays[0], 0u);
+        EXPECT_EQ(shadow_rays[0], shadow_rays[1]);
+        const std::vector<float> a = films[0].mean(), b = films[1].mean();
+        double sum = 0.0;
+        for (float v : b)
+            sum += v;
+        EXPECT_GT(sum, 0.0);
+        ASSERT_EQ(a.size(), b.size());
+        EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float)))
+            << "the back ends' images differ";
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Backends,

@@ -1,0 +1,48 @@
+// Typed settings (host/lib/load/render_settings.h): every name parses to its value and back,
+// the values are the kernels' codes, and an unknown name is an error that names the choices.
+#include "load/render_settings.h"
+#include "util/error.h"
+
+#include <gtest/gtest.h>
+
+namespace {
+
+TEST(RenderSettings, NamesRoundTrip) {
+    for (const auto& n : et::strategy_names())
+        EXPECT_EQ(et::name_of(et::parse_strategy(n, "t")), n);
+    for (const auto& n : et::heuristic_names())
+        EXPECT_EQ(et::name_of(et::parse_heuristic(n, "t")), n);
+    for (const auto& n : et::sampler_names())
+        EXPECT_EQ(et::name_of(et::parse_sampler(n, "t")), n);
+    for (const auto& n : et::backend_names())
+        EXPECT_EQ(et::name_of(et::parse_backend(n, "t")), n);
+    EXPECT_EQ(et::strategy_names().size(), 5u);
+}
+
+TEST(RenderSettings, ValuesAreTheKernelCodes) {
+    EXPECT_EQ(static_cast<int>(et::parse_strategy("mis", "t")), ETK_STRATEGY_MIS);
+    EXPECT_EQ(static_cast<int>(et::parse_strategy("sis", "t")), ETK_STRATEGY_SIS);
+    EXPECT_EQ(static_cast<int>(et::Strategy::lights), ETK_STRATEGY_LIGHTS);
+    EXPECT_EQ(static_cast<int>(et::parse_sampler("sobol", "t")), ETK_SAMPLER_SOBOL);
+    EXPECT_EQ(static_cast<int>(et::parse_heuristic("power", "t")), ETK_HEURISTIC_POWER);
+}
+
+TEST(RenderSettings, UnknownNamesAreClearErrors) {
+    try {
+        et::parse_strategy("lights", "scene.json: render"); // only --lights selects it
+        FAIL() << "no error";
+    } catch (const et::Error& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("scene.json: render"), std::string::npos) << m;
+        EXPECT_NE(m.find("unknown strategy 'lights'"), std::string::npos) << m;
+        EXPECT_NE(m.find("light, bsdf, mis, uniform, sis"), std::string::npos) << m;
+    }
+    try {
+        et::parse_sampler(std::string(10000, 'x'), "w");
+        FAIL() << "no error";
+    } catch (const et::Error& e) {
+        EXPECT_LT(std::string(e.what()).size(), 200u); // quotes an excerpt, not the value
+    }
+}
+
+} // namespace
