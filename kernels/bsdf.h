@@ -6,6 +6,7 @@
 // The paper's "roughness" is used directly as the GGX alpha.
 #ifndef ETK_BSDF_H
 #define ETK_BSDF_H
+#include "color.h"
 #include "compat.h"
 #include "trig.h"
 
@@ -34,9 +35,6 @@ ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
 
 ETK_FN float etk_max3(float3 v) {
     return fmax(v.x, fmax(v.y, v.z));
-}
-ETK_FN float etk_luma(float3 v) {
-    return 0.2126f * v.x + 0.7152f * v.y + 0.0722f * v.z;
 }
 
 // Orthonormal basis around n (Duff et al. 2017).

@@ -12,6 +12,7 @@
 #include "bvh.h"
 #include "compat.h"
 #include "envmap.h"
+#include "latlong.h"
 #include "sampler.h"
 #include "surface.h"
 #include "trig.h"
@@ -57,9 +58,7 @@ ETK_FN float3 etk_dl_stratum_direction(ETK_GLOBAL const int* texels, ETK_GLOBAL 
     int row = texel / w, col = texel % w;
     float z0 = etk_cospi((float)row / (float)h), z1 = etk_cospi((float)(row + 1) / (float)h);
     float y = z0 + (z1 - z0) * u.y; // y = cos(theta): uniform in solid angle within the row
-    float st = sqrt(fmax(0.0f, 1.0f - y * y));
-    float2 phi = etk_sincospi(2.0f * ((float)col + fx) / (float)w - 1.0f);
-    return make_float3(st * phi.x, y, -st * phi.y);
+    return etk_latlong_dir(((float)col + fx) / (float)w, y, sqrt(fmax(0.0f, 1.0f - y * y)));
 }
 
 ETK_END

@@ -14,10 +14,14 @@ ETK_FN float etk_latlong_sin_theta(float v) {
     return etk_sinpi(fmin(v, 1.0f - v));
 }
 
+// The direction at longitude coordinate u with the given cos and sin of the colatitude.
+ETK_FN float3 etk_latlong_dir(float u, float cos_theta, float sin_theta) {
+    float2 phi = etk_sincospi(2.0f * u - 1.0f);
+    return make_float3(sin_theta * phi.x, cos_theta, -sin_theta * phi.y);
+}
+
 ETK_FN float3 etk_latlong_to_dir(float2 uv) {
-    float2 phi = etk_sincospi(2.0f * uv.x - 1.0f);
-    float st = etk_latlong_sin_theta(uv.y);
-    return make_float3(st * phi.x, etk_cospi(uv.y), -st * phi.y);
+    return etk_latlong_dir(uv.x, etk_cospi(uv.y), etk_latlong_sin_theta(uv.y));
 }
 
 // theta = atan2(sqrt(x^2 + z^2), y) rather than acos(y): acos loses theta near the poles, where

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Renderer benchmarks (issues 3 and 4): `envtrace bench` on the bunny under grace, royal_esplanade_1k
 and pedestrian_overpass_1k, and on ogre, at depth 1 and 5, 512x512. Each invocation renders with
-both back ends in alternation (see host/cli/bench_command.cpp); this script collects their JSON
+both back ends in alternation (see host/cli/bench_command.cpp), and tools/bench/render_probes
+(environment-sampling share, program builds); this script collects their JSON
 into one markdown file (default tools/bench/render_results.md) and keeps the raw JSON and logs.
 
 Usage: tools/bench/render_benchmarks.py [--runs 5] [--bin build/envtrace] [--out FILE]
@@ -66,8 +67,6 @@ def main():
                    "--json", stem + ".json"]
             if args.spp > 0:
                 cmd += ["--spp", str(args.spp)]
-            if not first:
-                cmd.append("--no-cold")  # the program does not depend on the scene: once is enough
             print("+", " ".join(cmd), flush=True)
             with open(stem + ".log", "w") as log:
                 proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
@@ -78,6 +77,19 @@ def main():
                 sys.exit(f"render_benchmarks.py: {' '.join(cmd)} failed ({proc.returncode})")
             with open(stem + ".json") as f:
                 j = json.load(f)
+            # The environment-sampling share and the program builds: tools/bench/render_probes.
+            probe = [os.path.join(os.path.dirname(args.bin), "tools", "bench", "render_probes"),
+                     cmd[2], "--max-depth", str(depth), "--runs", str(args.runs), "--envtrace",
+                     args.bin, "--json", stem + "_probes.json"]
+            print("+", " ".join(probe), flush=True)
+            proc = subprocess.run(probe, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            print(proc.stdout, flush=True)
+            if proc.returncode != 0:
+                sys.exit(f"render_benchmarks.py: {' '.join(probe)} failed ({proc.returncode})")
+            with open(stem + "_probes.json") as f:
+                p = json.load(f)
+            j["env_sampling"] = p["env_sampling"]
+            j["program_build"].update(p["program_build"])
             j["name"] = name
             results.append(j)
             first = False
@@ -168,8 +180,8 @@ def main():
 
     L.append("## OpenCL program build (kernels/wavefront.cl)\n")
     pb = results[0]["program_build"]
-    L.append("| | program build | first sample (PoCL compiles work-group functions) | second sample |")
-    L.append("|---|---|---|---|")
+    L.append("| | program build | render of 2 spp (PoCL compiles work-group functions at the first) |")
+    L.append("|---|---|---|")
     for label, key in [("cold: child process, empty ENVTRACE_CACHE_DIR and POCL_CACHE_DIR",
                         "cold_child"),
                        ("warm: child process, the same caches again", "warm_child")]:
@@ -177,12 +189,12 @@ def main():
         if c:
             L.append(f"| {label} | {c['program_build_seconds']:.3f} s "
                      f"({'cached binary' if c['from_cache'] else 'compiled'}) "
-                     f"| {c['first_sample_seconds']:.3f} s | {c['second_sample_seconds']:.3f} s |")
+                     f"| {c['render_seconds_2spp']:.3f} s |")
     builds = [j["program_build"]["warm_in_process"]["median"] for j in results]
     L.append(f"| warm: in process, normal cache (median over every renderer of every row) "
-             f"| {statistics.median(builds) * 1e3:.1f} ms | – | – |")
+             f"| {statistics.median(builds) * 1e3:.1f} ms | – |")
     L.append(f"\nCold/warm measured once, in the first invocation ({results[0]['name']}, depth "
-             f"{results[0]['max_depth']}); the cold first sample includes PoCL compiling each "
+             f"{results[0]['max_depth']}); the cold render includes PoCL compiling each "
              "kernel's work-group function, the warm child loads them from POCL_CACHE_DIR.\n")
 
     L.append("## BVH (binned SAH, host)\n")

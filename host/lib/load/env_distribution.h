@@ -1,5 +1,6 @@
 // Environment map -> sampling distribution (paper, Section 3.4), as flat tables ready to upload.
 #pragma once
+#include "kernels/color.h"
 #include "image/image_io.h"
 
 #include <vector>
@@ -26,9 +27,9 @@ struct EnvDistribution {
 // Texels must already be finite and non-negative (see envmap.h).
 EnvDistribution build_env_distribution(const RgbImage& image, const DistributionOptions& options);
 
-// Rec. 709 luminance.
+// Rec. 709 luminance of an RGB texel (kernels/color.h).
 inline float luminance(const float* rgb) {
-    return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+    return etk::etk_luma(etk::make_float3(rgb[0], rgb[1], rgb[2]));
 }
 
 // The 1D building block: density and CDF (n+1 entries) of f, as in the paper's Figure 2.

@@ -1,4 +1,5 @@
 #include "prepare/sis.h"
+#include "kernels/latlong.h"
 #include "util/parallel.h"
 
 #include "util/error.h"
@@ -18,9 +19,10 @@ double texel_solid_angle(int row, int w, int h) {
 }
 
 glm::dvec3 texel_direction(int row, int col, int w, int h) {
-    const double theta = M_PI * (row + 0.5) / h, phi = M_PI * (2.0 * (col + 0.5) / w - 1.0);
-    const double st = std::sin(theta);
-    return {st * std::sin(phi), std::cos(theta), -st * std::cos(phi)};
+    const etk::float3 d = etk::etk_latlong_to_dir(
+        etk::make_float2((static_cast<float>(col) + 0.5f) / static_cast<float>(w),
+                         (static_cast<float>(row) + 0.5f) / static_cast<float>(h)));
+    return glm::dvec3(d.x, d.y, d.z);
 }
 
 glm::dvec3 map_power(const EnvMap& env) {

@@ -22,6 +22,7 @@ void Renderer::render_sample(uint32_t sample_index) {
     stats_.continuation_rays += c.continuation;
     stats_.shadow_rays += c.shadow;
     stats_.nonfinite_samples += c.nonfinite;
+    stats_.shaded_hits += c.shaded;
     stats_.samples_per_pixel += 1;
     stats_.seconds += timer.seconds();
 }

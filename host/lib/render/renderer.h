@@ -19,6 +19,7 @@ namespace et {
 struct RenderStats {
     uint64_t camera_rays = 0, continuation_rays = 0, shadow_rays = 0;
     uint64_t nonfinite_samples = 0; // dropped by the film; anything but 0 is a bug
+    uint64_t shaded_hits = 0;       // surface hits shaded
     int samples_per_pixel = 0;
     double seconds = 0.0;
     // Time per stage (seconds): device time from profiling events for OpenCL, thread time natively.

@@ -17,6 +17,7 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
     camera += o.camera;
     continuation += o.continuation;
     shadow += o.shadow;
+    shaded += o.shaded;
     nonfinite += o.nonfinite;
     return *this;
 }
@@ -41,6 +42,7 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
         ex.read_counters(c);
         ex.launch(etk::ETK_STAGE_escaped_rays, static_cast<int>(c[etk::ETK_Q_ESCAPED]), p);
         ex.launch(shade, static_cast<int>(c[etk::ETK_Q_SHADE]), p);
+        counts.shaded += c[etk::ETK_Q_SHADE];
         ex.read_counters(c);
         ex.launch(etk::ETK_STAGE_trace_shadows, static_cast<int>(c[etk::ETK_Q_SHADOW]), p);
         counts.shadow += c[etk::ETK_Q_SHADOW] + c[etk::ETK_Q_LIGHT_RAYS];

@@ -31,6 +31,7 @@ class StageExecutor {
 
 struct RayCounts {
     uint64_t camera = 0, continuation = 0, shadow = 0;
+    uint64_t shaded = 0;    // surface hits shaded (one light sample or light-set sum each)
     uint64_t nonfinite = 0; // samples dropped by the film; anything but 0 is a bug
     RayCounts& operator+=(const RayCounts& o);
 };
