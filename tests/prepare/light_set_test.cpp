@@ -163,12 +163,12 @@ TEST(LightSets, JsonRoundTripAndBadFiles) {
 TEST(LightSets, KeysOfTheWrongTypeAreErrors) {
     const std::string dir = ett::scratch_dir("light_sets_types");
     const std::string light = R"({"direction": [0, 0, 1], "power": [1, 1, 1]})";
-    for (const std::string& text :
-         {R"({"method": 1, "lights": [)" + light + "]}",
-          R"({"power_rule": [], "lights": [)" + light + "]}",
-          R"({"map": {}, "lights": [)" + light + "]}",
-          R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": "x"}]})",
-          R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": -1}]})"}) {
+    for (const std::string& text : std::vector<std::string>{
+             R"({"method": 1, "lights": [)" + light + "]}",
+             R"({"power_rule": [], "lights": [)" + light + "]}",
+             R"({"map": {}, "lights": [)" + light + "]}",
+             R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": "x"}]})",
+             R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": -1}]})"}) {
         {
             std::ofstream f(dir + "/l.json");
             f << text;

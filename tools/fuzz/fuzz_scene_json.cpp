@@ -51,16 +51,43 @@ bool scale_down(json& scene) {
     bool changed = false;
     if (scene.contains("environment") && scene["environment"].is_object()) {
         json& env = scene["environment"];
-        changed |= cap_pair(env, "distribution_resolution", 128, 64);
+        changed |= cap_pair(env, "distribution_resolution", 64, 32);
         if (env.contains("sky"))
-            changed |= cap_pair(env["sky"], "resolution", 64, 32);
+            changed |= cap_pair(env["sky"], "resolution", 32, 16);
         if (masks)
             changed |= cap(env, "blur", 16.0);
     }
     if (scene.contains("shapes") && scene["shapes"].is_array())
         for (json& s : scene["shapes"])
-            changed |= cap(s, "segments", 32.0);
+            changed |= cap(s, "segments", 16.0);
     return changed;
+}
+
+// Known findings in load/scene.cpp (being rewritten elsewhere; tools/fuzz/README.md):
+// F3: a "seed" that is a floating-point number outside [0, 2^32) is converted to uint32_t by
+//     json::get<uint32_t>: undefined behaviour.
+// F4: a transform "rotate" whose elements are not numbers escapes as json::type_error.
+bool hits_known_scene_finding(const json& scene) {
+    if (!scene.is_object())
+        return false;
+    if (scene.contains("render") && scene["render"].is_object() &&
+        scene["render"].contains("seed")) {
+        const json& seed = scene["render"]["seed"];
+        if (seed.is_number_float() &&
+            !(seed.get<double>() >= 0.0 && seed.get<double>() < 4294967296.0))
+            return true;
+    }
+    if (scene.contains("shapes") && scene["shapes"].is_array())
+        for (const json& s : scene["shapes"])
+            if (s.is_object() && s.contains("transform") && s["transform"].is_object() &&
+                s["transform"].contains("rotate")) {
+                const json& r = s["transform"]["rotate"];
+                if (r.is_array() && r.size() == 4)
+                    for (const json& v : r)
+                        if (!v.is_number())
+                            return true;
+            }
+    return false;
 }
 
 void write_text(const std::string& name, const std::string& text) {
@@ -92,6 +119,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         return 0;
     std::string text(reinterpret_cast<const char*>(data), size);
     json parsed = json::parse(text, nullptr, false);
+    if (masks && !parsed.is_discarded() && hits_known_scene_finding(parsed))
+        return 0;
     if (!parsed.is_discarded() && scale_down(parsed))
         text = parsed.dump();
     const std::string path = etfuzz::write_file(

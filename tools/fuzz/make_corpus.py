@@ -35,13 +35,13 @@ def point_at_stand_ins(scene, k):
             env["map"] = "map.exr" if k % 2 else "map.hdr"
         sky = env.get("sky")
         if isinstance(sky, dict):
-            sky["resolution"] = [64, 32]
+            sky["resolution"] = [32, 16]
     for s in scene.get("shapes", []):
         if isinstance(s, dict):
             if "file" in s:
                 s["file"] = "mesh.obj"
             if "segments" in s:
-                s["segments"] = min(s["segments"], 32)
+                s["segments"] = min(s["segments"], 16)
             elif s.get("type") == "sphere":
                 s["segments"] = 16
     return scene

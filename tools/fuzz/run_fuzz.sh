@@ -46,9 +46,8 @@ for h in "${harnesses[@]}"; do
   [ -x "$exe" ] || { echo "run_fuzz.sh: $exe not built (configure with -DENVTRACE_FUZZ=ON)" >&2; exit 2; }
   [ -d "$seeds" ] || { echo "run_fuzz.sh: no seed corpus $seeds (build target fuzz_corpus)" >&2; exit 2; }
   case "$h" in
-    fuzz_envmap) max_len=131072 ;;
-    fuzz_obj_mtl) max_len=65536 ;;
-    *) max_len=16384 ;;
+    fuzz_envmap) max_len=32768 ;;
+    *) max_len=8192 ;;
   esac
   mkdir -p "$out/$h/corpus" "$out/$h/artifacts"
   log=$out/$h/log.txt
@@ -64,7 +63,10 @@ for h in "${harnesses[@]}"; do
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || true)
   [ -n "$execs" ] || execs=$(grep -o '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
   found=$(find "$out/$h/artifacts" -type f | wc -l)
-  if [ $rc -ne 0 ] || { [ $keep = 1 ] && [ "$found" -gt 0 ]; }; then
+  if [ $rc -eq 72 ]; then
+    echo "$h: ${execs:-?} executions in ${secs} s: interrupted, no finding so far (log $log)"
+    status=1
+  elif [ $rc -ne 0 ] || { [ $keep = 1 ] && [ "$found" -gt 0 ]; }; then
     echo "$h: ${execs:-?} executions in ${secs} s: FINDING (exit $rc; $found artifact(s) in $out/$h/artifacts; log $log)"
     grep -E 'ERROR: |SUMMARY: |runtime error|terminate called|==[0-9]+==' "$log" | head -20 || true
     status=1
