@@ -51,14 +51,19 @@ for h in "${harnesses[@]}"; do
   esac
   mkdir -p "$out/$h/corpus" "$out/$h/artifacts"
   log=$out/$h/log.txt
-  flags=("${limit[@]}" -max_len=$max_len -rss_limit_mb=2560 -malloc_limit_mb=2048 -timeout=30
+  # fuzz_envmap: no leak checks. OpenImageIO 2.4 leaks an error string when libpng fails (finding
+  # T1, tools/fuzz/README.md), in uninstrumented code whose stack the fast unwinder cannot follow
+  # past libstdc++, so no suppression can name it.
+  leaks=1
+  [ "$h" != fuzz_envmap ] || leaks=0
+  flags=("${limit[@]}" -detect_leaks=$leaks -max_len=$max_len -rss_limit_mb=2560 -malloc_limit_mb=2048 -timeout=30
          -print_final_stats=1 -artifact_prefix="$out/$h/artifacts/")
   [ $keep = 0 ] || flags+=(-fork=1 -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1)
   # shellcheck disable=SC2206
   flags+=(${ENVTRACE_FUZZ_FLAGS:-})
   start=$(date +%s)
   rc=0
-  (cd "$out/$h" && "$exe" "${flags[@]}" corpus "$seeds") >"$log" 2>&1 || rc=$?
+  (cd "$out/$h" && ASAN_OPTIONS=$ASAN_OPTIONS:detect_leaks=$leaks "$exe" "${flags[@]}" corpus "$seeds") >"$log" 2>&1 || rc=$?
   secs=$(($(date +%s) - start))
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || true)
   [ -n "$execs" ] || execs=$(grep -o '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
