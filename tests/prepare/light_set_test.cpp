@@ -158,6 +158,25 @@ TEST(LightSets, JsonRoundTripAndBadFiles) {
     EXPECT_THROW(et::read_lights(dir + "/missing.json"), et::Error);
 }
 
+// Found by tools/fuzz/fuzz_light_set: keys of the wrong type used to escape as
+// nlohmann::json::type_error instead of et::Error (an uncaught exception in `envtrace render`).
+TEST(LightSets, KeysOfTheWrongTypeAreErrors) {
+    const std::string dir = ett::scratch_dir("light_sets_types");
+    const std::string light = R"({"direction": [0, 0, 1], "power": [1, 1, 1]})";
+    for (const std::string& text : std::vector<std::string>{
+             R"({"method": 1, "lights": [)" + light + "]}",
+             R"({"power_rule": [], "lights": [)" + light + "]}",
+             R"({"map": {}, "lights": [)" + light + "]}",
+             R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": "x"}]})",
+             R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": -1}]})"}) {
+        {
+            std::ofstream f(dir + "/l.json");
+            f << text;
+        }
+        EXPECT_THROW(et::read_lights(dir + "/l.json"), et::Error) << text;
+    }
+}
+
 // Jitter inside a stratum: every direction lands in a texel of that stratum, and the mean of
 // cos(theta) over many stratified draws matches the cell's solid-angle average.
 TEST(Sis, StratumJitterIsUniformInsideTheCell) {

@@ -126,9 +126,17 @@ LightSet read_lights(const std::string& path) {
     };
     if (!j.is_object() || !j.contains("lights") || !j["lights"].is_array())
         throw Error(path + ": not a light set (expected an object with a 'lights' array)");
-    set.method = j.value("method", "");
-    set.power_rule = j.value("power_rule", "");
-    set.map = j.value("map", "");
+    // json::value() would throw json::type_error for a key of the wrong type: check it here.
+    auto text = [&](const char* key) {
+        if (!j.contains(key))
+            return std::string();
+        if (!j[key].is_string())
+            throw Error(path + ": '" + key + "' must be a string");
+        return j[key].get<std::string>();
+    };
+    set.method = text("method");
+    set.power_rule = text("power_rule");
+    set.map = text("map");
     size_t i = 0;
     for (const auto& l : j["lights"]) {
         if (!l.is_object() || !l.contains("direction") || !l.contains("power"))
@@ -144,7 +152,12 @@ LightSet read_lights(const std::string& path) {
             if (!(d.power[c] >= 0.0) || !std::isfinite(d.power[c]))
                 throw Error(path + ": light " + std::to_string(i) +
                             ": power must be finite and non-negative");
-        d.solid_angle = l.value("solid_angle", 0.0);
+        if (l.contains("solid_angle")) {
+            if (!l["solid_angle"].is_number() || !(l["solid_angle"].get<double>() >= 0.0))
+                throw Error(path + ": light " + std::to_string(i) +
+                            ": 'solid_angle' must be a number >= 0");
+            d.solid_angle = l["solid_angle"].get<double>();
+        }
         set.lights.push_back(d);
         ++i;
     }
