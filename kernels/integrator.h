@@ -33,6 +33,17 @@ ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
     return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
+// The surface a path's ray hit (its hit record, stored by the intersect stage).
+ETK_FN EtkSurface etk_path_surface(EtkScene S, EtkPaths P, EtkParams p, int slot) {
+    float4 h4 = P.hit[slot];
+    EtkHit h;
+    h.t = h4.x;
+    h.prim = (int)as_uint(h4.y);
+    h.b1 = h4.z;
+    h.b2 = h4.w;
+    return etk_surface_at(S, p, etk_xyz(P.ray_o[slot]), etk_xyz(P.ray_d[slot]), h);
+}
+
 // Stage 1: a camera ray for slot i.
 ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
     (void)S;
@@ -88,15 +99,9 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
 ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     (void)F;
     int slot = Q.shade[i];
-    float4 o4 = P.ray_o[slot], d4 = P.ray_d[slot], h4 = P.hit[slot];
-    int depth = (int)o4.w;
+    int depth = (int)P.ray_o[slot].w;
     int pixel = P.pixel[slot];
-    EtkHit h;
-    h.t = h4.x;
-    h.prim = (int)as_uint(h4.y);
-    h.b1 = h4.z;
-    h.b2 = h4.w;
-    EtkSurface s = etk_surface_at(S, p, etk_xyz(o4), etk_xyz(d4), h);
+    EtkSurface s = etk_path_surface(S, P, p, slot);
     float3 t = s.t, b = s.b, ns = s.ns, ng = s.ng, wo = s.wo, origin = s.origin;
     EtkMaterial m = s.m;
     float3 beta = etk_xyz(P.beta[slot]);
@@ -195,13 +200,7 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
 ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
     (void)F;
     int slot = Q.shade[i];
-    float4 o4 = P.ray_o[slot], d4 = P.ray_d[slot], h4 = P.hit[slot];
-    EtkHit h;
-    h.t = h4.x;
-    h.prim = (int)as_uint(h4.y);
-    h.b1 = h4.z;
-    h.b2 = h4.w;
-    EtkSurface s = etk_surface_at(S, p, etk_xyz(o4), etk_xyz(d4), h);
+    EtkSurface s = etk_path_surface(S, P, p, slot);
     float3 beta = etk_xyz(P.beta[slot]);
     float3 L = make_float3(0.0f, 0.0f, 0.0f);
     uint traced = 0u;
