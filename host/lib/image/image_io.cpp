@@ -266,7 +266,8 @@ void check_writable_format(const std::string& path) {
 
 void write_image(const std::string& path, int width, int height, int channels,
                  const std::vector<float>& pixels,
-                 const std::vector<std::pair<std::string, std::string>>& attributes) {
+                 const std::vector<std::pair<std::string, std::string>>& attributes,
+                 bool keep_non_finite) {
     check_writable_format(path);
     fs::path target(path);
     fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
@@ -283,8 +284,9 @@ void write_image(const std::string& path, int width, int height, int channels,
     const std::vector<float>* data = &pixels;
     std::vector<float> finite;
     size_t bad = 0;
-    for (float v : pixels)
-        bad += !std::isfinite(v);
+    if (!keep_non_finite)
+        for (float v : pixels)
+            bad += !std::isfinite(v);
     if (bad) {
         finite = pixels;
         for (float& v : finite)
