@@ -185,9 +185,21 @@ Scene load_scene(const std::string& path) {
         auto& st = scene.settings;
         st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
         st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
-        st.strategy = rr.string(s, "strategy", st.strategy);
-        st.heuristic = rr.string(s, "heuristic", st.heuristic);
-        st.sampler = rr.string(s, "sampler", st.sampler);
+        // Kept as strings (the render command maps them), but only known names pass.
+        auto one_of = [&](const char* key, const std::string& fallback,
+                          std::initializer_list<const char*> names) {
+            const std::string v = rr.string(s, key, fallback);
+            std::string list;
+            for (const char* n : names) {
+                if (v == n)
+                    return v;
+                list += (list.empty() ? "" : ", ") + std::string(n);
+            }
+            rr.at(key).fail("unknown value " + json_excerpt(s[key]) + " (use " + list + ")");
+        };
+        st.strategy = one_of("strategy", st.strategy, {"light", "bsdf", "mis", "uniform", "sis"});
+        st.heuristic = one_of("heuristic", st.heuristic, {"balance", "power"});
+        st.sampler = one_of("sampler", st.sampler, {"sobol", "random"});
         st.seed = static_cast<uint32_t>(rr.integer(s, "seed", st.seed, 0, 4294967295LL));
         st.time_limit = rr.number(s, "time_limit", st.time_limit, 0.0, 1e7);
         st.paths = read_int(s, "paths", st.paths, 0, 1 << 26, rr);
