@@ -22,7 +22,7 @@ void check_distribution_size(int w, int h);
 struct DistributionOptions {
     int width = 0, height = 0; // 0: the map's resolution
     float blur_sigma = 0.5f;   // Gaussian blur of luminance, in texels; 0 disables it
-    int threads = 1;           // rows built on this many threads (0: all cores); same result
+    int threads = 0;           // rows built on this many threads (0: all cores); same result
 };
 
 struct EnvDistribution {
