@@ -33,25 +33,41 @@ SanitizeReport sanitize_texels(RgbImage& image) {
     std::vector<SanitizeReport> parts(threads);
     run_on_threads(threads, [&](int part) {
         SanitizeReport& r = parts[part];
-        for (size_t p = n * part / threads, end = n * (part + 1) / threads; p < end; ++p) {
-            float* t = &image.rgb[3 * p];
-            bool bad = false, neg = false, bright = false;
-            for (int c = 0; c < 3; ++c) {
-                if (!std::isfinite(t[c])) {
-                    t[c] = 0.0f;
-                    bad = true;
-                } else if (t[c] < 0.0f) {
-                    t[c] = 0.0f;
-                    neg = true;
-                } else if (t[c] > kMaxRadiance) {
-                    t[c] = kMaxRadiance;
-                    bright = true;
-                }
-                r.max_value = std::max(r.max_value, t[c]);
+        const size_t first = n * part / threads, last = n * (part + 1) / threads;
+        constexpr size_t kBlock = 4096; // texels checked at once, branch-free (vectorised)
+        for (size_t b = first; b < last; b += kBlock) {
+            const size_t e = std::min(last, b + kBlock);
+            const float* v = &image.rgb[3 * b];
+            bool ok = true;
+            float mx = r.max_value;
+            for (size_t i = 0, m = 3 * (e - b); i < m; ++i) {
+                ok &= v[i] >= 0.0f && v[i] <= kMaxRadiance; // false for NaN
+                mx = v[i] > mx ? v[i] : mx;
             }
-            r.non_finite += bad;
-            r.negative += neg && !bad;
-            r.too_bright += bright && !neg && !bad;
+            if (ok) {
+                r.max_value = mx;
+                continue;
+            }
+            for (size_t p = b; p < e; ++p) {
+                float* t = &image.rgb[3 * p];
+                bool bad = false, neg = false, bright = false;
+                for (int c = 0; c < 3; ++c) {
+                    if (!std::isfinite(t[c])) {
+                        t[c] = 0.0f;
+                        bad = true;
+                    } else if (t[c] < 0.0f) {
+                        t[c] = 0.0f;
+                        neg = true;
+                    } else if (t[c] > kMaxRadiance) {
+                        t[c] = kMaxRadiance;
+                        bright = true;
+                    }
+                    r.max_value = std::max(r.max_value, t[c]);
+                }
+                r.non_finite += bad;
+                r.negative += neg && !bad;
+                r.too_bright += bright && !neg && !bad;
+            }
         }
     });
     SanitizeReport r;
