@@ -8,6 +8,9 @@
 // Densities are over the unit interval (they average to one over a row with any light), so the
 // joint density on the unit square is p(u,v) = p(v) p(u|v). A function that sums to zero keeps a
 // linear CDF and zero densities: it is never chosen and evaluates to zero, without a division by 0.
+// Offsets are 32-bit ints, as on the device: they are exact while etk_dist2d_size(w, h) fits in an
+// int and w, h <= 65536, which the host checks before it builds a table (check_distribution_size
+// in host/lib/load/env_distribution.cpp, in 64-bit arithmetic).
 #ifndef ETK_PIECEWISE_CONSTANT_H
 #define ETK_PIECEWISE_CONSTANT_H
 #include "compat.h"

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -16,9 +17,22 @@ struct CompareArgs {
     std::string a, b, mask, json;
 };
 
+// NaN or Inf in either image makes every metric meaningless (an all-NaN image would compare as
+// 'l2 0'): refused, naming the file.
+void require_finite(const RgbImage& img, const std::string& path) {
+    size_t bad = 0;
+    for (float v : img.rgb)
+        bad += !std::isfinite(v);
+    if (bad)
+        throw Error(path + ": " + std::to_string(bad) + " of " + std::to_string(img.rgb.size()) +
+                    " values are NaN or infinite: cannot compare");
+}
+
 void run(const CompareArgs& args) {
     RgbImage a = read_rgb_image(args.a);
+    require_finite(a, args.a);
     RgbImage b = read_rgb_image(args.b);
+    require_finite(b, args.b);
     if (a.width != b.width || a.height != b.height)
         throw Error(args.a + " is " + std::to_string(a.width) + "x" + std::to_string(a.height) +
                     " but " + args.b + " is " + std::to_string(b.width) + "x" +

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -44,6 +45,20 @@ TEST(CompareCli, MetricsSizeMismatchAndMissingFile) {
     EXPECT_NE(out.find("3x3"), std::string::npos) << out;
     EXPECT_EQ(run_cli("compare " + dir + "/a.exr " + dir + "/missing.exr", out), 1);
     EXPECT_NE(out.find("missing.exr"), std::string::npos) << out;
+}
+
+// NaN or Inf in either image: an error naming the file (an all-NaN image compared as 'l2 0').
+TEST(CompareCli, NonFiniteImagesAreRefused) {
+    const std::string dir = ett::scratch_dir("compare_nan");
+    et::write_image(dir + "/ok.exr", 4, 2, 3, std::vector<float>(24, 1.0f));
+    et::write_image(dir + "/nan.exr", 4, 2, 3, std::vector<float>(24, NAN), {}, true);
+    std::string out;
+    EXPECT_EQ(run_cli("compare " + dir + "/nan.exr " + dir + "/ok.exr", out), 1) << out;
+    EXPECT_NE(out.find("envtrace: error: " + dir + "/nan.exr: 24 of 24 values are NaN"),
+              std::string::npos)
+        << out;
+    EXPECT_EQ(run_cli("compare " + dir + "/ok.exr " + dir + "/nan.exr", out), 1) << out;
+    EXPECT_EQ(out.find("l2"), std::string::npos) << out;
 }
 
 } // namespace

@@ -7,6 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <sys/resource.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -99,7 +102,7 @@ TEST(EnvmapBadInput, NonFiniteAndNegativeTexelsWarnOnce) {
     img.at(3, 3)[2] = -INFINITY;
     img.at(4, 4)[0] = -5.0f;
     const std::string path = ett::scratch_dir("nan") + "/nan.exr";
-    et::write_image(path, 16, 8, 3, img.rgb);
+    et::write_image(path, 16, 8, 3, img.rgb, {}, /*keep_non_finite=*/true);
     ett::WarningCapture w;
     const et::EnvMap env = et::load_envmap(path, {});
     EXPECT_EQ(w.count_containing("3 non-finite and 1 negative"), 1u);
@@ -206,6 +209,153 @@ TEST(EnvmapBadInput, CliSamplesDwabMapWithOneWarning) {
     EXPECT_EQ(err.rfind("envtrace: warning: ", 0), 0u) << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
     EXPECT_TRUE(fs::exists(out));
+}
+
+// Headers that declare more pixels than can be held, or than their file can hold, are refused
+// before any pixel is allocated: checked in a child whose address space is capped at 1 GiB more
+// than it uses (the old reader allocated 3.7 GB for a 60-byte HDR, 5.3 GB for a 5 kB PNG).
+TEST(EnvmapBadInputDeathTest, HugeDeclaredSizesAreRefusedBeforeAllocating) {
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    const std::string dir = ett::scratch_dir("huge-header");
+    write_bytes(dir + "/huge.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 12500 +X 25000\n");
+    write_bytes(dir + "/claims.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8000 +X 16000\n");
+    write_bytes(dir + "/huge.pfm", "PF\n30000 15000\n-1.0\n" + std::string(64, '\0'));
+    // A PNG claiming 30000x15000 RGB with 5 kB of (compressed zero) data.
+    auto be32 = [](uint32_t v) {
+        return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+    };
+    auto chunk = [&](const std::string& type, const std::string& data) {
+        const std::string td = type + data;
+        uint32_t crc = 0xffffffffu;
+        for (unsigned char c : td) {
+            crc ^= c;
+            for (int k = 0; k < 8; ++k)
+                crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+        }
+        return be32(static_cast<uint32_t>(data.size())) + td + be32(~crc);
+    };
+    const std::string ihdr = be32(30000) + be32(15000) + std::string{8, 2, 0, 0, 0};
+    // A stored (uncompressed) deflate block of 5000 zero bytes inside a zlib stream.
+    std::string idat = "\x78\x01";
+    idat += std::string{1, char(5000 & 0xff), char(5000 >> 8), char(~5000 & 0xff),
+                        char((~5000 >> 8) & 0xff)};
+    idat += std::string(5000, '\0');
+    idat += be32(0x1387138d); // adler32 of the zeros is not checked before the size
+    write_bytes(dir + "/huge.png", "\x89PNG\r\n\x1a\n" + chunk("IHDR", ihdr) + chunk("IDAT", idat) +
+                                       chunk("IEND", ""));
+    for (const char* name : {"huge.hdr", "claims.hdr", "huge.pfm", "huge.png"}) {
+        const std::string path = dir + "/" + name;
+        SCOPED_TRACE(path);
+        EXPECT_EXIT(
+            {
+                long pages = 0;
+                if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+                    if (std::fscanf(f, "%ld", &pages) != 1)
+                        pages = 0;
+                    std::fclose(f);
+                }
+                rlimit lim{};
+                getrlimit(RLIMIT_AS, &lim);
+                lim.rlim_cur = static_cast<rlim_t>(pages) * sysconf(_SC_PAGESIZE) + (1L << 30);
+                setrlimit(RLIMIT_AS, &lim);
+                et::set_warning_sink([](const std::string&) {});
+                try {
+                    et::load_envmap(path, {});
+                    std::_Exit(2); // loaded
+                } catch (const et::Error& e) {
+                    const std::string m = e.what();
+                    const bool named = m.rfind(path, 0) == 0 && m.find('\n') == std::string::npos;
+                    const bool says = m.find("budget") != std::string::npos ||
+                                      m.find("corrupt or truncated") != std::string::npos;
+                    std::_Exit(named && says ? 0 : 3);
+                } catch (...) {
+                    std::_Exit(4); // bad_alloc: it allocated first
+                }
+            },
+            ::testing::ExitedWithCode(0), "");
+    }
+}
+
+// PFM is read here: corrupt files say what is wrong (OpenImageIO said 'unknown error'), both
+// byte orders and grey PFMs read, and what write_image writes reads back bit for bit.
+TEST(EnvmapBadInput, PfmReadWriteAndCorruption) {
+    const std::string dir = ett::scratch_dir("pfm");
+    auto error_of = [](const std::string& path) -> std::string {
+        try {
+            et::read_rgb_image(path);
+        } catch (const et::Error& e) {
+            return e.what();
+        }
+        return "(no error)";
+    };
+    write_bytes(dir + "/short.pfm", "PF\n4 2\n-1.0\n" + std::string(10, '\0'));
+    write_bytes(dir + "/header.pfm", "PF\nfour 2\n-1.0\n" + std::string(96, '\0'));
+    write_bytes(dir + "/magic.pfm", "P6\n4 2\n255\n" + std::string(24, '\0'));
+    write_bytes(dir + "/scale.pfm", "PF\n4 2\n0\n" + std::string(96, '\0'));
+    write_bytes(dir + "/neg.pfm", "PF\n-4 2\n-1.0\n" + std::string(96, '\0'));
+    EXPECT_NE(error_of(dir + "/short.pfm").find("truncated PFM"), std::string::npos);
+    EXPECT_NE(error_of(dir + "/header.pfm").find("corrupt PFM header"), std::string::npos);
+    EXPECT_NE(error_of(dir + "/magic.pfm").find("not a PFM file"), std::string::npos);
+    EXPECT_NE(error_of(dir + "/scale.pfm").find("corrupt PFM header"), std::string::npos);
+    EXPECT_NE(error_of(dir + "/neg.pfm").find("no pixels"), std::string::npos);
+    for (const char* f : {"short", "header", "magic", "scale", "neg"})
+        EXPECT_EQ(error_of(dir + "/" + f + ".pfm").find("unknown error"), std::string::npos);
+
+    // Round trip, rows bottom to top.
+    std::vector<float> px(5 * 3 * 3);
+    for (size_t i = 0; i < px.size(); ++i)
+        px[i] = 0.25f * static_cast<float>(i) - 3.0f;
+    et::write_image(dir + "/rt.pfm", 5, 3, 3, px);
+    const et::RgbImage img = et::read_rgb_image(dir + "/rt.pfm");
+    ASSERT_EQ(img.width, 5);
+    ASSERT_EQ(img.height, 3);
+    EXPECT_EQ(img.rgb, px);
+    // Big-endian grey: 2x1, values 1 and 2, bottom row first (one row here).
+    write_bytes(dir + "/grey.pfm",
+                std::string("Pf\n2 1\n1.0\n") + std::string("\x3f\x80\x00\x00\x40\x00\x00\x00", 8));
+    const et::RgbImage g = et::read_rgb_image(dir + "/grey.pfm");
+    EXPECT_EQ(g.rgb, (std::vector<float>{1, 1, 1, 2, 2, 2}));
+    et::check_writable_format(dir + "/x.pfm");
+    EXPECT_THROW(et::check_writable_format(dir + "/x.tga"), et::Error);
+    EXPECT_THROW(et::check_writable_format(dir), et::Error);
+}
+
+// Distribution sizes in 64 bits: what the device cannot index is an error, not a 32-bit overflow
+// and a read past the table; the blur is bounded.
+TEST(EnvmapBadInput, DistributionSizeAndBlurBounds) {
+    EXPECT_EQ(et::distribution_table_entries(65536, 65536), 2ull * 65536 + 1 + 65536ull * 131073);
+    EXPECT_THROW(et::check_distribution_size(65536, 65536), et::Error);
+    EXPECT_THROW(et::check_distribution_size(46341, 46341), et::Error);
+    EXPECT_THROW(et::check_distribution_size(65537, 1), et::Error);
+    EXPECT_NO_THROW(et::check_distribution_size(65536, 1024));
+    int w = 0, h = 0;
+    EXPECT_THROW(et::parse_resolution("65536x65536", w, h), et::Error);
+    EXPECT_THROW(et::parse_resolution("99999999999999999999x2", w, h), et::Error);
+    et::DistributionOptions o;
+    o.width = o.height = 65536;
+    EXPECT_THROW(et::make_envmap("m", ett::constant_image(16, 8, 1.0f), o), et::Error);
+    o = {};
+    o.blur_sigma = 1e30f;
+    EXPECT_THROW(et::make_envmap("m", ett::constant_image(16, 8, 1.0f), o), et::Error);
+    o.blur_sigma = et::kMaxBlurSigma;
+    const et::EnvMap env = et::make_envmap("m", ett::constant_image(16, 8, 1.0f), o);
+    for (float v : env.dist.table)
+        ASSERT_TRUE(std::isfinite(v));
+}
+
+// Texels beyond kMaxRadiance are clamped with one warning, and the intensity is bounded so that
+// intensity x brightest texel stays at most kMaxRadiance.
+TEST(EnvmapBadInput, HugeTexelsAndIntensityAreBounded) {
+    ett::WarningCapture w;
+    et::EnvMap env = et::make_envmap("bright", ett::constant_image(16, 8, 3e38f), {});
+    EXPECT_EQ(w.count_containing("clamped"), 1u);
+    EXPECT_EQ(env.max_texel, et::kMaxRadiance);
+    for (float v : env.dist.table)
+        ASSERT_TRUE(std::isfinite(v));
+    env.scale = 1e20f;
+    et::bound_intensity(env, "scene.json: environment.intensity");
+    EXPECT_LE(double(env.scale) * env.max_texel, double(et::kMaxRadiance) * 1.0000001);
+    EXPECT_EQ(w.count_containing("scene.json: environment.intensity"), 1u);
 }
 
 } // namespace

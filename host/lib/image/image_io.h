@@ -13,7 +13,9 @@ struct RgbImage {
     const float* at(int x, int y) const { return &rgb[3 * (static_cast<size_t>(y) * width + x)]; }
 };
 
-// Any format OpenImageIO reads (EXR of every compression, HDR, PFM, PNG, JPEG, ...). 8- and 16-bit
+// Any format OpenImageIO reads (EXR of every compression, HDR, PNG, JPEG, ...) and PFM (read
+// here). Only regular files of at most kMaxImageBytes are opened, and the declared size is
+// checked against the memory budget and the file's size before any pixel is read. 8- and 16-bit
 // images are decoded from sRGB to linear. One channel is replicated to RGB; otherwise the R, G, B
 // channels are used (the first three when they are not named so). Throws et::Error naming the
 // file and the problem.
@@ -21,10 +23,18 @@ RgbImage read_rgb_image(const std::string& path);
 
 // Writes `channels`-channel float pixels. .exr/.hdr/.pfm keep linear floats; .png/.jpg expect
 // display values in [0,1] and store 8 bits. Writes to a temporary file beside `path` and renames
-// it into place. `attributes` are name/value string metadata.
+// it into place. `attributes` are name/value string metadata. NaN and Inf are written as 0 with a
+// warning (no output of envtrace holds them) unless `keep_non_finite` (test inputs).
 void write_image(const std::string& path, int width, int height, int channels,
                  const std::vector<float>& pixels,
-                 const std::vector<std::pair<std::string, std::string>>& attributes = {});
+                 const std::vector<std::pair<std::string, std::string>>& attributes = {},
+                 bool keep_non_finite = false);
+
+// Throws et::Error "PATH: problem" unless an image can be written at `path`: a supported
+// extension with a writer (.pfm is written here, the rest by OpenImageIO), an existing folder,
+// and not a folder itself. write_image checks this first; a command can call it before it
+// spends time on a render.
+void check_writable_format(const std::string& path);
 
 // Linear radiance to display sRGB in [0,1]: exposure scale, then a clamped sRGB curve.
 float linear_to_srgb(float v);

@@ -1,4 +1,7 @@
 #include "load/env_distribution.h"
+#include "util/checked_size.h"
+#include "util/error.h"
+#include "util/file_check.h"
 #include "util/parallel.h"
 
 #include "kernels/piecewise_constant.h"
@@ -21,6 +24,7 @@ namespace {
 // The bilinear cell-mean taps [1 6 1]/8 convolved with a truncated, normalised Gaussian.
 std::vector<float> filter_taps(float sigma) {
     std::vector<float> g{1.0f};
+    sigma = std::min(sigma, kMaxBlurSigma); // callers check; this keeps the int cast defined
     if (sigma > 0.0f) {
         int r = std::max(1, static_cast<int>(std::ceil(3.0f * sigma)));
         g.assign(2 * r + 1, 0.0f);
@@ -231,6 +235,30 @@ void build_rows(const Plan& p, int o0, int o1) {
 
 } // namespace
 
+uint64_t distribution_table_entries(int w, int h) {
+    // 2h + 1 + h (2w + 1), as etk_dist2d_size but without 32-bit overflow.
+    const uint64_t W = static_cast<uint64_t>(std::max(w, 0)),
+                   H = static_cast<uint64_t>(std::max(h, 0));
+    return 2 * H + 1 + H * (2 * W + 1);
+}
+
+void check_distribution_size(int w, int h) {
+    const std::string res = std::to_string(w) + "x" + std::to_string(h);
+    if (w < 1 || h < 1 || w > kMaxDistributionSide || h > kMaxDistributionSide)
+        throw Error("distribution resolution " + res + " is out of range (1 to " +
+                    std::to_string(kMaxDistributionSide) + " cells each way)");
+    const uint64_t entries = distribution_table_entries(w, h);
+    if (entries > kMaxDeviceIndex)
+        throw Error("distribution resolution " + res + " needs " + std::to_string(entries) +
+                    " table entries, more than the device indexes (" +
+                    std::to_string(kMaxDeviceIndex) + "); use fewer cells");
+    const uint64_t bytes = checked_mul(entries, sizeof(float), "distribution " + res);
+    if (bytes > kMaxBufferBytes)
+        throw Error("distribution resolution " + res + " needs " + byte_text(bytes) +
+                    ", more than the memory budget of " + byte_text(kMaxBufferBytes) +
+                    " per buffer; use fewer cells");
+}
+
 double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf) {
     std::vector<double> scratch(static_cast<size_t>(std::max(n, 0)) + 1);
     return build_1d(f, n, pdf, cdf, scratch.data());
@@ -252,10 +280,11 @@ EnvDistribution build_env_distribution(const RgbImage& image, const Distribution
         p.sy = area_weights(p.h, p.dh);
     }
 
+    check_distribution_size(p.dw, p.dh); // 32-bit offsets below are then exact
     EnvDistribution d;
     d.width = p.dw;
     d.height = p.dh;
-    d.table.assign(etk::etk_dist2d_size(p.dw, p.dh), 0.0f);
+    d.table.assign(distribution_table_entries(p.dw, p.dh), 0.0f);
     p.cond_pdf = d.table.data() + etk::etk_dist2d_conditional_pdf(p.dh);
     p.cond_cdf = d.table.data() + etk::etk_dist2d_conditional_cdf(p.dw, p.dh);
     std::vector<float> row_mass(p.dh);

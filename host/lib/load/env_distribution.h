@@ -3,14 +3,27 @@
 #include "kernels/color.h"
 #include "image/image_io.h"
 
+#include <cstdint>
 #include <vector>
 
 namespace et {
 
+// Bounds of the options: a side of at most 65536 cells (etk_find_interval's fixed step count), a
+// blur of at most 64 texels (its filter has 2 * ceil(3 sigma) + 3 taps per pass).
+constexpr int kMaxDistributionSide = 65536;
+constexpr float kMaxBlurSigma = 64.0f;
+
+// Entries of the table of a w x h distribution (kernels/piecewise_constant.h), in 64 bits.
+uint64_t distribution_table_entries(int w, int h);
+
+// Throws et::Error "WxH: problem" when a w x h table is out of range, larger than the device can
+// index with 32-bit ints or than the memory budget (util/checked_size.h).
+void check_distribution_size(int w, int h);
+
 struct DistributionOptions {
     int width = 0, height = 0; // 0: the map's resolution
     float blur_sigma = 0.5f;   // Gaussian blur of luminance, in texels; 0 disables it
-    int threads = 1;           // rows built on this many threads (0: all cores); same result
+    int threads = 0;           // rows built on this many threads (0: all cores); same result
 };
 
 struct EnvDistribution {

@@ -9,21 +9,29 @@
 
 namespace et {
 
+// The brightest radiance a texel (times the intensity) may have: far below FLT_MAX, so that
+// radiance x throughput x pdf ratios, summed over 2^24 samples, stay finite. Brighter texels are
+// clamped with a warning (the physical sun is about 1.6e9).
+constexpr float kMaxRadiance = 1e12f;
+
 struct EnvMap {
     std::string name;
     RgbImage image;
     EnvDistribution dist;
     float scale = 1.0f;
     float rotation_degrees = 0.0f; // about the up (+Y) axis
+    float max_texel = 0.0f;        // the largest channel value of `image`
     double load_seconds = 0.0, build_seconds = 0.0;
 
     etk::EtkEnvMap desc() const;
 };
 
 // Replaces non-finite values and negative channels by zero, so they neither light the scene nor
-// poison the distribution; returns the number of texels changed.
+// poison the distribution, and clamps channels above kMaxRadiance; returns the number of texels
+// changed and the largest channel left.
 struct SanitizeReport {
-    size_t non_finite = 0, negative = 0;
+    size_t non_finite = 0, negative = 0, too_bright = 0;
+    float max_value = 0.0f;
 };
 SanitizeReport sanitize_texels(RgbImage& image);
 
@@ -33,6 +41,10 @@ EnvMap load_envmap(const std::string& path, const DistributionOptions& options);
 
 // Wraps an in-memory image (e.g. the procedural sky) the same way.
 EnvMap make_envmap(std::string name, RgbImage image, const DistributionOptions& options);
+
+// Clamps env.scale so that scale x max_texel <= kMaxRadiance, warning (naming `where`) if it had
+// to.
+void bound_intensity(EnvMap& env, const std::string& where);
 
 // Parses "512x256" into a distribution resolution; throws et::Error on anything else.
 void parse_resolution(const std::string& text, int& width, int& height);

@@ -1,4 +1,6 @@
 #include "util/error.h"
+#include "util/file_check.h"
+#include "util/json_file.h"
 #include "kernels/bsdf.h"
 #include "load/scene.h"
 
@@ -7,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <sstream>
 
 namespace et {
 
@@ -29,37 +33,67 @@ bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3]
     return true;
 }
 
+namespace {
+
+// One line from tinyobjloader's messages: newlines become ';', at most a short excerpt.
+std::string tinyobj_text(std::string msg) {
+    while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' '))
+        msg.pop_back();
+    for (auto& c : msg)
+        if (c == '\n')
+            c = ';';
+    return excerpt(msg, 200);
+}
+
+// MTL files named by `mtllib`, resolved against the OBJ's folder and read through the regular-file
+// check (a FIFO or /dev/zero named as mtllib is an error, not a hang). A missing MTL is a warning
+// (tinyobjloader's), as before.
+class MtlReader : public tinyobj::MaterialReader {
+  public:
+    explicit MtlReader(std::string dir) : dir_(std::move(dir)) {}
+    bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                    std::map<std::string, int>* names, std::string* warning,
+                    std::string* err) override {
+        const std::filesystem::path p = std::filesystem::path(name).is_absolute()
+                                            ? std::filesystem::path(name)
+                                            : std::filesystem::path(dir_) / name;
+        std::error_code ec;
+        if (!std::filesystem::exists(p, ec)) {
+            if (warning)
+                *warning += "material file '" + excerpt(name, 60) + "' not found\n";
+            return false;
+        }
+        std::istringstream in(read_regular_file(p.string(), kMaxMtlBytes, "MTL file"));
+        tinyobj::LoadMtl(names, materials, &in, warning, err);
+        return true;
+    }
+
+  private:
+    std::string dir_;
+};
+
+} // namespace
+
 void load_obj(const std::string& path, const glm::mat4& transform, int override_material,
               std::vector<Material>& materials, TriangleSoup& out) {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        throw Error(path + ": is a directory, not an OBJ file");
-    tinyobj::ObjReaderConfig config;
-    config.triangulate = true;
-    config.vertex_color = false;
-    config.mtl_search_path = std::filesystem::path(path).parent_path().string();
-    tinyobj::ObjReader reader;
-    if (!reader.ParseFromFile(path, config)) {
-        std::string msg = reader.Error();
-        while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' '))
-            msg.pop_back();
-        for (auto& c : msg)
-            if (c == '\n')
-                c = ';';
-        throw Error(path + ": cannot read OBJ: " + (msg.empty() ? "unknown error" : msg));
+    std::istringstream obj(read_regular_file(path, kMaxMeshBytes, "OBJ file"));
+    tinyobj::attrib_t attrib_data;
+    std::vector<tinyobj::shape_t> shapes_data;
+    std::vector<tinyobj::material_t> mtls_data;
+    std::string warning, error;
+    MtlReader mtl_reader(std::filesystem::path(path).parent_path().string());
+    if (!tinyobj::LoadObj(&attrib_data, &shapes_data, &mtls_data, &warning, &error, &obj,
+                          &mtl_reader, /*triangulate=*/true, /*default_vcols_fallback=*/false)) {
+        const std::string msg = tinyobj_text(error);
+        throw Error(path + ": cannot read OBJ: " + (msg.empty() ? "no geometry found" : msg));
     }
-    if (!reader.Warning().empty()) {
-        std::string w = reader.Warning();
-        while (!w.empty() && w.back() == '\n')
-            w.pop_back();
-        for (auto& c : w)
-            if (c == '\n')
-                c = ';';
-        warn(path + ": " + w);
-    }
-    const auto& attrib = reader.GetAttrib();
-    const auto& shapes = reader.GetShapes();
-    const auto& mtls = reader.GetMaterials();
+    if (!error.empty()) // reported, but the geometry was read
+        warning += error;
+    if (!warning.empty())
+        warn(path + ": " + tinyobj_text(warning));
+    const auto& attrib = attrib_data;
+    const auto& shapes = shapes_data;
+    const auto& mtls = mtls_data;
 
     // OBJ/MTL materials map onto ours: Kd -> albedo, Ks/Ns -> specular/roughness.
     const int base = static_cast<int>(materials.size());

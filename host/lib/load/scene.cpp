@@ -3,6 +3,7 @@
 #include "util/data_path.h"
 #include "util/error.h"
 #include "util/json_file.h"
+#include "util/checked_size.h"
 #include "kernels/bsdf.h"
 #include "load/scene_environment.h"
 
@@ -10,6 +11,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 
 namespace et {
@@ -17,81 +19,83 @@ namespace {
 
 using json = nlohmann::json;
 
-struct Reader {
-    std::string where; // "scene.json: camera"
+// Colours and vectors: [x, y, z] of finite floats, or one number for all three.
+glm::vec3 read_vec3(const json& j, const char* key, glm::vec3 fallback, const JsonReader& r,
+                    bool allow_scalar = true) {
+    auto it = j.find(key);
+    if (it == j.end())
+        return fallback;
+    const JsonReader rk = r.at(key);
+    const double big = std::numeric_limits<float>::max();
+    if (allow_scalar && it->is_number())
+        return glm::vec3(static_cast<float>(rk.number(*it, -big, big)));
+    if (!it->is_array() || it->size() != 3)
+        rk.fail(std::string("expected [x, y, z]") + (allow_scalar ? " or one number" : "") +
+                ", got " + json_excerpt(*it));
+    glm::vec3 v;
+    for (int k = 0; k < 3; ++k)
+        v[k] = static_cast<float>(rk.at(k).number((*it)[k], -big, big));
+    return v;
+}
 
-    template <typename T> T get(const json& j, const char* key, T fallback) const {
-        if (!j.contains(key))
-            return fallback;
-        try {
-            return j.at(key).get<T>();
-        } catch (const json::exception&) {
-            throw Error(where + ": '" + key + "' has the wrong type (" + j.at(key).dump() + ")");
-        }
-    }
-    float number(const json& j, const char* key, float fallback, float lo, float hi) const {
-        float v = get<float>(j, key, fallback);
-        if (!std::isfinite(v) || v < lo || v > hi)
-            throw Error(where + ": '" + key + "' = " + j.at(key).dump() + " is outside [" +
-                        std::to_string(lo) + ", " + std::to_string(hi) + "]");
-        return v;
-    }
-    glm::vec3 vec3(const json& j, const char* key, glm::vec3 fallback) const {
-        if (!j.contains(key))
-            return fallback;
-        const json& a = j.at(key);
-        if (a.is_number()) {
-            float s = a.get<float>();
-            return glm::vec3(s);
-        }
-        if (!a.is_array() || a.size() != 3 || !a[0].is_number() || !a[1].is_number() ||
-            !a[2].is_number())
-            throw Error(where + ": '" + key + "' must be [x, y, z] (got " + a.dump() + ")");
-        glm::vec3 v(a[0].get<float>(), a[1].get<float>(), a[2].get<float>());
-        if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-            throw Error(where + ": '" + key + "' is not finite");
-        return v;
-    }
-};
+float read_float(const json& j, const char* key, float fallback, float lo, float hi,
+                 const JsonReader& r) {
+    return static_cast<float>(r.number(j, key, fallback, lo, hi));
+}
 
-glm::mat4 read_transform(const json& s, const Reader& r) {
+int read_int(const json& j, const char* key, int fallback, int lo, int hi, const JsonReader& r) {
+    return static_cast<int>(r.integer(j, key, fallback, lo, hi));
+}
+
+glm::mat4 read_transform(const json& s, const JsonReader& r) {
     glm::mat4 m(1.0f);
-    if (!s.contains("transform"))
+    const json* tp = r.object(s, "transform");
+    if (!tp)
         return m;
-    const json& t = s["transform"];
-    Reader rt{r.where + ".transform"};
-    warn_unknown_keys(t, {"translate", "rotate", "scale", "matrix"}, rt.where);
+    const json& t = *tp;
+    const JsonReader rt = r.at("transform");
+    rt.warn_unknown_keys(t, {"translate", "rotate", "scale", "matrix"});
+    const double big = 1e30;
     if (t.contains("matrix")) {
         // A full 4x4 matrix, row-major (as Mitsuba writes them); nothing else alongside it.
         const json& a = t["matrix"];
+        const JsonReader rm = rt.at("matrix");
         if (!a.is_array() || a.size() != 16)
-            throw Error(rt.where + ": 'matrix' must be 16 numbers, row-major");
+            rm.fail("expected 16 numbers, row-major, got " + json_excerpt(a));
         if (t.size() != 1)
-            throw Error(rt.where + ": 'matrix' cannot be combined with translate/rotate/scale");
+            rm.fail("cannot be combined with translate/rotate/scale");
         for (int r = 0; r < 4; ++r)
-            for (int c = 0; c < 4; ++c) {
-                if (!a[4 * r + c].is_number())
-                    throw Error(rt.where + ": 'matrix' must be 16 numbers, row-major");
-                m[c][r] = a[4 * r + c].get<float>(); // glm is column-major
-            }
-        if (!(std::fabs(glm::determinant(glm::mat3(m))) > 0.0f))
-            throw Error(rt.where + ": 'matrix' is singular");
+            for (int c = 0; c < 4; ++c) // glm is column-major
+                m[c][r] = static_cast<float>(rm.at(4 * r + c).number(a[4 * r + c], -big, big));
+        const float det = glm::determinant(glm::mat3(m));
+        if (!(std::fabs(det) > 0.0f) || !std::isfinite(det))
+            rm.fail("is singular (or its determinant overflows)");
         return m;
     }
     // Applied as scale, then rotate (about [x, y, z] by degrees), then translate.
-    m = glm::translate(m, rt.vec3(t, "translate", glm::vec3(0.0f)));
+    glm::vec3 tr = read_vec3(t, "translate", glm::vec3(0.0f), rt, false);
+    if (glm::any(glm::greaterThan(glm::abs(tr), glm::vec3(big))))
+        rt.at("translate").fail("components must be within [-1e30, 1e30]");
+    m = glm::translate(m, tr);
     if (t.contains("rotate")) {
         const json& a = t["rotate"];
+        const JsonReader ra = rt.at("rotate");
         if (!a.is_array() || a.size() != 4)
-            throw Error(rt.where + ": 'rotate' must be [axis x, axis y, axis z, degrees]");
-        glm::vec3 axis(a[0].get<float>(), a[1].get<float>(), a[2].get<float>());
-        if (!(glm::length(axis) > 0.0f))
-            throw Error(rt.where + ": 'rotate' axis is zero");
-        m = glm::rotate(m, glm::radians(a[3].get<float>()), glm::normalize(axis));
+            ra.fail("expected [axis x, axis y, axis z, degrees], got " + json_excerpt(a));
+        glm::vec3 axis;
+        for (int k = 0; k < 3; ++k)
+            axis[k] = static_cast<float>(ra.at(k).number(a[k], -big, big));
+        const float degrees = static_cast<float>(ra.at(3).number(a[3], -1e6, 1e6));
+        const float len = glm::length(axis);
+        if (!(len > 0.0f) || !std::isfinite(len))
+            ra.fail("the axis is zero or too long");
+        m = glm::rotate(m, glm::radians(degrees), axis / len);
     }
-    glm::vec3 sc = rt.vec3(t, "scale", glm::vec3(1.0f));
+    glm::vec3 sc = read_vec3(t, "scale", glm::vec3(1.0f), rt);
     if (sc.x == 0.0f || sc.y == 0.0f || sc.z == 0.0f)
-        throw Error(rt.where + ": 'scale' has a zero component");
+        rt.at("scale").fail("has a zero component");
+    if (glm::any(glm::greaterThan(glm::abs(sc), glm::vec3(big))))
+        rt.at("scale").fail("components must be within [-1e30, 1e30]");
     return glm::scale(m, sc);
 }
 
@@ -113,11 +117,12 @@ void add_sphere(TriangleSoup& soup, glm::vec3 c, float radius, int segments, int
         }
 }
 
-Material read_material(const std::string& name, const json& j, const Reader& r) {
+Material read_material(const std::string& name, const json& j, const JsonReader& r) {
     Material m;
     m.name = name;
-    warn_unknown_keys(j, {"type", "albedo", "specular", "roughness"}, r.where);
-    const std::string type = r.get<std::string>(j, "type", "diffuse");
+    r.expect_object(j);
+    r.warn_unknown_keys(j, {"type", "albedo", "specular", "roughness"});
+    const std::string type = r.string(j, "type", "diffuse");
     if (type == "diffuse") {
         m.type = ETK_MAT_DIFFUSE;
     } else if (type == "microfacet" || type == "plastic" || type == "cook-torrance") {
@@ -128,92 +133,92 @@ Material read_material(const std::string& name, const json& j, const Reader& r) 
         m.type = ETK_MAT_MIRROR;
         m.specular = glm::vec3(1.0f);
     } else {
-        throw Error(r.where + ": unknown material type '" + type +
-                    "' (use diffuse, microfacet, plastic or mirror)");
+        r.at("type").fail("unknown material type " + json_excerpt(j["type"]) +
+                          " (use diffuse, microfacet, plastic or mirror)");
     }
-    m.albedo = glm::clamp(r.vec3(j, "albedo", m.albedo), 0.0f, 1.0f);
-    m.specular = glm::clamp(r.vec3(j, "specular", m.specular), 0.0f, 1.0f);
-    m.roughness = r.number(j, "roughness", m.roughness, 0.0f, 1.0f);
+    m.albedo = glm::clamp(read_vec3(j, "albedo", m.albedo, r), 0.0f, 1.0f);
+    m.specular = glm::clamp(read_vec3(j, "specular", m.specular, r), 0.0f, 1.0f);
+    m.roughness = read_float(j, "roughness", m.roughness, 0.0f, 1.0f, r);
     return m;
 }
 
 } // namespace
 
 Scene load_scene(const std::string& path) {
-    json j = read_json_file(path);
+    json j = read_json_file(path, "scene file");
+    const JsonReader r(path);
     if (!j.is_object())
-        throw Error(path + ": the scene must be a JSON object");
+        r.fail("the scene must be a JSON object, got " + json_excerpt(j));
     Scene scene;
     scene.path = path;
     const std::string dir = std::filesystem::path(path).parent_path().string();
-    Reader r{path};
-    warn_unknown_keys(
-        j, {"camera", "film", "environment", "materials", "shapes", "render", "output"}, path);
+    r.warn_unknown_keys(
+        j, {"camera", "film", "environment", "materials", "shapes", "render", "output"});
 
-    if (j.contains("camera")) {
-        Reader rc{path + ": camera"};
-        const json& c = j["camera"];
-        warn_unknown_keys(c, {"eye", "target", "up", "fov"}, rc.where);
-        scene.camera.eye = rc.vec3(c, "eye", scene.camera.eye);
-        scene.camera.target = rc.vec3(c, "target", scene.camera.target);
-        scene.camera.up = rc.vec3(c, "up", scene.camera.up);
-        scene.camera.fov_deg = rc.number(c, "fov", scene.camera.fov_deg, 0.01f, 179.0f);
+    if (const json* cp = r.object(j, "camera")) {
+        const json& c = *cp;
+        const JsonReader rc = r.at("camera");
+        rc.warn_unknown_keys(c, {"eye", "target", "up", "fov"});
+        scene.camera.eye = read_vec3(c, "eye", scene.camera.eye, rc, false);
+        scene.camera.target = read_vec3(c, "target", scene.camera.target, rc, false);
+        scene.camera.up = read_vec3(c, "up", scene.camera.up, rc, false);
+        scene.camera.fov_deg = read_float(c, "fov", scene.camera.fov_deg, 0.01f, 179.0f, rc);
+        for (const glm::vec3& v : {scene.camera.eye, scene.camera.target, scene.camera.up})
+            if (glm::any(glm::greaterThan(glm::abs(v), glm::vec3(1e30f))))
+                rc.fail("eye, target and up must be within [-1e30, 1e30]");
         glm::vec3 f = scene.camera.target - scene.camera.eye;
         if (!(glm::length(f) > 0.0f) ||
             !(glm::length(glm::cross(f, scene.camera.up)) > 1e-6f * glm::length(f)))
-            throw Error(
-                rc.where +
-                ": eye, target and up must span a view (eye != target, up not along the view)");
+            rc.fail("eye, target and up must span a view (eye != target, up not along the view)");
     }
-    if (j.contains("film")) {
-        Reader rf{path + ": film"};
-        warn_unknown_keys(j["film"], {"width", "height"}, rf.where);
-        scene.width = static_cast<int>(rf.number(j["film"], "width", 512, 1, 16384));
-        scene.height = static_cast<int>(rf.number(j["film"], "height", 512, 1, 16384));
+    if (const json* fp = r.object(j, "film")) {
+        const JsonReader rf = r.at("film");
+        rf.warn_unknown_keys(*fp, {"width", "height"});
+        scene.width = read_int(*fp, "width", scene.width, 1, 16384, rf);
+        scene.height = read_int(*fp, "height", scene.height, 1, 16384, rf);
     }
-    if (j.contains("render")) {
-        Reader rr{path + ": render"};
-        const json& s = j["render"];
-        warn_unknown_keys(
-            s,
-            {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed", "time_limit", "paths"},
-            rr.where);
+    if (const json* sp = r.object(j, "render")) {
+        const json& s = *sp;
+        const JsonReader rr = r.at("render");
+        rr.warn_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
+                                 "time_limit", "paths"});
         auto& st = scene.settings;
-        st.spp = static_cast<int>(rr.number(s, "spp", st.spp, 1, 1 << 24));
-        st.max_depth = static_cast<int>(rr.number(s, "max_depth", st.max_depth, 1, 1000));
+        st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
+        st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
         if (s.contains("strategy"))
-            st.strategy = parse_strategy(rr.get<std::string>(s, "strategy", ""), rr.where);
+            st.strategy = parse_strategy(rr.string(s, "strategy", ""), rr.at("strategy").where());
         if (s.contains("heuristic"))
-            st.heuristic = parse_heuristic(rr.get<std::string>(s, "heuristic", ""), rr.where);
+            st.heuristic =
+                parse_heuristic(rr.string(s, "heuristic", ""), rr.at("heuristic").where());
         if (s.contains("sampler"))
-            st.sampler = parse_sampler(rr.get<std::string>(s, "sampler", ""), rr.where);
-        st.seed = rr.get<uint32_t>(s, "seed", st.seed);
-        st.time_limit = rr.number(s, "time_limit", 0.0f, 0.0f, 1e7f);
-        st.paths = static_cast<int>(rr.number(s, "paths", 0, 0, 1 << 26));
+            st.sampler = parse_sampler(rr.string(s, "sampler", ""), rr.at("sampler").where());
+        st.seed = static_cast<uint32_t>(rr.integer(s, "seed", st.seed, 0, 4294967295LL));
+        st.time_limit = rr.number(s, "time_limit", st.time_limit, 0.0, 1e7);
+        st.paths = read_int(s, "paths", st.paths, 0, 1 << 26, rr);
     }
-    scene.output = r.get<std::string>(j, "output", "");
+    scene.output = r.string(j, "output", "");
 
     if (!j.contains("environment"))
-        throw Error(path + ": no \"environment\": a scene needs a map or a sky to be lit by");
+        r.fail("no \"environment\": a scene needs a map or a sky to be lit by");
     scene.env = load_scene_environment(j["environment"], dir, path, {});
 
     std::map<std::string, int> by_name;
-    if (j.contains("materials")) {
-        if (!j["materials"].is_object())
-            throw Error(path + ": materials must be an object of name: {type, ...}");
-        for (auto it = j["materials"].begin(); it != j["materials"].end(); ++it) {
+    if (const json* mp = r.object(j, "materials")) {
+        const JsonReader rm = r.at("materials");
+        for (auto it = mp->begin(); it != mp->end(); ++it) {
             by_name[it.key()] = static_cast<int>(scene.materials.size());
-            scene.materials.push_back(
-                read_material(it.key(), it.value(), Reader{path + ": materials." + it.key()}));
+            scene.materials.push_back(read_material(it.key(), it.value(), rm.at(it.key())));
         }
     }
-    auto material_of = [&](const json& s, const Reader& rs) {
+    auto material_of = [&](const json& s, const JsonReader& rs) {
         if (!s.contains("material"))
             return -1;
-        std::string name = rs.get<std::string>(s, "material", "");
+        std::string name = rs.string(s, "material", "");
         auto it = by_name.find(name);
         if (it == by_name.end())
-            throw Error(rs.where + ": material '" + name + "' is not defined in \"materials\"");
+            rs.at("material")
+                .fail("material " + json_excerpt(s["material"]) +
+                      " is not defined in \"materials\"");
         return it->second;
     };
     auto default_material = [&] {
@@ -227,28 +232,35 @@ Scene load_scene(const std::string& path) {
     };
 
     if (j.contains("shapes")) {
-        if (!j["shapes"].is_array())
-            throw Error(path + ": shapes must be an array");
-        int index = 0;
+        const JsonReader rshapes = r.at("shapes");
+        rshapes.expect_array(j["shapes"]);
+        size_t index = 0;
         for (const json& s : j["shapes"]) {
-            Reader rs{path + ": shapes[" + std::to_string(index++) + "]"};
-            if (!s.is_object())
-                throw Error(rs.where + ": each shape must be an object");
-            const std::string type = rs.get<std::string>(s, "type", "");
+            const JsonReader rs = rshapes.at(index++);
+            rs.expect_object(s);
+            if (!s.contains("type"))
+                rs.fail("no \"type\" (use mesh, sphere or quad)");
+            const std::string type = rs.string(s, "type", "");
             int mat = material_of(s, rs);
             if (type == "mesh") {
-                warn_unknown_keys(s, {"type", "file", "material", "transform"}, rs.where);
-                std::string file = resolve_data_file(rs.get<std::string>(s, "file", ""), dir);
-                load_obj(file, read_transform(s, rs), mat, scene.materials, scene.triangles);
+                rs.warn_unknown_keys(s, {"type", "file", "material", "transform"});
+                if (!s.contains("file"))
+                    rs.fail("a mesh needs \"file\" (an OBJ file)");
+                const glm::mat4 transform = read_transform(s, rs);
+                std::string file = resolve_data_file(rs.string(s, "file", ""), dir);
+                load_obj(file, transform, mat, scene.materials, scene.triangles);
             } else if (type == "sphere") {
-                warn_unknown_keys(s, {"type", "center", "radius", "material", "segments", "smooth"},
-                                  rs.where);
-                glm::vec3 c = rs.vec3(s, "center", glm::vec3(0.0f));
-                float radius = rs.number(s, "radius", 1.0f, 1e-6f, 1e9f);
-                int segments = static_cast<int>(rs.number(s, "segments", 96, 4, 4096));
+                rs.warn_unknown_keys(
+                    s, {"type", "center", "radius", "material", "segments", "smooth"});
+                glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
+                if (glm::any(glm::greaterThan(glm::abs(c), glm::vec3(1e30f))))
+                    rs.at("center").fail("components must be within [-1e30, 1e30]");
+                float radius = read_float(s, "radius", 1.0f, 1e-6f, 1e9f, rs);
+                int segments = read_int(s, "segments", 96, 4, 4096, rs);
+                const bool smooth = rs.boolean(s, "smooth", true);
                 TriangleSoup sphere;
                 add_sphere(sphere, c, radius, segments, mat < 0 ? default_material() : mat);
-                if (!rs.get<bool>(s, "smooth", true))
+                if (!smooth)
                     for (size_t t = 0; t < sphere.size(); ++t) {
                         glm::vec3 ng = glm::normalize(
                             glm::cross(sphere.positions[3 * t + 1] - sphere.positions[3 * t],
@@ -262,20 +274,22 @@ Scene load_scene(const std::string& path) {
                 T.normals.insert(T.normals.end(), sphere.normals.begin(), sphere.normals.end());
                 T.material.insert(T.material.end(), sphere.material.begin(), sphere.material.end());
             } else if (type == "quad") {
-                warn_unknown_keys(s, {"type", "center", "size", "material", "transform"}, rs.where);
-                glm::vec3 c = rs.vec3(s, "center", glm::vec3(0.0f));
+                rs.warn_unknown_keys(s, {"type", "center", "size", "material", "transform"});
+                glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
+                if (glm::any(glm::greaterThan(glm::abs(c), glm::vec3(1e30f))))
+                    rs.at("center").fail("components must be within [-1e30, 1e30]");
                 float hx = 5.0f, hz = 5.0f; // "size": edge length or [x extent, z extent]
                 if (s.contains("size")) {
                     const json& z = s["size"];
-                    if (z.is_number() && z.get<float>() > 0.0f)
-                        hx = hz = 0.5f * z.get<float>();
-                    else if (z.is_array() && z.size() == 2 && z[0].is_number() &&
-                             z[1].is_number() && z[0].get<float>() > 0.0f &&
-                             z[1].get<float>() > 0.0f) {
-                        hx = 0.5f * z[0].get<float>();
-                        hz = 0.5f * z[1].get<float>();
-                    } else
-                        throw Error(rs.where + ": 'size' must be a positive number or [x, z]");
+                    const JsonReader rz = rs.at("size");
+                    if (z.is_array() && z.size() == 2) {
+                        hx = 0.5f * static_cast<float>(rz.at(0).number(z[0], 1e-9, 1e30));
+                        hz = 0.5f * static_cast<float>(rz.at(1).number(z[1], 1e-9, 1e30));
+                    } else if (z.is_number()) {
+                        hx = hz = 0.5f * static_cast<float>(rz.number(z, 1e-9, 1e30));
+                    } else {
+                        rz.fail("expected a positive number or [x, z], got " + json_excerpt(z));
+                    }
                 }
                 glm::mat4 m = read_transform(s, rs);
                 glm::vec3 q[4] = {{-hx, 0, -hz}, {hx, 0, -hz}, {hx, 0, hz}, {-hx, 0, hz}};
@@ -285,15 +299,19 @@ Scene load_scene(const std::string& path) {
                 int qm = mat < 0 ? default_material() : mat;
                 if (!add_triangle(scene.triangles, a, nullptr, qm) ||
                     !add_triangle(scene.triangles, b, nullptr, qm))
-                    throw Error(rs.where + ": the quad is degenerate");
+                    rs.fail("the quad is degenerate (or not finite after its transform)");
             } else {
-                throw Error(rs.where + ": unknown shape type '" + type +
-                            "' (use mesh, sphere or quad)");
+                rs.at("type").fail("unknown shape type " + json_excerpt(s["type"]) +
+                                   " (use mesh, sphere or quad)");
             }
         }
     }
     if (scene.triangles.size() == 0)
         warn(path + ": the scene has no geometry; rendering the environment alone");
+    if (scene.triangles.size() > static_cast<size_t>(kMaxDeviceIndex / 3))
+        r.at("shapes").fail(std::to_string(scene.triangles.size()) +
+                            " triangles: more than the device can index (" +
+                            std::to_string(kMaxDeviceIndex / 3) + ")");
     return scene;
 }
 

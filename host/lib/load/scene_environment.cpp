@@ -5,75 +5,73 @@
 #include "util/json_file.h"
 #include "load/sky.h"
 
+#include <cmath>
+
 namespace et {
-namespace {
-
-template <typename T>
-T get_or(const nlohmann::json& j, const char* key, T fallback, const std::string& where) {
-    if (!j.contains(key))
-        return fallback;
-    try {
-        return j.at(key).get<T>();
-    } catch (const nlohmann::json::exception&) {
-        throw Error(where + ": '" + key + "' has the wrong type (" + j.at(key).dump() + ")");
-    }
-}
-
-} // namespace
 
 EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scene_dir,
                               const std::string& where, DistributionOptions options) {
-    const std::string w = where + ": environment";
+    const JsonReader r = JsonReader(where).at("environment");
     if (!env.is_object())
-        throw Error(w + " must be an object with \"map\" or \"sky\"");
-    warn_unknown_keys(
-        env, {"map", "sky", "intensity", "rotation", "distribution_resolution", "blur"}, w);
+        r.fail("expected an object with \"map\" or \"sky\", got " + json_excerpt(env));
+    r.warn_unknown_keys(env,
+                        {"map", "sky", "intensity", "rotation", "distribution_resolution", "blur"});
     if (env.contains("distribution_resolution")) {
-        auto r = env["distribution_resolution"];
-        if (!r.is_array() || r.size() != 2 || !r[0].is_number_integer() ||
-            !r[1].is_number_integer())
-            throw Error(w + ": distribution_resolution must be [width, height]");
-        options.width = r[0].get<int>();
-        options.height = r[1].get<int>();
+        const auto& res = env["distribution_resolution"];
+        const JsonReader rd = r.at("distribution_resolution");
+        if (!res.is_array() || res.size() != 2)
+            rd.fail("expected [width, height], got " + json_excerpt(res));
+        options.width = static_cast<int>(rd.at(0).integer(res[0], 1, kMaxDistributionSide));
+        options.height = static_cast<int>(rd.at(1).integer(res[1], 1, kMaxDistributionSide));
+        // The table's size against what the device indexes and the memory budget, before
+        // the map is read.
+        try {
+            check_distribution_size(options.width, options.height);
+        } catch (const Error& e) {
+            rd.fail(e.what());
+        }
     }
-    options.blur_sigma = get_or<float>(env, "blur", options.blur_sigma, w);
+    options.blur_sigma =
+        static_cast<float>(r.number(env, "blur", options.blur_sigma, 0.0, kMaxBlurSigma));
+    const float scale = static_cast<float>(r.number(env, "intensity", 1.0, 0.0, 1e30));
+    const float rotation = static_cast<float>(r.number(env, "rotation", 0.0, -1e6, 1e6));
     EnvMap map;
+    if (env.contains("map") && env.contains("sky"))
+        r.fail("has both \"map\" and \"sky\": give one");
     if (env.contains("map")) {
-        const std::string path =
-            resolve_data_file(get_or<std::string>(env, "map", "", w), scene_dir);
+        const std::string path = resolve_data_file(r.string(env, "map", ""), scene_dir);
         map = load_envmap(path, options);
-    } else if (env.contains("sky")) {
-        const auto& s = env["sky"];
-        const std::string ws = w + ".sky";
-        warn_unknown_keys(s,
-                          {"resolution", "sun_elevation", "sun_azimuth", "sun_radius",
-                           "sun_radiance", "sky_radiance"},
-                          ws);
+    } else if (const nlohmann::json* sp = r.object(env, "sky")) {
+        const auto& s = *sp;
+        const JsonReader rs = r.at("sky");
+        rs.warn_unknown_keys(s, {"resolution", "sun_elevation", "sun_azimuth", "sun_radius",
+                                 "sun_radiance", "sky_radiance"});
         SkyParams p;
         if (s.contains("resolution")) {
-            auto r = s["resolution"];
-            if (!r.is_array() || r.size() != 2 || !r[0].is_number_integer() ||
-                !r[1].is_number_integer() || r[0].get<int>() < 2 || r[1].get<int>() < 1 ||
-                r[0].get<int>() > 16384 || r[1].get<int>() > 8192)
-                throw Error(ws + ": resolution must be [width, height] within [2..16384, 1..8192]");
-            p.width = r[0].get<int>();
-            p.height = r[1].get<int>();
+            const auto& res = s["resolution"];
+            const JsonReader rr = rs.at("resolution");
+            if (!res.is_array() || res.size() != 2)
+                rr.fail("expected [width, height], got " + json_excerpt(res));
+            p.width = static_cast<int>(rr.at(0).integer(res[0], 2, 16384));
+            p.height = static_cast<int>(rr.at(1).integer(res[1], 1, 8192));
         }
-        p.sun_elevation_deg = get_or<float>(s, "sun_elevation", p.sun_elevation_deg, ws);
-        p.sun_azimuth_deg = get_or<float>(s, "sun_azimuth", p.sun_azimuth_deg, ws);
-        p.sun_angular_radius_deg = get_or<float>(s, "sun_radius", p.sun_angular_radius_deg, ws);
-        p.sun_radiance = get_or<float>(s, "sun_radiance", p.sun_radiance, ws);
-        p.sky_radiance = get_or<float>(s, "sky_radiance", p.sky_radiance, ws);
+        p.sun_elevation_deg =
+            static_cast<float>(rs.number(s, "sun_elevation", p.sun_elevation_deg, -90, 90));
+        p.sun_azimuth_deg =
+            static_cast<float>(rs.number(s, "sun_azimuth", p.sun_azimuth_deg, -1e6, 1e6));
+        p.sun_angular_radius_deg =
+            static_cast<float>(rs.number(s, "sun_radius", p.sun_angular_radius_deg, 0.0, 90));
+        p.sun_radiance =
+            static_cast<float>(rs.number(s, "sun_radiance", p.sun_radiance, 0, kMaxRadiance));
+        p.sky_radiance =
+            static_cast<float>(rs.number(s, "sky_radiance", p.sky_radiance, 0, kMaxRadiance));
         map = make_envmap("procedural sky", make_sky(p), options);
     } else {
-        throw Error(w + " needs \"map\" (a lat-long image) or \"sky\" (procedural sun and sky)");
+        r.fail("needs \"map\" (a lat-long image) or \"sky\" (procedural sun and sky)");
     }
-    map.scale = get_or<float>(env, "intensity", 1.0f, w);
-    map.rotation_degrees = get_or<float>(env, "rotation", 0.0f, w);
-    if (!(map.scale >= 0.0f) || !std::isfinite(map.scale))
-        throw Error(w + ": intensity must be a finite number >= 0");
-    if (!std::isfinite(map.rotation_degrees))
-        throw Error(w + ": rotation must be a finite number of degrees");
+    map.scale = scale;
+    map.rotation_degrees = rotation;
+    bound_intensity(map, r.at("intensity").where());
     return map;
 }
 

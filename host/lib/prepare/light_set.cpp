@@ -115,54 +115,44 @@ void write_lights(const std::string& path, const LightSet& set) {
 }
 
 LightSet read_lights(const std::string& path) {
-    const nlohmann::json j = read_json_file(path);
+    const nlohmann::json j = read_json_file(path, "light set");
+    const JsonReader r(path);
     LightSet set;
-    auto vec = [&](const nlohmann::json& v, const char* what, size_t i) {
-        if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
-            !v[2].is_number())
-            throw Error(path + ": light " + std::to_string(i) + ": '" + what +
-                        "' must be an array of three numbers");
-        return glm::dvec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
-    };
     if (!j.is_object() || !j.contains("lights") || !j["lights"].is_array())
-        throw Error(path + ": not a light set (expected an object with a 'lights' array)");
-    // json::value() would throw json::type_error for a key of the wrong type: check it here.
-    auto text = [&](const char* key) {
-        if (!j.contains(key))
-            return std::string();
-        if (!j[key].is_string())
-            throw Error(path + ": '" + key + "' must be a string");
-        return j[key].get<std::string>();
+        r.fail("not a light set (expected an object with a 'lights' array)");
+    // Powers as the brightest map could give (4 pi x kMaxRadiance), so renders stay finite.
+    const double max_value = 4.0 * M_PI * kMaxRadiance;
+    auto vec = [&](const nlohmann::json& v, const JsonReader& rv, double lo) {
+        if (!v.is_array() || v.size() != 3)
+            rv.fail("expected an array of three numbers, got " + json_excerpt(v));
+        glm::dvec3 out;
+        for (int k = 0; k < 3; ++k)
+            out[k] = rv.at(k).number(v[k], lo, max_value);
+        return out;
     };
-    set.method = text("method");
-    set.power_rule = text("power_rule");
-    set.map = text("map");
+    set.method = r.string(j, "method", "");
+    set.power_rule = r.string(j, "power_rule", "");
+    set.map = r.string(j, "map", "");
+    const JsonReader rl = r.at("lights");
     size_t i = 0;
     for (const auto& l : j["lights"]) {
-        if (!l.is_object() || !l.contains("direction") || !l.contains("power"))
-            throw Error(path + ": light " + std::to_string(i) + " needs 'direction' and 'power'");
+        const JsonReader ri = rl.at(i);
+        ri.expect_object(l);
+        if (!l.contains("direction") || !l.contains("power"))
+            ri.fail("needs 'direction' and 'power'");
         DirectionalLight d;
-        const glm::dvec3 dir = vec(l["direction"], "direction", i);
+        const glm::dvec3 dir = vec(l["direction"], ri.at("direction"), -max_value);
         const double len = glm::length(dir);
         if (!(len > 0.0) || !std::isfinite(len))
-            throw Error(path + ": light " + std::to_string(i) + ": zero or non-finite direction");
+            ri.at("direction").fail("zero or non-finite direction");
         d.direction = glm::vec3(dir / len);
-        d.power = vec(l["power"], "power", i);
-        for (int c = 0; c < 3; ++c)
-            if (!(d.power[c] >= 0.0) || !std::isfinite(d.power[c]))
-                throw Error(path + ": light " + std::to_string(i) +
-                            ": power must be finite and non-negative");
-        if (l.contains("solid_angle")) {
-            if (!l["solid_angle"].is_number() || !(l["solid_angle"].get<double>() >= 0.0))
-                throw Error(path + ": light " + std::to_string(i) +
-                            ": 'solid_angle' must be a number >= 0");
-            d.solid_angle = l["solid_angle"].get<double>();
-        }
+        d.power = vec(l["power"], ri.at("power"), 0.0);
+        d.solid_angle = ri.number(l, "solid_angle", 0.0, 0.0, 4.0 * M_PI);
         set.lights.push_back(d);
         ++i;
     }
     if (set.lights.empty())
-        throw Error(path + ": the light set is empty");
+        r.fail("the light set is empty");
     return set;
 }
 

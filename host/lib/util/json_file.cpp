@@ -1,58 +1,141 @@
 #include "util/json_file.h"
 
 #include "util/error.h"
+#include "util/file_check.h"
 
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <unistd.h>
 
 namespace et {
+namespace {
 
-nlohmann::json read_json_file(const std::string& path) {
-    std::error_code ec;
-    if (!std::filesystem::exists(path, ec))
-        throw Error(path + ": no such file");
-    if (std::filesystem::is_directory(path, ec))
-        throw Error(path + ": is a directory, not a JSON file");
-    std::ifstream in(path, std::ios::binary);
-    if (!in)
-        throw Error(path + ": cannot open for reading");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    const std::string text = ss.str();
-    try {
-        return nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        // e.byte is 1-based and points just past the offending character.
-        size_t pos = e.byte > 0 ? std::min(text.size(), e.byte - 1) : 0;
-        int line = 1, col = 1;
-        for (size_t i = 0; i < pos; ++i) {
-            if (text[i] == '\n') {
-                ++line;
-                col = 1;
-            } else {
-                ++col;
-            }
+using json = nlohmann::json;
+
+std::string position(const std::string& path, const std::string& text, size_t pos) {
+    pos = std::min(pos, text.size());
+    size_t line = 1, col = 1;
+    for (size_t i = 0; i < pos; ++i) {
+        if (text[i] == '\n') {
+            ++line;
+            col = 1;
+        } else {
+            ++col;
         }
-        std::string what = e.what();
-        auto colon = what.rfind(": ");
-        if (colon != std::string::npos)
-            what = what.substr(colon + 2);
-        throw Error(path + ":" + std::to_string(line) + ":" + std::to_string(col) +
-                    ": malformed JSON: " + what);
+    }
+    return path + ":" + std::to_string(line) + ":" + std::to_string(col);
+}
+
+// What nlohmann's parser does not bound: nesting depth (its error messages and other recursive
+// walks use the stack) and numbers that overflow a double (it throws out_of_range.406 with no
+// position). One pass over the text, skipping strings, finds both with their position.
+void prescan(const std::string& path, const std::string& text) {
+    int depth = 0;
+    const size_t n = text.size();
+    for (size_t i = 0; i < n; ++i) {
+        const char c = text[i];
+        if (c == '"') {
+            for (++i; i < n && text[i] != '"'; ++i)
+                if (text[i] == '\\')
+                    ++i;
+        } else if (c == '[' || c == '{') {
+            if (++depth > kMaxJsonDepth)
+                throw Error(position(path, text, i) + ": malformed JSON: nested deeper than " +
+                            std::to_string(kMaxJsonDepth) + " levels");
+        } else if (c == ']' || c == '}') {
+            --depth;
+        } else if (c == '-' || (c >= '0' && c <= '9')) {
+            size_t end = i;
+            while (end < n &&
+                   (std::isdigit(static_cast<unsigned char>(text[end])) || text[end] == '-' ||
+                    text[end] == '+' || text[end] == '.' || text[end] == 'e' || text[end] == 'E'))
+                ++end;
+            const std::string token = text.substr(i, end - i);
+            errno = 0;
+            const double v = std::strtod(token.c_str(), nullptr);
+            if (std::isinf(v))
+                throw Error(position(path, text, i) + ": number " + excerpt(token, 40) +
+                            " is out of range (a double holds at most about 1.8e308)");
+            i = end - 1;
+        }
     }
 }
 
-void write_json_file(const std::string& path, const nlohmann::json& j, int indent) {
+std::string number_text(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return buf;
+}
+
+} // namespace
+
+// The longest prefix of `text` of at most `max` bytes that does not split a UTF-8 sequence.
+static std::string utf8_prefix(const std::string& text, size_t max) {
+    if (text.size() <= max)
+        return text;
+    size_t cut = max;
+    while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80)
+        --cut;
+    return text.substr(0, cut);
+}
+
+std::string excerpt(const std::string& text, size_t max) {
+    return text.size() <= max ? text : utf8_prefix(text, max) + "...";
+}
+
+std::string json_excerpt(const json& v) {
+    switch (v.type()) {
+    case json::value_t::object:
+        return "an object of " + std::to_string(v.size()) + (v.size() == 1 ? " key" : " keys");
+    case json::value_t::array:
+        return "an array of " + std::to_string(v.size()) +
+               (v.size() == 1 ? " element" : " elements");
+    case json::value_t::string: {
+        const std::string& s = v.get_ref<const std::string&>();
+        return json(utf8_prefix(s, 60)).dump(-1, ' ', false, json::error_handler_t::replace) +
+               (s.size() > 60 ? "..." : "");
+    }
+    case json::value_t::number_float:
+        return number_text(v.get<double>());
+    default:
+        return v.dump(-1, ' ', false, json::error_handler_t::replace);
+    }
+}
+
+json read_json_file(const std::string& path, const char* what) {
+    const std::string text = read_regular_file(path, kMaxJsonBytes, what);
+    prescan(path, text);
+    try {
+        return json::parse(text);
+    } catch (const json::parse_error& e) {
+        // e.byte is 1-based and points just past the offending character.
+        const size_t pos = e.byte > 0 ? e.byte - 1 : 0;
+        std::string msg = e.what();
+        auto colon = msg.rfind(": ");
+        if (colon != std::string::npos)
+            msg = msg.substr(colon + 2);
+        // The message quotes the last token read, which can be a whole long string.
+        msg = excerpt(msg, 120);
+        throw Error(position(path, text, pos) + ": malformed JSON: " + msg);
+    } catch (const json::exception& e) {
+        // Anything else the prescan did not foresee: still one line, with the file.
+        throw Error(path + ": malformed JSON: " + excerpt(e.what(), 120));
+    }
+}
+
+void write_json_file(const std::string& path, const json& j, int indent) {
     namespace fs = std::filesystem;
     const std::string tmp = path + ".tmp" + std::to_string(::getpid());
     std::error_code ec;
     {
         std::ofstream f(tmp);
         if (f)
-            f << j.dump(indent) << "\n";
+            f << j.dump(indent, ' ', false, json::error_handler_t::replace) << "\n";
         if (!f) {
             fs::remove(tmp, ec);
             throw Error(path + ": cannot write");
@@ -65,16 +148,131 @@ void write_json_file(const std::string& path, const nlohmann::json& j, int inden
     }
 }
 
-void warn_unknown_keys(const nlohmann::json& object, const std::vector<std::string>& known,
+void warn_unknown_keys(const json& object, const std::vector<std::string>& known,
                        const std::string& where) {
     if (!object.is_object())
         return;
     std::string unknown;
+    int listed = 0, more = 0;
     for (auto it = object.begin(); it != object.end(); ++it)
-        if (std::find(known.begin(), known.end(), it.key()) == known.end())
-            unknown += (unknown.empty() ? "'" : ", '") + it.key() + "'";
+        if (std::find(known.begin(), known.end(), it.key()) == known.end()) {
+            if (listed < 8) {
+                unknown += (unknown.empty() ? "'" : ", '") + excerpt(it.key(), 40) + "'";
+                ++listed;
+            } else {
+                ++more;
+            }
+        }
+    if (more)
+        unknown += " and " + std::to_string(more) + " more";
     if (!unknown.empty())
         warn(where + ": unknown key(s) " + unknown + " ignored");
+}
+
+// JsonReader
+
+JsonReader JsonReader::at(const std::string& key) const {
+    const std::string k = excerpt(key, 40);
+    return JsonReader(file_, path_.empty() ? k : path_ + "." + k);
+}
+
+JsonReader JsonReader::at(size_t index) const {
+    return JsonReader(file_, path_ + "[" + std::to_string(index) + "]");
+}
+
+std::string JsonReader::where() const {
+    return path_.empty() ? file_ : file_ + ": " + path_;
+}
+
+void JsonReader::fail(const std::string& problem) const {
+    throw Error(where() + ": " + problem);
+}
+
+void JsonReader::expect_object(const json& v) const {
+    if (!v.is_object())
+        fail("expected an object, got " + json_excerpt(v));
+}
+
+void JsonReader::expect_array(const json& v) const {
+    if (!v.is_array())
+        fail("expected an array, got " + json_excerpt(v));
+}
+
+double JsonReader::number(const json& v, double lo, double hi) const {
+    const double x = v.is_number() ? v.get<double>() : NAN;
+    if (!v.is_number() || !std::isfinite(x) || x < lo || x > hi)
+        fail("expected a number in [" + number_text(lo) + ", " + number_text(hi) + "], got " +
+             json_excerpt(v));
+    return x;
+}
+
+int64_t JsonReader::integer(const json& v, int64_t lo, int64_t hi) const {
+    bool ok = false;
+    int64_t x = 0;
+    if (v.is_number_unsigned()) {
+        const uint64_t u = v.get<uint64_t>();
+        ok = u <= static_cast<uint64_t>(INT64_MAX);
+        x = static_cast<int64_t>(u);
+    } else if (v.is_number_integer()) {
+        x = v.get<int64_t>();
+        ok = true;
+    } else if (v.is_number_float()) {
+        // 64.0 and 6.4e1 are integers written as floats: harmless, accepted.
+        const double d = v.get<double>();
+        ok = std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 9.0e15;
+        x = ok ? static_cast<int64_t>(d) : 0;
+    }
+    if (!ok || x < lo || x > hi)
+        fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+             "], got " + json_excerpt(v));
+    return x;
+}
+
+std::string JsonReader::string(const json& v) const {
+    if (!v.is_string())
+        fail("expected a string, got " + json_excerpt(v));
+    return v.get<std::string>();
+}
+
+bool JsonReader::boolean(const json& v) const {
+    if (!v.is_boolean())
+        fail("expected true or false, got " + json_excerpt(v));
+    return v.get<bool>();
+}
+
+double JsonReader::number(const json& j, const char* key, double fallback, double lo,
+                          double hi) const {
+    auto it = j.find(key);
+    return it == j.end() ? fallback : at(key).number(*it, lo, hi);
+}
+
+int64_t JsonReader::integer(const json& j, const char* key, int64_t fallback, int64_t lo,
+                            int64_t hi) const {
+    auto it = j.find(key);
+    return it == j.end() ? fallback : at(key).integer(*it, lo, hi);
+}
+
+std::string JsonReader::string(const json& j, const char* key, const std::string& fallback) const {
+    auto it = j.find(key);
+    return it == j.end() ? fallback : at(key).string(*it);
+}
+
+bool JsonReader::boolean(const json& j, const char* key, bool fallback) const {
+    auto it = j.find(key);
+    return it == j.end() ? fallback : at(key).boolean(*it);
+}
+
+const json* JsonReader::object(const json& j, const char* key) const {
+    auto it = j.find(key);
+    if (it == j.end())
+        return nullptr;
+    at(key).expect_object(*it);
+    return &*it;
+}
+
+void JsonReader::warn_unknown_keys(const json& object,
+                                   const std::vector<std::string>& known) const {
+    et::warn_unknown_keys(object, known, where());
 }
 
 } // namespace et
