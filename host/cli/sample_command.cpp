@@ -58,7 +58,8 @@ void add_sample_command(CLI::App& app, Globals& g) {
         "sample", "Draw importance samples from an environment map and plot them (paper, Fig. 6)");
     cmd->add_option("map", a->map, "Lat-long environment map (.exr, .hdr, .pfm, .png, .jpg)")
         ->required();
-    cmd->add_option("-n,--count", a->count, "Number of samples")->check(CLI::Range(0, 100000000));
+    cmd->add_option("-n,--count", a->count, "Number of samples")
+        ->check(CLI::Range(0, 1 << 22)); // 4M points: ~330 MB of samples on host and device
     cmd->add_option("-o,--output", a->output, "Output image (.png, .jpg, .exr, ...)");
     cmd->add_option("--sampler", a->sampler, "sobol (scrambled (0,2)-sequence) or random")
         ->check(CLI::IsMember({"sobol", "random"}));

@@ -1,5 +1,6 @@
 #include "load/environment_map.h"
 
+#include "util/checked_size.h"
 #include "util/error.h"
 #include "util/json_file.h"
 #include "util/parallel.h"
@@ -97,6 +98,10 @@ EnvMap make_envmap(std::string name, RgbImage image, const DistributionOptions& 
         warn(env.name + ": " + std::to_string(env.image.width) + "x" +
              std::to_string(env.image.height) +
              " is not a 2:1 lat-long map; it is stretched over the sphere as it is");
+    if (3 * static_cast<uint64_t>(env.image.width) * static_cast<uint64_t>(env.image.height) >
+        kMaxDeviceIndex)
+        throw Error(env.name + ": " + std::to_string(env.image.width) + "x" +
+                    std::to_string(env.image.height) + " texels: more than the device indexes");
     if (options.width < 0 || options.height < 0)
         throw Error(env.name + ": distribution resolution " + std::to_string(options.width) + "x" +
                     std::to_string(options.height) + " is out of range");

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <unistd.h>
@@ -132,13 +133,21 @@ void write_json_file(const std::string& path, const json& j, int indent) {
     namespace fs = std::filesystem;
     const std::string tmp = path + ".tmp" + std::to_string(::getpid());
     std::error_code ec;
+    if (fs::is_directory(path, ec))
+        throw Error(path + ": cannot write: it is a folder");
+    const fs::path dir = fs::path(path).parent_path();
+    if (!dir.empty() && !fs::is_directory(dir, ec))
+        throw Error(path + ": cannot write: folder '" + dir.string() + "' does not exist");
     {
+        errno = 0;
         std::ofstream f(tmp);
         if (f)
             f << j.dump(indent, ' ', false, json::error_handler_t::replace) << "\n";
         if (!f) {
+            const int err = errno;
             fs::remove(tmp, ec);
-            throw Error(path + ": cannot write");
+            throw Error(path + ": cannot write" +
+                        (err ? std::string(": ") + std::strerror(err) : std::string()));
         }
     }
     fs::rename(tmp, path, ec);
