@@ -128,6 +128,8 @@ void run(const RenderArgs& a, const Globals& g) {
     std::error_code ec;
     if (!dir.empty() && !fs::is_directory(dir, ec))
         throw Error(exr_name + ": cannot write: folder '" + dir.string() + "' does not exist");
+    check_writable_format(exr_name);
+    check_writable_format(png_name);
 
     // Directional lights and SIS strata: the light directions the shade stages sum or draw.
     LightSet light_set;
