@@ -17,12 +17,14 @@ constexpr size_t kBytesPerPath = 0 ETK_PATH_FIELDS(ET_FIELD_BYTES) ETK_QUEUES(ET
 #undef ET_FIELD_BYTES
 #undef ET_QUEUE_BYTES
 
-// A read-only buffer initialised from `v` (OpenCL copies it: no staging copy here). Device
+// A read-only buffer over `v`, which the DeviceScene keeps alive for the renderer's lifetime:
+// CL_MEM_USE_HOST_PTR lets a CPU device (PoCL) read the host vector in place instead of holding
+// a second copy of a map that may be gigabytes; a GPU copies it as it would anyway. Device
 // buffers cannot be empty: an empty vector gets one zero element.
 template <typename T> cl::Buffer upload(cl::Context& ctx, const std::vector<T>& v) {
     static const T zero{};
     const void* data = v.empty() ? &zero : v.data();
-    return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+    return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR,
                       std::max<size_t>(1, v.size()) * sizeof(T), const_cast<void*>(data));
 }
 
