@@ -1,6 +1,9 @@
 #include "test_data.h"
 
 #include "util/data_path.h"
+#include "util/error.h"
+
+#include <OpenImageIO/imageio.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -71,6 +74,14 @@ size_t WarningCapture::count_containing(const std::string& text) const {
     for (const auto& m : messages_)
         n += m.find(text) != std::string::npos;
     return n;
+}
+
+void write_raw_exr(const std::string& path, int w, int h, const std::vector<float>& rgb) {
+    auto out = OIIO::ImageOutput::create(path);
+    const OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::FLOAT);
+    if (!out || !out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, rgb.data()) ||
+        !out->close())
+        throw et::Error(path + ": cannot write the test image");
 }
 
 } // namespace ett

@@ -29,6 +29,10 @@ et::ClRuntime& runtime();
 et::RgbImage constant_image(int w, int h, float value);
 
 // Loads DATA/envmaps/NAME with the given options.
+// Writes float RGB pixels to an EXR exactly as given, NaN and Inf included (envtrace's own
+// writer never does: this makes hostile inputs for tests).
+void write_raw_exr(const std::string& path, int w, int h, const std::vector<float>& rgb);
+
 et::EnvMap load_map(const std::string& path, const et::DistributionOptions& options = {});
 
 // Collects et::warn messages while alive (restores the previous sink on destruction).

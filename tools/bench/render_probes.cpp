@@ -212,8 +212,6 @@ int main(int argc, char** argv) try {
     et::RenderSettings st = scene.settings;
     st.max_depth = depth;
     et::DeviceScene ds = et::prepare_device_scene(std::move(scene), st);
-    et::DeviceScene uniform = ds; // the in-situ comparison: uniform light directions
-    uniform.params.strategy = ETK_STRATEGY_UNIFORM;
     const int threads = et::thread_count(0);
 
     ds.settings.backend = et::Backend::cpu;
@@ -225,8 +223,13 @@ int main(int argc, char** argv) try {
     for (int r = 0; r < runs; ++r) {
         for (et::Backend b : {et::Backend::cpu, et::Backend::opencl}) {
             const int k = b == et::Backend::cpu ? 0 : 1;
-            ds.settings.backend = uniform.settings.backend = b;
-            const Frame env = render(ds, spp), uni = render(uniform, spp);
+            ds.settings.backend = b;
+            const Frame env = render(ds, spp);
+            // The in-situ comparison: the same scene with uniform light directions.
+            const int strategy = ds.params.strategy;
+            ds.params.strategy = ETK_STRATEGY_UNIFORM;
+            const Frame uni = render(ds, spp);
+            ds.params.strategy = strategy;
             shade[k].push_back(env.shade_share);
             insitu[k].push_back((env.shade_seconds - uni.shade_seconds) / env.stage_seconds);
             if (b == et::Backend::cpu) {

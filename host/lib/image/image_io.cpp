@@ -266,8 +266,7 @@ void check_writable_format(const std::string& path) {
 
 void write_image(const std::string& path, int width, int height, int channels,
                  const std::vector<float>& pixels,
-                 const std::vector<std::pair<std::string, std::string>>& attributes,
-                 bool keep_non_finite) {
+                 const std::vector<std::pair<std::string, std::string>>& attributes) {
     check_writable_format(path);
     fs::path target(path);
     fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
@@ -284,9 +283,8 @@ void write_image(const std::string& path, int width, int height, int channels,
     const std::vector<float>* data = &pixels;
     std::vector<float> finite;
     size_t bad = 0;
-    if (!keep_non_finite)
-        for (float v : pixels)
-            bad += !std::isfinite(v);
+    for (float v : pixels)
+        bad += !std::isfinite(v);
     if (bad) {
         finite = pixels;
         for (float& v : finite)

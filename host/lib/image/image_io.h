@@ -24,11 +24,10 @@ RgbImage read_rgb_image(const std::string& path);
 // Writes `channels`-channel float pixels. .exr/.hdr/.pfm keep linear floats; .png/.jpg expect
 // display values in [0,1] and store 8 bits. Writes to a temporary file beside `path` and renames
 // it into place. `attributes` are name/value string metadata. NaN and Inf are written as 0 with a
-// warning (no output of envtrace holds them) unless `keep_non_finite` (test inputs).
+// warning: no output of envtrace holds them.
 void write_image(const std::string& path, int width, int height, int channels,
                  const std::vector<float>& pixels,
-                 const std::vector<std::pair<std::string, std::string>>& attributes = {},
-                 bool keep_non_finite = false);
+                 const std::vector<std::pair<std::string, std::string>>& attributes = {});
 
 // Throws et::Error "PATH: problem" unless an image can be written at `path`: a supported
 // extension with a writer (.pfm is written here, the rest by OpenImageIO), an existing folder,
