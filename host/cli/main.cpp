@@ -38,5 +38,5 @@ int main(int argc, char** argv) {
         std::cerr << "envtrace: error: " << e.what() << "\n";
         return 1;
     }
-    return 0;
+    return globals.exit_code;
 }

@@ -5,6 +5,7 @@
 #include "util/checked_size.h"
 #include "util/file_check.h"
 #include "util/json_file.h"
+#include "util/output_batch.h"
 
 #include <OpenImageIO/imageio.h>
 
@@ -264,13 +265,12 @@ void check_writable_format(const std::string& path) {
                     "'");
 }
 
-void write_image(const std::string& path, int width, int height, int channels,
-                 const std::vector<float>& pixels,
-                 const std::vector<std::pair<std::string, std::string>>& attributes) {
-    check_writable_format(path);
-    fs::path target(path);
-    fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-    std::error_code ec;
+namespace {
+
+// Writes the whole image to `file`; messages name `path`, the output it becomes.
+void write_image_file(const std::string& path, const std::string& file, int width, int height,
+                      int channels, const std::vector<float>& pixels,
+                      const std::vector<std::pair<std::string, std::string>>& attributes) {
     const std::string ext = lower_extension(path);
     const bool floating = is_float_image_extension(path);
     if (width <= 0 || height <= 0 || channels <= 0 ||
@@ -293,35 +293,44 @@ void write_image(const std::string& path, int width, int height, int channels,
         warn(path + ": " + std::to_string(bad) + " non-finite values written as 0");
     }
 
-    fs::path tmp = dir / ("." + target.stem().string() + ".tmp" + std::to_string(getpid()) + ext);
     if (ext == ".pfm") {
-        const std::string err = write_pfm(tmp.string(), width, height, channels, *data);
-        if (!err.empty()) {
-            fs::remove(tmp, ec);
+        const std::string err = write_pfm(file, width, height, channels, *data);
+        if (!err.empty())
             throw Error(path + ": cannot write: " + err);
-        }
-    } else {
-        auto out = ImageOutput::create(tmp.string());
-        if (!out)
-            throw Error(path + ": cannot write: " + one_line(OIIO::geterror()));
-        ImageSpec spec(width, height, channels, floating ? TypeDesc::FLOAT : TypeDesc::UINT8);
-        if (ext == ".exr")
-            spec.attribute("compression", "zip");
-        for (const auto& [k, v] : attributes)
-            spec.attribute(k, v);
-        const bool ok = out->open(tmp.string(), spec) &&
-                        out->write_image(TypeDesc::FLOAT, data->data()) && out->close();
-        if (!ok) {
-            std::string msg = one_line(out->geterror());
-            fs::remove(tmp, ec);
-            throw Error(path + ": cannot write: " + msg);
-        }
+        return;
     }
-    fs::rename(tmp, target, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw Error(path + ": cannot write: " + ec.message());
-    }
+    auto out = ImageOutput::create(file);
+    if (!out)
+        throw Error(path + ": cannot write: " + one_line(OIIO::geterror()));
+    ImageSpec spec(width, height, channels, floating ? TypeDesc::FLOAT : TypeDesc::UINT8);
+    if (ext == ".exr")
+        spec.attribute("compression", "zip");
+    for (const auto& [k, v] : attributes)
+        spec.attribute(k, v);
+    const bool ok = out->open(file, spec) &&
+                    out->write_image(TypeDesc::FLOAT, data->data()) && out->close();
+    if (!ok)
+        throw Error(path + ": cannot write: " + one_line(out->geterror()));
+}
+
+} // namespace
+
+void write_image(OutputBatch& batch, const std::string& path, int width, int height,
+                 int channels, const std::vector<float>& pixels,
+                 const std::vector<std::pair<std::string, std::string>>& attributes) {
+    check_writable_format(path);
+    batch.write(path, [&](const std::string& file) {
+        write_image_file(path, file, width, height, channels, pixels, attributes);
+    });
+}
+
+void write_image(const std::string& path, int width, int height, int channels,
+                 const std::vector<float>& pixels,
+                 const std::vector<std::pair<std::string, std::string>>& attributes) {
+    check_writable_format(path);
+    OutputBatch batch({path});
+    write_image(batch, path, width, height, channels, pixels, attributes);
+    batch.commit();
 }
 
 } // namespace et

@@ -6,6 +6,8 @@
 
 namespace et {
 
+class OutputBatch;
+
 struct RgbImage {
     int width = 0, height = 0;
     std::vector<float> rgb; // row-major, 3 floats per pixel, row 0 at the top
@@ -22,11 +24,15 @@ struct RgbImage {
 RgbImage read_rgb_image(const std::string& path);
 
 // Writes `channels`-channel float pixels. .exr/.hdr/.pfm keep linear floats; .png/.jpg expect
-// display values in [0,1] and store 8 bits. Writes to a temporary file beside `path` and renames
-// it into place. `attributes` are name/value string metadata. NaN and Inf are written as 0 with a
-// warning: no output of envtrace holds them.
+// display values in [0,1] and store 8 bits. `attributes` are name/value string metadata. NaN and
+// Inf are written as 0 with a warning: no output of envtrace holds them. All-or-nothing: written
+// to a temporary and renamed into place (util/output_batch.h), never over an input of the run.
 void write_image(const std::string& path, int width, int height, int channels,
                  const std::vector<float>& pixels,
+                 const std::vector<std::pair<std::string, std::string>>& attributes = {});
+// The same as one file of a batch: renamed into place with the others by batch.commit().
+void write_image(OutputBatch& batch, const std::string& path, int width, int height,
+                 int channels, const std::vector<float>& pixels,
                  const std::vector<std::pair<std::string, std::string>>& attributes = {});
 
 // Throws et::Error "PATH: problem" unless an image can be written at `path`: a supported
