@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -356,6 +357,75 @@ TEST(EnvmapBadInput, HugeTexelsAndIntensityAreBounded) {
     et::bound_intensity(env, "scene.json: environment.intensity");
     EXPECT_LE(double(env.scale) * env.max_texel, double(et::kMaxRadiance) * 1.0000001);
     EXPECT_EQ(w.count_containing("scene.json: environment.intensity"), 1u);
+}
+
+// A map of w x h texels spanning several decades, a third of it black, as float RGB.
+std::vector<float> random_texels(int w, int h, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<float> px(static_cast<size_t>(w) * h * 3);
+    for (size_t p = 0; p < px.size(); p += 3) {
+        const float s = u(rng) < 0.33f ? 0.0f : std::pow(10.0f, 5.0f * u(rng) - 2.0f);
+        for (int c = 0; c < 3; ++c)
+            px[p + c] = s * u(rng);
+    }
+    return px;
+}
+
+// load_envmap decodes the map in bands on one thread while the others build the distribution's
+// blocks: the texels and the table must be exactly those of make_envmap(read_rgb_image(...)),
+// whatever the thread count, the blur (its halo crosses bands) and the resampling.
+TEST(EnvmapLoad, PipelinedLoadEqualsSequentialForAnyThreadCount) {
+    const std::string dir = ett::scratch_dir("pipelined");
+    const int w = 1200, h = 600; // three bands of decoding, three blocks of distribution rows
+    const std::string path = dir + "/map.exr";
+    ett::write_raw_exr(path, w, h, random_texels(w, h, 17));
+    std::vector<et::DistributionOptions> variants(3);
+    variants[1].blur_sigma = 3.0f;
+    variants[2].blur_sigma = 0.0f;
+    variants[2].width = 100;
+    variants[2].height = 45;
+    for (et::DistributionOptions opt : variants) {
+        opt.threads = 1;
+        const et::EnvMap ref = et::make_envmap(path, et::read_rgb_image(path), opt);
+        for (int threads : {1, 2, 3, 8}) {
+            SCOPED_TRACE("blur " + std::to_string(opt.blur_sigma) + ", " + std::to_string(threads) +
+                         " threads");
+            opt.threads = threads;
+            const et::EnvMap env = et::load_envmap(path, opt);
+            EXPECT_EQ(env.image.rgb, ref.image.rgb);
+            EXPECT_EQ(env.dist.width, ref.dist.width);
+            EXPECT_EQ(env.dist.table, ref.dist.table);
+            EXPECT_EQ(env.dist.total, ref.dist.total);
+            EXPECT_EQ(env.max_texel, ref.max_texel);
+        }
+    }
+}
+
+// A file that breaks off part-way is an et::Error naming it on every thread count: the threads
+// waiting for rows that never come are released.
+TEST(EnvmapLoad, TruncatedFileIsAnErrorOnAnyThreadCount) {
+    const std::string dir = ett::scratch_dir("truncated");
+    const int w = 1200, h = 600;
+    const std::vector<float> px = random_texels(w, h, 5);
+    for (const char* name : {"/cut.exr", "/cut.hdr"}) {
+        const std::string path = dir + name;
+        if (std::string(name) == "/cut.exr")
+            ett::write_raw_exr(path, w, h, px);
+        else
+            et::write_image(path, w, h, 3, px);
+        fs::resize_file(path, fs::file_size(path) * 3 / 5);
+        for (int threads : {1, 2, 4}) {
+            et::DistributionOptions opt;
+            opt.threads = threads;
+            try {
+                et::load_envmap(path, opt);
+                ADD_FAILURE() << path << " loaded on " << threads << " threads";
+            } catch (const et::Error& e) {
+                EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+            }
+        }
+    }
 }
 
 } // namespace
