@@ -5,6 +5,8 @@
 #include "cli_run.h"
 #include "test_data.h"
 
+#include <OpenImageIO/imageio.h>
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -426,6 +428,28 @@ TEST(EnvmapLoad, TruncatedFileIsAnErrorOnAnyThreadCount) {
             }
         }
     }
+}
+
+// Fuzz finding F6 as a file: a one-channel float TIFF of denormal texels loads with a finite,
+// normalised distribution and samples fine.
+TEST(EnvmapBadInput, GreyTiffOfDenormalsHasAFiniteDistribution) {
+    const std::string path = ett::scratch_dir("f6") + "/grey.tif";
+    const int w = 16, h = 8;
+    std::vector<float> grey(w * h, 0.0f);
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < w; x += 4)
+            grey[y * w + x] = 1.4013e-45f * (1 + 10 * x + 7 * y);
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, 1, OIIO::TypeDesc::FLOAT);
+    spec.attribute("compression", "zip");
+    ASSERT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, grey.data()) &&
+                out->close())
+        << out->geterror();
+    const et::EnvMap env = et::load_envmap(path, {});
+    EXPECT_TRUE(env.dist.has_light());
+    EXPECT_TRUE(std::isfinite(env.dist.total));
+    expect_clean_outcome(path);
 }
 
 } // namespace

@@ -69,7 +69,7 @@ constexpr int kChains = 8;
 // local[i + 1] = sum of f over [segment start, i] for kChains contiguous segments of n / kChains
 // elements and a short tail; seg_offset[j] = sum of f before segment j (kChains + 2 entries).
 // Returns the sum of f. Every partial sum is exact to double rounding of float inputs.
-double prefix_sums(const float* f, int n, double* local, double* seg_offset) {
+template <typename T> double prefix_sums(const T* f, int n, double* local, double* seg_offset) {
     const int len = n / kChains;
     double acc[kChains] = {};
     for (int i = 0; i < len; ++i)
@@ -93,8 +93,9 @@ double prefix_sums(const float* f, int n, double* local, double* seg_offset) {
     return run;
 }
 
-// build_piecewise_constant_1d with pdf allowed to alias f, using scratch of n + 1 doubles.
-double build_1d(const float* f, int n, float* pdf, float* cdf, double* local) {
+// build_piecewise_constant_1d with pdf allowed to alias f, using scratch of n + 1 doubles. f is
+// float (a row) or double (the row masses of the marginal).
+template <typename T> double build_1d(const T* f, int n, float* pdf, float* cdf, double* local) {
     double seg_offset[kChains + 2];
     const double sum = prefix_sums(f, n, local, seg_offset);
     cdf[0] = 0.0f;
@@ -108,13 +109,16 @@ double build_1d(const float* f, int n, float* pdf, float* cdf, double* local) {
         return 0.0;
     }
     const double inv = 1.0 / sum;
-    const float density_scale = static_cast<float>(n * inv);
+    // The densities f n / sum in double: n / sum alone overflows a float when the sum is below
+    // n / FLT_MAX (1e-34 for n = 65536; texels of 1e-44 occur, fuzz finding F6), while each
+    // density is at most n.
+    const double density_scale = n * inv;
     const int len = n / kChains;
     for (int j = 0; j <= kChains; ++j) {
         const int begin = j * len, end = j < kChains ? begin + len : n;
         const double off = seg_offset[j];
         for (int i = begin; i < end; ++i) {
-            pdf[i] = f[i] * density_scale;
+            pdf[i] = static_cast<float>(f[i] * density_scale);
             cdf[i + 1] = static_cast<float>((off + local[i + 1]) * inv);
         }
     }
@@ -131,7 +135,7 @@ struct Plan {
     std::vector<Span> sx, sy;
     float* cond_pdf;
     float* cond_cdf;
-    float* row_mass;
+    double* row_mass; // double: a float would round a row of denormal densities to 0
 };
 
 // Works on distribution rows [o0, o1): filters the input rows they need, writes their densities
@@ -181,8 +185,8 @@ void build_rows(const Plan& p, const RgbImage& image, int o0, int o1) {
         const float sin_theta = std::sin(static_cast<float>(M_PI) * (o + 0.5f) / dh);
         for (int x = 0; x < dw; ++x)
             fr[x] = std::max(0.0f, fr[x]) * sin_theta; // max: filters never go negative, NaN-safe
-        p.row_mass[o] = static_cast<float>(
-            build_1d(fr, dw, fr, p.cond_cdf + static_cast<size_t>(o) * (dw + 1), scratch.data()));
+        p.row_mass[o] =
+            build_1d(fr, dw, fr, p.cond_cdf + static_cast<size_t>(o) * (dw + 1), scratch.data());
     };
 
     int o_next = o0; // resampled case: first output row not yet finished
@@ -267,7 +271,7 @@ double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf
 struct DistributionBuilder::State {
     Plan p;
     EnvDistribution d;
-    std::vector<float> row_mass;
+    std::vector<double> row_mass;
     std::vector<int> block_start; // first distribution row of each block, then dh
 };
 
@@ -297,7 +301,7 @@ DistributionBuilder::DistributionBuilder(int width, int height, const Distributi
     d.table = prefaulted_vector<float>(distribution_table_entries(p.dw, p.dh));
     p.cond_pdf = d.table.data() + etk::etk_dist2d_conditional_pdf(p.dh);
     p.cond_cdf = d.table.data() + etk::etk_dist2d_conditional_cdf(p.dw, p.dh);
-    s_->row_mass.assign(p.dh, 0.0f);
+    s_->row_mass.assign(p.dh, 0.0);
     p.row_mass = s_->row_mass.data();
 
     // Blocks of about 256 map rows (more for wide filters): each block filters the 2r rows around
