@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -498,6 +500,122 @@ TEST(ImageIo, ReaderBandsOfAnySizeGiveTheWholeImage) {
                 y += n;
             EXPECT_EQ(y, h) << path;
             EXPECT_EQ(rgb, whole.rgb) << path << ", bands of " << band;
+        }
+    }
+}
+
+namespace {
+
+// Radiance files made byte by byte: a header, then scanlines RLE-encoded (runs where three or more
+// bytes repeat), flat, or given as raw bytes.
+std::string rgbe_header(int w, int h, const std::string& resolution = "") {
+    return "#?RADIANCE\n# made by the test\nEXPOSURE=1.0\nFORMAT=32-bit_rle_rgbe\n\n" +
+           (resolution.empty() ? "-Y " + std::to_string(h) + " +X " + std::to_string(w)
+                               : resolution) +
+           "\n";
+}
+
+std::string rgbe_rle_scanline(const std::vector<std::array<unsigned char, 4>>& px) {
+    const int w = static_cast<int>(px.size());
+    std::string out = {2, 2, static_cast<char>(w >> 8), static_cast<char>(w & 255)};
+    for (int c = 0; c < 4; ++c)
+        for (int x = 0; x < w;) {
+            int n = 1;
+            while (x + n < w && n < 127 && px[x + n][c] == px[x][c])
+                ++n;
+            if (n >= 3) {
+                out += {static_cast<char>(128 + n), static_cast<char>(px[x][c])};
+            } else {
+                n = std::min(128, w - x);
+                out += static_cast<char>(n);
+                for (int i = 0; i < n; ++i)
+                    out += static_cast<char>(px[x + i][c]);
+            }
+            x += n;
+        }
+    return out;
+}
+
+std::string rgbe_flat_scanline(const std::vector<std::array<unsigned char, 4>>& px) {
+    std::string out;
+    for (const auto& p : px)
+        out.append(reinterpret_cast<const char*>(p.data()), 4);
+    return out;
+}
+
+std::vector<std::array<unsigned char, 4>> rgbe_pixels(int w, std::mt19937& rng) {
+    std::vector<std::array<unsigned char, 4>> px(w);
+    for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 4; ++c)
+            px[x][c] = x % 5 == 0 ? 10 : static_cast<unsigned char>(rng()); // runs and noise
+    px[0][0] = 3; // a flat scanline must not start with 2, 2
+    return px;
+}
+
+} // namespace
+
+// Radiance pixels are decoded by envtrace (OpenImageIO reads the header): every file decodes bit
+// for bit as OpenImageIO's reader decodes it, or both refuse it. RLE and flat scanlines, mixed,
+// narrow and wide (flat) images, bottom-up files, every exponent (OpenImageIO's table has three
+// entries that are not powers of two), and broken runs, widths and ends.
+TEST(ImageIo, RadianceDecodedBitForBitAsOpenImageIo) {
+    const std::string dir = ett::scratch_dir("image-io-rgbe");
+    std::mt19937 rng(3);
+    std::vector<std::pair<std::string, std::string>> files;
+    const int w = 40, h = 6;
+    std::string rle = rgbe_header(w, h), mixed = rle, bottom_up = rgbe_header(w, h, "+Y 6 +X 40");
+    for (int y = 0; y < h; ++y) {
+        const auto px = rgbe_pixels(w, rng);
+        rle += rgbe_rle_scanline(px);
+        bottom_up += rgbe_rle_scanline(px);
+        mixed += y % 2 ? rgbe_flat_scanline(px) : rgbe_rle_scanline(px);
+    }
+    files.push_back({"rle", rle});
+    files.push_back({"mixed", mixed});
+    files.push_back({"bottom-up", bottom_up});
+    std::vector<std::array<unsigned char, 4>> exponents(256);
+    for (int e = 0; e < 256; ++e)
+        exponents[e] = {static_cast<unsigned char>(255 - e), 1, 128, static_cast<unsigned char>(e)};
+    files.push_back({"exponents", rgbe_header(256, 1) + rgbe_rle_scanline(exponents)});
+    files.push_back({"narrow", rgbe_header(5, 2) + rgbe_flat_scanline(rgbe_pixels(10, rng))});
+    files.push_back({"wide", rgbe_header(40000, 1) + rgbe_flat_scanline(rgbe_pixels(40000, rng))});
+    files.push_back({"truncated", rle.substr(0, rle.size() - 30)});
+    std::string broken = rle;
+    const size_t data = rgbe_header(w, h).size();
+    broken[data + 3] = 41; // scanline width
+    files.push_back({"width", broken});
+    broken = rle;
+    broken[data + 4] = 0; // a run of 0
+    files.push_back({"run0", broken});
+    broken[data + 4] = static_cast<char>(128 + 100); // a run past the end of the scanline
+    files.push_back({"overrun", broken});
+    for (int i = 0; i < 200; ++i) { // and random damage
+        std::string f = i % 2 ? mixed : rle;
+        for (int k = 0; k < 3; ++k)
+            f[data + rng() % (f.size() - data)] = static_cast<char>(rng());
+        files.push_back({"damaged" + std::to_string(i), f});
+    }
+    for (const auto& [name, bytes] : files) {
+        const std::string path = dir + "/" + name + ".hdr";
+        std::ofstream(path, std::ios::binary) << bytes;
+        std::vector<float> want;
+        bool oiio_ok = false;
+        if (auto in = OIIO::ImageInput::open(path)) {
+            want.resize(3 * static_cast<size_t>(in->spec().width) * in->spec().height);
+            oiio_ok = in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, want.data());
+        }
+        (void)OIIO::geterror();
+        try {
+            const et::RgbImage img = et::read_rgb_image(path);
+            EXPECT_TRUE(oiio_ok) << name << ": OpenImageIO refuses it, envtrace reads it";
+            EXPECT_EQ(img.rgb.size(), want.size()) << name;
+            EXPECT_EQ(std::memcmp(img.rgb.data(), want.data(),
+                                  std::min(img.rgb.size(), want.size()) * sizeof(float)),
+                      0)
+                << name;
+        } catch (const et::Error& e) {
+            EXPECT_FALSE(oiio_ok) << name << ": OpenImageIO reads it, envtrace says " << e.what();
+            EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
         }
     }
 }

@@ -452,4 +452,33 @@ TEST(EnvmapBadInput, GreyTiffOfDenormalsHasAFiniteDistribution) {
     expect_clean_outcome(path);
 }
 
+// sanitize_texels checks blocks of texels at once (one vectorised unsigned max over their bits)
+// and fixes the blocks that fail texel by texel: each bad texel counts once, in its first kind,
+// the largest channel is found in clean and fixed blocks alike, and -0 is left as it is.
+TEST(EnvmapBadInput, SanitizeCountsEachBadTexelOnceAndFindsTheMaximum) {
+    et::RgbImage img = ett::constant_image(5000, 3, 0.5f); // several blocks of 4096 texels
+    img.at(10, 0)[1] = -0.0f;
+    img.at(4100, 0)[0] = NAN;
+    img.at(4100, 0)[2] = -3.0f; // the same texel: non-finite only
+    img.at(100, 1)[0] = INFINITY;
+    img.at(7, 1)[2] = -1.0f;
+    img.at(3000, 2)[1] = 7e11f;
+    et::SanitizeReport r = et::sanitize_texels(img);
+    EXPECT_EQ(r.non_finite, 2u);
+    EXPECT_EQ(r.negative, 1u);
+    EXPECT_EQ(r.too_bright, 0u);
+    EXPECT_EQ(r.max_value, 7e11f);
+    EXPECT_EQ(img.at(4100, 0)[0], 0.0f);
+    EXPECT_EQ(img.at(4100, 0)[2], 0.0f);
+    EXPECT_EQ(img.at(100, 1)[0], 0.0f);
+    EXPECT_EQ(img.at(7, 1)[2], 0.0f);
+    EXPECT_TRUE(img.at(10, 0)[1] == 0.0f && std::signbit(img.at(10, 0)[1]));
+    img.at(4999, 2)[0] = 2e12f;
+    r = et::sanitize_texels(img);
+    EXPECT_EQ(r.non_finite + r.negative, 0u);
+    EXPECT_EQ(r.too_bright, 1u);
+    EXPECT_EQ(r.max_value, et::kMaxRadiance);
+    EXPECT_EQ(img.at(4999, 2)[0], et::kMaxRadiance);
+}
+
 } // namespace

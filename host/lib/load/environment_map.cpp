@@ -12,6 +12,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <mutex>
 
@@ -35,18 +36,26 @@ namespace {
 
 // Sanitises n texels from rgb on, adding to r.
 void sanitize_range(float* rgb, size_t n, SanitizeReport& r) {
-    constexpr size_t kBlock = 4096; // texels checked at once, branch-free (vectorised)
+    // The bits of a float in [+0, kMaxRadiance], read as an unsigned int, are at most those of
+    // kMaxRadiance and ordered as the floats are; negative values (-0 too), NaN and Inf are above.
+    // So one unsigned max over a block, which vectorises (float compares did not), tells whether
+    // the block is clean and gives its largest value.
+    uint32_t max_bits;
+    std::memcpy(&max_bits, &kMaxRadiance, sizeof max_bits);
+    constexpr size_t kBlock = 4096; // texels checked at once
     for (size_t b = 0; b < n; b += kBlock) {
         const size_t e = std::min(n, b + kBlock);
         const float* v = rgb + 3 * b;
-        bool ok = true;
-        float mx = r.max_value;
+        uint32_t top = 0;
         for (size_t i = 0, m = 3 * (e - b); i < m; ++i) {
-            ok &= v[i] >= 0.0f && v[i] <= kMaxRadiance; // false for NaN
-            mx = v[i] > mx ? v[i] : mx;
+            uint32_t u;
+            std::memcpy(&u, v + i, sizeof u);
+            top = u > top ? u : top;
         }
-        if (ok) {
-            r.max_value = mx;
+        if (top <= max_bits) {
+            float mx;
+            std::memcpy(&mx, &top, sizeof mx);
+            r.max_value = std::max(r.max_value, mx);
             continue;
         }
         for (size_t p = b; p < e; ++p) {
