@@ -201,7 +201,8 @@ EnvMap load_envmap(const std::string& path, const DistributionOptions& options) 
             timed([&] { b->build_block(env.image, k); });
         }
     };
-    const int threads = thread_count(options.threads);
+    // A map of one band and one block gains nothing from a second thread.
+    const int threads = h > 256 ? thread_count(options.threads) : 1;
     run_on_threads(threads, [&](int part) {
         try {
             if (part == 0) {
