@@ -4,6 +4,13 @@
 //
 // A material is two float4: (albedo rgb, type as int bits), (specular F0 rgb, GGX alpha).
 // The paper's "roughness" is used directly as the GGX alpha.
+//
+// The GGX lobe is sampled either from the distribution of normals, pdf(h) = D(h) cos(theta_h)
+// (the paper's), or from the distribution of normals visible from wo (Heitz 2018, "Sampling the
+// GGX Distribution of Visible Normals"), pdf(h) = G1(wo) max(0, wo.h) D(h) / wo.z: it never
+// draws a normal that faces away from wo, so fewer samples go below the horizon and the weights
+// f cos / pdf vary only through G1(wi) and the Fresnel term. EtkMaterial.vndf picks which; the
+// pdf follows it.
 #ifndef ETK_BSDF_H
 #define ETK_BSDF_H
 #include "color.h"
@@ -21,6 +28,7 @@ typedef struct {
     float3 specular;
     float alpha;
     int type;
+    int vndf; // GGX lobe sampled from visible normals (1) or from D(h) cos(theta_h) (0)
 } EtkMaterial;
 
 ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
@@ -30,6 +38,7 @@ ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
     m.type = (int)as_uint(a.w);
     m.specular = make_float3(b.x, b.y, b.z);
     m.alpha = fmax(b.w, 1e-3f);
+    m.vndf = 0;
     return m;
 }
 
@@ -94,6 +103,25 @@ ETK_FN float3 etk_schlick(float3 f0, float cos_d) {
     return f0 + (make_float3(1.0f, 1.0f, 1.0f) - f0) * m5;
 }
 
+// A GGX normal visible from wo (wo.z > 0), with density G1(wo) max(0, wo.h) D(h) / wo.z:
+// stretch wo to the unit-roughness configuration, sample the projected hemisphere seen from it
+// (a disk, its far half squeezed by the hemisphere's tilt), unstretch (Heitz 2018, listing 1).
+ETK_FN float3 etk_sample_ggx_vndf(float3 wo, float alpha, float2 u) {
+    float3 vh = normalize(make_float3(alpha * wo.x, alpha * wo.y, wo.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    float inv = lensq > 0.0f ? 1.0f / sqrt(lensq) : 0.0f;
+    float3 t1 =
+        lensq > 0.0f ? make_float3(-vh.y * inv, vh.x * inv, 0.0f) : make_float3(1.0f, 0.0f, 0.0f);
+    float3 t2 = cross(vh, t1);
+    float r = sqrt(u.x);
+    float2 sc = etk_sincospi(2.0f * u.y);
+    float p1 = r * sc.y, p2 = r * sc.x;
+    float sh = 0.5f * (1.0f + vh.z);
+    p2 = (1.0f - sh) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + sh * p2;
+    float3 nh = t1 * p1 + t2 * p2 + vh * sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2));
+    return normalize(make_float3(alpha * nh.x, alpha * nh.y, fmax(1e-7f, nh.z)));
+}
+
 // Probability of choosing the specular lobe of a microfacet material with a diffuse base.
 ETK_FN float etk_specular_weight(EtkMaterial m) {
     float ws = etk_luma(m.specular);
@@ -126,7 +154,9 @@ ETK_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
     if (m.type == ETK_MAT_DIFFUSE)
         return diffuse;
     float3 h = normalize(wo + wi);
-    float spec = etk_ggx_d(h.z, m.alpha) * h.z / (4.0f * dot(wo, h));
+    // The half vector's density over the reflection's Jacobian 1 / (4 wo.h).
+    float spec = m.vndf ? etk_smith_g1(wo.z, m.alpha) * etk_ggx_d(h.z, m.alpha) / (4.0f * wo.z)
+                        : etk_ggx_d(h.z, m.alpha) * h.z / (4.0f * dot(wo, h));
     float ps = etk_specular_weight(m);
     return ps * spec + (1.0f - ps) * diffuse;
 }
@@ -154,7 +184,10 @@ ETK_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 u, float l
         s.delta = 1;
         return s;
     }
-    if (m.type == ETK_MAT_MICROFACET && lobe < etk_specular_weight(m)) {
+    if (m.type == ETK_MAT_MICROFACET && lobe < etk_specular_weight(m) && m.vndf) {
+        float3 h = etk_sample_ggx_vndf(wo, m.alpha, u);
+        s.wi = h * (2.0f * dot(wo, h)) - wo;
+    } else if (m.type == ETK_MAT_MICROFACET && lobe < etk_specular_weight(m)) {
         // GGX normal distribution sampling: pdf(h) = D(h) cos(theta_h).
         float a2 = m.alpha * m.alpha;
         float cos2 = (1.0f - u.x) / (1.0f + (a2 - 1.0f) * u.x);

@@ -33,6 +33,14 @@ ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
     return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
+// The distribution light samples are drawn from, and weighted by in MIS. The compensated one
+// (Karlik et al. 2019) is used only where a BSDF sample can reach the same direction: the MIS
+// strategies at non-delta vertices. Delta vertices draw no light sample, and rays they scatter
+// count in full (escaped stage), so nothing needs the full distribution in this strategy.
+ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p) {
+    return p.strategy == ETK_STRATEGY_COMPENSATED ? S.env_dist_comp : S.env_dist;
+}
+
 // The surface a path's ray hit (its hit record, stored by the intersect stage).
 ETK_FN EtkSurface etk_path_surface(EtkScene S, EtkPaths P, EtkParams p, int slot) {
     float4 h4 = P.hit[slot];
@@ -82,8 +90,8 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
     float2 uv = etk_env_uv(p.env, etk_xyz(d));
     float w = 1.0f;
     if (d.w >= 0.0f) { // made by a non-delta BSDF sample
-        if (p.strategy == ETK_STRATEGY_MIS)
-            w = etk_mis_weight(p.heuristic, d.w, etk_env_pdf_uv(S.env_dist, p.env, uv));
+        if (etk_strategy_is_mis(p.strategy))
+            w = etk_mis_weight(p.heuristic, d.w, etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv));
         else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
     }
@@ -130,7 +138,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 light_uv = etk_env_uv(p.env, wi_world);
                 pdf_light = 0.25f * ETK_INV_PI;
             } else {
-                EtkEnvSample ls = etk_env_sample(S.env_dist, p.env, u);
+                EtkEnvSample ls = etk_env_sample(etk_light_dist(S, p), p.env, u);
                 wi_world = ls.dir;
                 light_uv = ls.uv;
                 pdf_light = ls.pdf;
@@ -138,7 +146,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             float3 wi = etk_to_local(wi_world, t, b, ns);
             if (pdf_light > 0.0f && wi.z > 0.0f && dot(wi_world, ng) > 0.0f) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
-                float w = p.strategy == ETK_STRATEGY_MIS
+                float w = etk_strategy_is_mis(p.strategy)
                               ? etk_mis_weight(p.heuristic, pdf_light, etk_bsdf_pdf(m, wo, wi))
                               : 1.0f;
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
@@ -157,8 +165,9 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     // BSDF sample: the continuation. Not needed when nothing it could reach would count.
     // SIS (like the light set) renders direct lighting from its strata alone: no continuation.
     int last = depth + 1 >= p.max_depth;
-    if (p.strategy == ETK_STRATEGY_SIS || (last && p.strategy != ETK_STRATEGY_BSDF &&
-                                           p.strategy != ETK_STRATEGY_MIS && !etk_bsdf_is_delta(m)))
+    if (p.strategy == ETK_STRATEGY_SIS ||
+        (last && p.strategy != ETK_STRATEGY_BSDF && !etk_strategy_is_mis(p.strategy) &&
+         !etk_bsdf_is_delta(m)))
         return;
     float2 rr = etk_dims(p, pixel, pair + 2u);
     EtkBsdfSample bs = etk_bsdf_sample(m, wo, etk_dims(p, pixel, pair + 1u), rr.x);

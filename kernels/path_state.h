@@ -8,17 +8,18 @@
 
 // Scene buffers, read-only, one element type each: X(type, name).
 #define ETK_SCENE_BUFFERS(X)                                                                       \
-    X(float4, nodes)      /* BVH: two child boxes per node (bvh.h) */                              \
-    X(float4, tris)       /* v0, e1, e2 per triangle */                                            \
-    X(float4, normals)    /* three vertex normals per triangle */                                  \
-    X(int, tri_material)  /* material index per triangle */                                        \
-    X(float4, materials)  /* two float4 per material (bsdf.h) */                                   \
-    X(float, env_dist)    /* the map's 2D distribution (piecewise_constant.h) */                   \
-    X(float, env_texels)  /* the map's RGB texels */                                               \
-    X(float4, lights)     /* directional lights / SIS strata: direction, power */                  \
-    X(int, strata_texels) /* SIS: texels sorted by stratum */                                      \
-    X(int, strata_begin)  /* SIS: stratum k owns strata_texels[begin[k] .. begin[k+1]) */          \
-    X(float, strata_cdf)  /* SIS: running solid-angle fraction inside each stratum */
+    X(float4, nodes)        /* BVH: two child boxes per node (bvh.h) */                            \
+    X(float4, tris)         /* v0, e1, e2 per triangle */                                          \
+    X(float4, normals)      /* three vertex normals per triangle */                                \
+    X(int, tri_material)    /* material index per triangle */                                      \
+    X(float4, materials)    /* two float4 per material (bsdf.h) */                                 \
+    X(float, env_dist)      /* the map's 2D distribution (piecewise_constant.h) */                 \
+    X(float, env_dist_comp) /* its MIS-compensated twin (ETK_STRATEGY_COMPENSATED only) */         \
+    X(float, env_texels)    /* the map's RGB texels */                                             \
+    X(float4, lights)       /* directional lights / SIS strata: direction, power */                \
+    X(int, strata_texels)   /* SIS: texels sorted by stratum */                                    \
+    X(int, strata_begin)    /* SIS: stratum k owns strata_texels[begin[k] .. begin[k+1]) */        \
+    X(float, strata_cdf)    /* SIS: running solid-angle fraction inside each stratum */
 
 // Path state, one element per path in flight: X(type, name).
 #define ETK_PATH_FIELDS(X)                                                                         \

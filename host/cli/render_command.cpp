@@ -28,6 +28,7 @@ namespace {
 
 struct RenderArgs {
     std::string scene, output, stats_file, strategy, heuristic, sampler, backend = "opencl";
+    std::string bsdf_sampling;
     std::string lights; // --lights: render with this directional light set
     int sis_samples = 64;
     int spp = 0, max_depth = 0, paths = -1, threads = 0;
@@ -93,6 +94,8 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.heuristic = parse_heuristic(a.heuristic, cli);
     if (!a.sampler.empty())
         st.sampler = parse_sampler(a.sampler, cli);
+    if (!a.bsdf_sampling.empty())
+        st.bsdf_sampling = parse_bsdf_sampling(a.bsdf_sampling, cli);
     if (a.seed >= 0)
         st.seed = static_cast<uint32_t>(a.seed);
     if (a.time_limit >= 0)
@@ -149,6 +152,7 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                     {"precompute_seconds", sis.seconds},
                     {"level_samples", sis.level_samples}};
     j["sampler"] = name_of(st.sampler);
+    j["bsdf_sampling"] = name_of(resolved_bsdf_sampling(st));
     j["render_seconds"] = render_s;
     j["seconds_per_spp"] = render_s / std::max(1, rendered);
     j["nonfinite_samples"] = s.nonfinite_samples;
@@ -276,8 +280,9 @@ void run(const RenderArgs& a, Globals& g) {
     progress.finish();
     const int sig = InterruptHandler::signal();
     if (sig)
-        std::fprintf(stderr, "envtrace: %s: stopped at %d spp; writing the image (a second "
-                             "signal stops at once)\n",
+        std::fprintf(stderr,
+                     "envtrace: %s: stopped at %d spp; writing the image (a second "
+                     "signal stops at once)\n",
                      signal_name(sig), done);
     const double render_s = render.seconds();
     std::vector<float> img = renderer.image();
@@ -290,6 +295,7 @@ void run(const RenderArgs& a, Globals& g) {
         {"envtrace:strategy", name_of(st.strategy)},
         {"envtrace:mis_heuristic", name_of(st.heuristic)},
         {"envtrace:sampler", name_of(st.sampler)},
+        {"envtrace:bsdf_sampling", name_of(resolved_bsdf_sampling(st))},
         {"envtrace:seed", std::to_string(st.seed)},
         {"envtrace:max_depth", std::to_string(st.max_depth)},
         {"envtrace:render_seconds", std::to_string(render_s)},
@@ -350,7 +356,8 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "Bounces (1: direct lighting only, the paper's setting)")
         ->check(CLI::Range(1, 1000));
     cmd->add_option("--strategy", a->strategy,
-                    "light | bsdf | mis | uniform | sis (structured importance sampling, native)")
+                    "light | bsdf | mis (the paper's) | compensated (MIS with a compensated light "
+                    "distribution) | uniform | sis (structured importance sampling)")
         ->check(CLI::IsMember(strategy_names()));
     cmd->add_option("--sis-samples", a->sis_samples,
                     "SIS strata (one shadow ray per sample; --spp a multiple of it)")
@@ -361,6 +368,10 @@ void add_render_command(CLI::App& app, Globals& g) {
         ->check(CLI::IsMember(heuristic_names()));
     cmd->add_option("--sampler", a->sampler, "sobol | random")
         ->check(CLI::IsMember(sampler_names()));
+    cmd->add_option("--bsdf-sampling", a->bsdf_sampling,
+                    "GGX lobes: vndf (visible normals) | ndf (the paper's) | auto (vndf for "
+                    "compensated, ndf otherwise)")
+        ->check(CLI::IsMember(bsdf_sampling_names()));
     cmd->add_option("--seed", a->seed, "Sampler seed")->check(CLI::Range(0LL, 4294967295LL));
     cmd->add_option("--paths", a->paths, "Paths in flight (0: the whole film, capped by memory)")
         ->check(CLI::Range(0, 1 << 26));

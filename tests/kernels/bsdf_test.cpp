@@ -28,9 +28,10 @@ struct Config {
     float cos_o;
 };
 
-etk::EtkMaterial material(int type, float albedo, float f0, float alpha) {
+etk::EtkMaterial material(int type, float albedo, float f0, float alpha, int vndf = 0) {
     etk::EtkMaterial m;
     m.type = type;
+    m.vndf = vndf;
     m.albedo = etk::make_float3(albedo, albedo, albedo);
     m.specular = etk::make_float3(f0, f0, f0);
     m.alpha = alpha;
@@ -44,6 +45,11 @@ std::vector<Config> configs() {
         for (float alpha : {0.05f, 0.2f, 0.5f, 1.0f}) {
             c.push_back({"microfacet", material(ETK_MAT_MICROFACET, 0.0f, 0.9f, alpha), cos_o});
             c.push_back({"plastic", material(ETK_MAT_MICROFACET, 0.5f, 0.04f, alpha), cos_o});
+            // Visible-normal sampling of the GGX lobe (Heitz 2018), with its own pdf.
+            c.push_back(
+                {"microfacet vndf", material(ETK_MAT_MICROFACET, 0.0f, 0.9f, alpha, 1), cos_o});
+            c.push_back(
+                {"plastic vndf", material(ETK_MAT_MICROFACET, 0.5f, 0.04f, alpha, 1), cos_o});
         }
     }
     return c;

@@ -11,6 +11,7 @@
 // etk_env_pdf numerically instead would add quadrature error at the many density jumps of maps
 // like grace.hdr, whose sun covers a handful of cells.
 #include "chi2.h"
+#include "prepare/env_compensation.h"
 #include "render/env_sampling.h"
 #include "kernels/sampler.h"
 #include "test_data.h"
@@ -24,7 +25,7 @@ namespace {
 constexpr int kPhiBins = 128, kCosBins = 64;
 constexpr int kSamples = 1 << 20;
 // Every chi-square test of this file shares the family-wise alpha of 0.01.
-constexpr int kChi2Tests = 10;
+constexpr int kChi2Tests = 13;
 
 // The world-space azimuth used for binning (the lat-long convention of ../shared/data/README.md).
 double world_phi(double x, double z) {
@@ -227,6 +228,30 @@ TEST(EnvmapChi2, OneLitTexelNoBlur) {
     et::DistributionOptions opt;
     opt.blur_sigma = 0.0f;
     run_chi2("one-lit-texel-seam", et::make_envmap("one-lit-texel-seam", img, opt));
+}
+
+// The compensated distribution (prepare/env_compensation.h) is sampled by the same code from its
+// own table: its samples against its own pdf, which must integrate to one.
+et::EnvMap compensated(et::EnvMap env) {
+    env.dist = et::compensate_distribution(env.dist);
+    return env;
+}
+
+TEST(EnvmapChi2, GraceCompensated) {
+    ETT_DATA_FILE(path, "envmaps/grace.hdr");
+    run_chi2("grace-compensated", compensated(data_map(path)));
+}
+
+TEST(EnvmapChi2, RoyalEsplanadeCompensated) {
+    ETT_DATA_FILE(path, "envmaps/royal_esplanade_1k.hdr");
+    run_chi2("royal_esplanade-compensated", compensated(data_map(path)));
+}
+
+TEST(EnvmapChi2, PedestrianOverpassCompensatedRotated) {
+    ETT_DATA_FILE(path, "envmaps/pedestrian_overpass_1k.hdr");
+    et::EnvMap env = compensated(data_map(path));
+    env.rotation_degrees = -41.0f;
+    run_chi2("pedestrian_overpass-compensated-rotated", env);
 }
 
 TEST(EnvmapChi2, Constant) {

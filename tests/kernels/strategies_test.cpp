@@ -1,5 +1,6 @@
-// The light, bsdf and mis strategies estimate the same integral, so they converge to the same
-// image; and the error of an unbiased estimator with independent samples falls as 1/sqrt(spp).
+// The light, bsdf, mis and compensated strategies (and either GGX sampling) estimate the same
+// integral, so they converge to the same image; and the error of an unbiased estimator with
+// independent samples falls as 1/sqrt(spp).
 //
 // Noise: every render uses the random sampler (independent passes), and the per-pixel variance
 // of the mean is measured from the passes (render_util.h). Two renders of the same image give
@@ -58,6 +59,12 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     const auto light2 = ett::render(scene(env, "light", depth, 2), "cpu", spp);
     const auto bsdf = ett::render(scene(env, "bsdf", depth, 3), "cpu", spp);
     const auto mis = ett::render(scene(env, "mis", depth, 4), "cpu", spp);
+    // MIS compensation (with visible-normal GGX sampling, its default), and the paper's MIS with
+    // visible-normal sampling alone.
+    const auto comp = ett::render(scene(env, "compensated", depth, 5), "cpu", spp);
+    et::Scene vndf_scene = scene(env, "mis", depth, 6);
+    vndf_scene.settings.bsdf_sampling = et::BsdfSampling::vndf;
+    const auto mis_vndf = ett::render(vndf_scene, "cpu", spp);
     const std::string d = " depth " + std::to_string(depth);
     // The noise estimate itself: two seeds of one strategy.
     const ett::Agreement self = ett::agreement(light, light2);
@@ -66,6 +73,9 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     expect_agree(light, bsdf, "light vs bsdf" + d);
     expect_agree(light, mis, "light vs mis" + d);
     expect_agree(bsdf, mis, "bsdf vs mis" + d);
+    expect_agree(light, comp, "light vs compensated" + d);
+    expect_agree(mis, comp, "mis vs compensated" + d);
+    expect_agree(light, mis_vndf, "light vs mis+vndf" + d);
 }
 
 INSTANTIATE_TEST_SUITE_P(Depth, Strategies, ::testing::Values(1, 3));

@@ -10,12 +10,16 @@ template <typename E> struct Named {
     const char* name;
 };
 constexpr Named<Strategy> kStrategies[] = {
-    {Strategy::light, "light"},     {Strategy::bsdf, "bsdf"}, {Strategy::mis, "mis"},
-    {Strategy::uniform, "uniform"}, {Strategy::sis, "sis"},   {Strategy::lights, "lights"}};
+    {Strategy::light, "light"},  {Strategy::bsdf, "bsdf"},
+    {Strategy::mis, "mis"},      {Strategy::uniform, "uniform"},
+    {Strategy::sis, "sis"},      {Strategy::compensated, "compensated"},
+    {Strategy::lights, "lights"}};
 constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::balance, "balance"},
                                                {MisHeuristic::power, "power"}};
 constexpr Named<SamplerKind> kSamplers[] = {{SamplerKind::sobol, "sobol"},
                                             {SamplerKind::random, "random"}};
+constexpr Named<BsdfSampling> kBsdfSamplings[] = {
+    {BsdfSampling::automatic, "auto"}, {BsdfSampling::ndf, "ndf"}, {BsdfSampling::vndf, "vndf"}};
 constexpr Named<Backend> kBackends[] = {{Backend::opencl, "opencl"}, {Backend::cpu, "cpu"}};
 
 template <typename E, size_t N> const char* name_in(const Named<E> (&table)[N], E v) {
@@ -46,7 +50,7 @@ E parse_in(const Named<E> (&table)[N], const std::string& s, const std::string& 
     throw Error(what + ": unknown " + kind + " '" + shown + "' (use " + choices + ")");
 }
 
-constexpr size_t kUserStrategies = 5; // all but "lights"
+constexpr size_t kUserStrategies = 6; // all but "lights"
 
 } // namespace
 
@@ -61,6 +65,21 @@ const char* name_of(SamplerKind v) {
 }
 const char* name_of(Backend v) {
     return name_in(kBackends, v);
+}
+
+const char* name_of(BsdfSampling v) {
+    return name_in(kBsdfSamplings, v);
+}
+BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what) {
+    return parse_in(kBsdfSamplings, s, what, "BSDF sampling");
+}
+std::vector<std::string> bsdf_sampling_names() {
+    return names_in(kBsdfSamplings);
+}
+BsdfSampling resolved_bsdf_sampling(const RenderSettings& st) {
+    if (st.bsdf_sampling != BsdfSampling::automatic)
+        return st.bsdf_sampling;
+    return st.strategy == Strategy::compensated ? BsdfSampling::vndf : BsdfSampling::ndf;
 }
 
 Strategy parse_strategy(const std::string& s, const std::string& what) {

@@ -17,8 +17,12 @@ enum class Strategy : int {
     mis = ETK_STRATEGY_MIS,
     uniform = ETK_STRATEGY_UNIFORM,
     sis = ETK_STRATEGY_SIS,
+    compensated = ETK_STRATEGY_COMPENSATED, // MIS, light samples from the compensated map
     lights = ETK_STRATEGY_LIGHTS, // a directional light set (--lights), never named by a user
 };
+// How GGX lobes are sampled (kernels/bsdf.h): automatic picks vndf for the compensated strategy
+// and ndf, the paper's, for the others, so that `mis` stays the paper's estimator.
+enum class BsdfSampling : int { automatic = -1, ndf = 0, vndf = 1 };
 enum class MisHeuristic : int { balance = ETK_HEURISTIC_BALANCE, power = ETK_HEURISTIC_POWER };
 enum class SamplerKind : int { random = ETK_SAMPLER_RANDOM, sobol = ETK_SAMPLER_SOBOL };
 enum class Backend : int { opencl, cpu };
@@ -27,18 +31,25 @@ const char* name_of(Strategy v);
 const char* name_of(MisHeuristic v);
 const char* name_of(SamplerKind v);
 const char* name_of(Backend v);
+const char* name_of(BsdfSampling v);
 
 // Throws et::Error "`what`: unknown strategy 'x' (use light, bsdf, ...)".
 Strategy parse_strategy(const std::string& s, const std::string& what);
 MisHeuristic parse_heuristic(const std::string& s, const std::string& what);
 SamplerKind parse_sampler(const std::string& s, const std::string& what);
 Backend parse_backend(const std::string& s, const std::string& what);
+BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what);
 
 // The names a user may give (for the command line's choices).
 std::vector<std::string> strategy_names(); // without "lights", which --lights selects
 std::vector<std::string> heuristic_names();
 std::vector<std::string> sampler_names();
 std::vector<std::string> backend_names();
+std::vector<std::string> bsdf_sampling_names();
+
+struct RenderSettings;
+// bsdf_sampling with automatic resolved for the strategy.
+BsdfSampling resolved_bsdf_sampling(const RenderSettings& st);
 
 struct RenderSettings {
     // From the scene's "render" block, overridden by the command line.
@@ -47,6 +58,7 @@ struct RenderSettings {
     Strategy strategy = Strategy::mis;
     MisHeuristic heuristic = MisHeuristic::power;
     SamplerKind sampler = SamplerKind::sobol;
+    BsdfSampling bsdf_sampling = BsdfSampling::automatic;
     uint32_t seed = 1;
     double time_limit = 0.0; // seconds; 0: none
     int rr_depth = 3;

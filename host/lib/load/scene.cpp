@@ -181,7 +181,7 @@ Scene load_scene(const std::string& path) {
         const json& s = *sp;
         const JsonReader rr = r.at("render");
         rr.warn_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
-                                 "time_limit", "paths"});
+                                 "time_limit", "paths", "bsdf_sampling"});
         auto& st = scene.settings;
         st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
         st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
@@ -192,6 +192,9 @@ Scene load_scene(const std::string& path) {
                 parse_heuristic(rr.string(s, "heuristic", ""), rr.at("heuristic").where());
         if (s.contains("sampler"))
             st.sampler = parse_sampler(rr.string(s, "sampler", ""), rr.at("sampler").where());
+        if (s.contains("bsdf_sampling"))
+            st.bsdf_sampling = parse_bsdf_sampling(rr.string(s, "bsdf_sampling", ""),
+                                                   rr.at("bsdf_sampling").where());
         st.seed = static_cast<uint32_t>(rr.integer(s, "seed", st.seed, 0, 4294967295LL));
         st.time_limit = rr.number(s, "time_limit", st.time_limit, 0.0, 1e7);
         st.paths = read_int(s, "paths", st.paths, 0, 1 << 26, rr);

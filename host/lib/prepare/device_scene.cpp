@@ -1,4 +1,5 @@
 #include "prepare/device_scene.h"
+#include "prepare/env_compensation.h"
 
 #include "prepare/bvh_build.h"
 #include "util/error.h"
@@ -112,6 +113,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     p.heuristic = static_cast<int>(st.heuristic);
     p.sampler = static_cast<int>(st.sampler);
     p.seed = st.seed;
+    p.bsdf_sampling = static_cast<int>(resolved_bsdf_sampling(st));
     p.ray_epsilon = kRayEpsilon;
     add_triangles(scene, d);
     add_materials(scene, d);
@@ -129,6 +131,8 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     d.map_width = scene.env.image.width;
     d.map_height = scene.env.image.height;
     d.map_build_seconds = scene.env.build_seconds;
+    if (st.strategy == Strategy::compensated)
+        d.env_dist_comp = compensate_distribution(scene.env.dist).table;
     d.env_dist = std::move(scene.env.dist.table);
     d.env_texels = std::move(scene.env.image.rgb);
     return d;

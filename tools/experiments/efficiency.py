@@ -1,0 +1,262 @@
+#!/usr/bin/python3
+"""Efficiency of envtrace's estimators: MSE x time against a converged reference, relative to the
+paper's MIS (issue 10).
+
+    tools/experiments/efficiency.py [--budgets 0.5 2] [--seeds 3] [--maps ...] [--depths 1 5]
+                                    [--strategies light bsdf mis ...] [--out DIR] [--tiny]
+
+The suite: five maps (a tiny intense sun: royal_esplanade_1k, spot1Lux; few small sources:
+grace; broad light: pedestrian_overpass_1k, venice_sunset_1k), each lighting one scene of five
+spheres in a row on a diffuse ground -- diffuse, plastic (GGX alpha 0.3), metal alpha 0.2, metal
+alpha 0.05, mirror -- at path depth 1 and 5. Every sphere has its own band of image columns, so
+one render measures every material.
+
+For each scene, strategy, wall-clock budget and seed: a render with --time-limit BUDGET (the
+native back end, PFM output), its MSE per material band and over the image against the
+reference, and its render time (render_seconds of --stats: the pass loop, not loading). The
+efficiency of a strategy is 1 / (MSE x time) with MSE averaged over the seeds and time the mean
+time; the table gives it relative to `mis` (the paper's estimator): 2.0 means the strategy reaches
+the same error in half the time. Per scene, the gain is the geometric mean over the budgets.
+
+The reference: two renders with `mis`, different seeds, --time-limit REF/2 each; their mean is the
+reference and half their difference estimates its own noise, which is subtracted from every
+measured MSE (so a reference that is not quite converged does not flatten the ratios). Cached in
+OUT/ref/ by scene and duration.
+
+Fireflies: the brightest pixel of each render over the brightest pixel of the reference (max over
+seeds); NaN/Inf: the renders' nonfinite_samples and any non-finite pixel.
+
+Writes OUT/efficiency.csv (every render), OUT/efficiency.md (the tables for docs/results.md) and
+OUT/efficiency.png."""
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+import common
+
+MAPS = {  # name -> (file, kind)
+    "esplanade": ("royal_esplanade_1k.hdr", "tiny sun"),
+    "spot": ("spot1Lux.hdr", "tiny sun"),
+    "grace": ("grace.hdr", "few small sources"),
+    "overpass": ("pedestrian_overpass_1k.hdr", "broad"),
+    "venice": ("venice_sunset_1k.hdr", "broad"),
+}
+MATERIALS = [  # band name, material
+    ("diffuse", {"type": "diffuse", "albedo": 0.8}),
+    ("plastic 0.3", {"type": "plastic", "albedo": 0.6, "specular": 0.04, "roughness": 0.3}),
+    ("metal 0.2", {"type": "microfacet", "specular": [0.95, 0.8, 0.6], "roughness": 0.2}),
+    ("metal 0.05", {"type": "microfacet", "specular": [0.9, 0.9, 0.9], "roughness": 0.05}),
+    ("mirror", {"type": "mirror", "specular": 0.9}),
+]
+
+
+def scene_json(map_file, depth, width, height):
+    mats = {f"m{i}": m for i, (_, m) in enumerate(MATERIALS)}
+    mats["ground"] = {"type": "diffuse", "albedo": 0.5}
+    n = len(MATERIALS)
+    shapes = [{"type": "quad", "center": [0, 0, 0], "size": 40, "material": "ground"}]
+    for i in range(n):
+        x = (i - (n - 1) / 2) * 1.1
+        shapes.append({"type": "sphere", "center": [x, 0.5, 0], "radius": 0.5, "segments": 48,
+                       "smooth": True, "material": f"m{i}"})
+    return {
+        "camera": {"eye": [0, 1.1, 9.0], "target": [0, 0.45, 0], "fov": 13},
+        "film": {"width": width, "height": height},
+        "environment": {"map": os.path.join(common.data_dir(), "envmaps", map_file)},
+        "materials": mats,
+        "shapes": shapes,
+        "render": {"max_depth": depth},
+    }
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        kind = f.readline().strip()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    c = 3 if kind == b"PF" else 1
+    return data.reshape(h, w, c).astype(np.float64)
+
+
+def bands(width):
+    """Column ranges of the material bands: the image split evenly, one sphere in each."""
+    n = len(MATERIALS)
+    edges = [round(width * k / n) for k in range(n + 1)]
+    return [(edges[k], edges[k + 1]) for k in range(n)]
+
+
+def render(scene, out, strategy, budget, seed, extra):
+    args = ["--time-limit", str(budget), "--seed", str(seed)] + strategy_args(strategy) + extra
+    stats = common.render(scene, out, args)
+    return read_pfm(out), stats
+
+
+def strategy_args(strategy):
+    """A strategy of the table: a --strategy name, optionally with +options (e.g. mis+vndf)."""
+    parts = strategy.split("+")
+    a = ["--strategy", parts[0]]
+    for opt in parts[1:]:
+        if opt in ("ndf", "vndf"):
+            a += ["--bsdf-sampling", opt]
+        else:
+            sys.exit(f"efficiency: unknown strategy option '{opt}' in '{strategy}'")
+    return a
+
+
+def reference(scene, name, ref_seconds, cache, extra):
+    """Mean of two independent MIS renders, and the per-pixel variance of that mean."""
+    halves = []
+    for seed in (7919, 7920):
+        out = os.path.join(cache, f"{name}-ref{ref_seconds:g}-{seed}.pfm")
+        if not os.path.exists(out):
+            common.render(scene, out, ["--time-limit", str(ref_seconds / 2), "--seed", str(seed),
+                                       "--strategy", "mis"] + extra)
+        halves.append(read_pfm(out))
+    ref = 0.5 * (halves[0] + halves[1])
+    var = 0.25 * (halves[0] - halves[1]) ** 2  # E[(h1-h2)^2/4] = var(mean of two)
+    return ref, var
+
+
+def main():
+    p = common.parser(__doc__.splitlines()[0])
+    p.add_argument("--budgets", type=float, nargs="+", default=[0.5, 2.0])
+    p.add_argument("--seeds", type=int, default=3)
+    p.add_argument("--maps", nargs="+", default=list(MAPS), choices=list(MAPS))
+    p.add_argument("--depths", type=int, nargs="+", default=[1, 5])
+    p.add_argument("--strategies", nargs="+", default=["light", "bsdf", "mis"])
+    p.add_argument("--ref-seconds", type=float, default=None,
+                   help="reference render time (default 40 x the largest budget)")
+    p.add_argument("--size", type=int, nargs=2, default=[320, 72])
+    a = p.parse_args()
+    if a.tiny:
+        a.budgets, a.seeds, a.maps, a.depths = [0.05], 2, ["grace"], [1]
+        a.size, a.ref_seconds = [60, 16], 0.4
+    ref_seconds = a.ref_seconds or 40 * max(a.budgets)
+    out_dir = common.out_dir(a, "efficiency")
+    cache = os.path.join(out_dir, "ref")
+    os.makedirs(cache, exist_ok=True)
+    work = common.tmpdir("efficiency")
+    extra = []  # common.render: the native back end
+    width, height = a.size
+    strategies = a.strategies if "mis" in a.strategies else ["mis"] + a.strategies
+    band_names = [b for b, _ in MATERIALS]
+
+    rows = []  # one per render
+    for map_key in a.maps:
+        for depth in a.depths:
+            name = f"{map_key}-d{depth}"
+            scene = os.path.join(cache, f"{name}-{width}x{height}.json")
+            with open(scene, "w") as f:
+                json.dump(scene_json(MAPS[map_key][0], depth, width, height), f, indent=1)
+            ref, ref_var = reference(scene, f"{name}-{width}x{height}", ref_seconds, cache, extra)
+            ref_max = float(ref.mean(axis=2).max())
+            regions = [(0, width)] + bands(width)
+            ref_noise = [float(ref_var[:, c0:c1].mean()) for c0, c1 in regions]
+            for budget in a.budgets:
+                for strategy in strategies:
+                    for seed in range(1, a.seeds + 1):
+                        out = os.path.join(work, f"{name}-{strategy}-{budget:g}-{seed}.pfm")
+                        img, stats = render(scene, out, strategy, budget, seed, extra)
+                        finite = bool(np.isfinite(img).all())
+                        err = (np.nan_to_num(img, nan=0.0, posinf=0.0) - ref) ** 2
+                        mse = [max(float(err[:, c0:c1].mean()) - n, 0.0)
+                               for (c0, c1), n in zip(regions, ref_noise)]
+                        rows.append({
+                            "scene": name, "map": map_key, "depth": depth, "strategy": strategy,
+                            "budget": budget, "seed": seed, "seconds": stats["render_seconds"],
+                            "spp": stats["spp"], "nonfinite": stats["nonfinite_samples"] +
+                            (0 if finite else 1),
+                            "max_ratio": float(img.mean(axis=2).max()) / max(ref_max, 1e-30),
+                            "mse": mse[0], **{f"mse {b}": m for b, m in zip(band_names, mse[1:])},
+                            "ref_noise": ref_noise[0],
+                        })
+                        print(f"{name} {strategy:>16} {budget:g}s seed {seed}: {stats['spp']} spp "
+                              f"{stats['render_seconds']:.2f}s mse {mse[0]:.4g}", flush=True)
+    common.write_csv(os.path.join(out_dir, "efficiency.csv"), list(rows[0]), [list(r.values()) for r in rows])
+    write_tables(rows, strategies, band_names, a, ref_seconds, out_dir)
+
+
+def gains(rows, strategies, column):
+    """{(scene, strategy): gain over mis} of the geometric mean over budgets of
+    (MSE x time of mis) / (MSE x time of the strategy), MSE and time averaged over seeds."""
+    def cost(scene, strategy, budget):
+        rs = [r for r in rows if r["scene"] == scene and r["strategy"] == strategy and r["budget"] == budget]
+        return np.mean([r[column] for r in rs]) * np.mean([r["seconds"] for r in rs])
+
+    out = {}
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    budgets = sorted(set(r["budget"] for r in rows))
+    for sc in scenes:
+        for st in strategies:
+            logs = []
+            for b in budgets:
+                c, m = cost(sc, st, b), cost(sc, "mis", b)
+                logs.append(math.log(m / c) if c > 0 and m > 0 else float("nan"))
+            out[(sc, st)] = math.exp(np.mean(logs))
+    return scenes, out
+
+
+def geomean(xs):
+    xs = [x for x in xs if x > 0 and math.isfinite(x)]
+    return math.exp(np.mean([math.log(x) for x in xs])) if xs else float("nan")
+
+
+def write_tables(rows, strategies, band_names, a, ref_seconds, out_dir):
+    scenes, g = gains(rows, strategies, "mse")
+    lines = [f"Efficiency (1 / (MSE x time)) relative to the paper's MIS; budgets "
+             f"{', '.join(f'{b:g} s' for b in a.budgets)}, {a.seeds} seeds, "
+             f"{a.size[0]}x{a.size[1]}, native back end, reference {ref_seconds:g} s of MIS. "
+             f"Command: `tools/experiments/efficiency.py --budgets {' '.join(f'{b:g}' for b in a.budgets)} "
+             f"--seeds {a.seeds} --strategies {' '.join(strategies)}`.", ""]
+    lines.append("| scene | " + " | ".join(strategies) + " | best of light/bsdf/mis |")
+    lines.append("|---" * (len(strategies) + 2) + "|")
+    for sc in scenes:
+        best = max(g.get((sc, s), 0) for s in ("light", "bsdf", "mis") if (sc, s) in g)
+        lines.append(f"| {sc} | " + " | ".join(f"{g[(sc, s)]:.2f}" for s in strategies) + f" | {best:.2f} |")
+    lines.append("| **geometric mean** | " + " | ".join(
+        f"**{geomean([g[(sc, s)] for sc in scenes]):.2f}**" for s in strategies) + " | |")
+    lines += ["", "Per material band (geometric mean over the scenes):", ""]
+    lines.append("| material | " + " | ".join(strategies) + " |")
+    lines.append("|---" * (len(strategies) + 1) + "|")
+    for b in band_names:
+        _, gb = gains(rows, strategies, f"mse {b}")
+        lines.append(f"| {b} | " + " | ".join(f"{geomean([gb[(sc, s)] for sc in scenes]):.2f}"
+                                             for s in strategies) + " |")
+    lines += ["", "Brightest pixel / the reference's brightest (max over seeds and budgets; "
+              "fireflies show as > 1) and non-finite samples:", ""]
+    lines.append("| scene | " + " | ".join(strategies) + " |")
+    lines.append("|---" * (len(strategies) + 1) + "|")
+    for sc in scenes:
+        cells = []
+        for s in strategies:
+            rs = [r for r in rows if r["scene"] == sc and r["strategy"] == s]
+            nf = sum(r["nonfinite"] for r in rs)
+            cells.append(f"{max(r['max_ratio'] for r in rs):.2f}" + (f" ({nf} NaN)" if nf else ""))
+        lines.append(f"| {sc} | " + " | ".join(cells) + " |")
+    text = "\n".join(lines) + "\n"
+    with open(os.path.join(out_dir, "efficiency.md"), "w") as f:
+        f.write(text)
+    print(text)
+
+    plt = common.pyplot()
+    fig, ax = plt.subplots(figsize=(max(6, len(scenes) * 0.9), 3.5))
+    w = 0.8 / len(strategies)
+    for k, s in enumerate(strategies):
+        ax.bar([i + k * w for i in range(len(scenes))], [g[(sc, s)] for sc in scenes], w, label=s)
+    ax.set_yscale("log")
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_xticks([i + 0.4 - w / 2 for i in range(len(scenes))])
+    ax.set_xticklabels(scenes, rotation=30, ha="right")
+    ax.set_ylabel("efficiency / paper's MIS")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "efficiency.png"), dpi=120)
+    print(f"wrote {os.path.join(out_dir, 'efficiency.png')}")
+
+
+if __name__ == "__main__":
+    main()
