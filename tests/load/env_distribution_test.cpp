@@ -295,6 +295,30 @@ TEST(EnvDistribution, UsesRec709Luminance) {
         EXPECT_NEAR(t.cond_pdf(r, 24) / t.cond_pdf(r, 8), 0.7152 / 0.2126, 1e-4) << r;
 }
 
+TEST(EnvDistribution, ExponentSamplesAPowerOfLuminance) {
+    // Left half luminance 1, right half 16: with exponent 0.5 the densities away from the seams
+    // are in the ratio 4, with 1 in the ratio 16; an exponent out of range is an error.
+    const int w = 32, h = 8;
+    et::RgbImage img = ett::constant_image(w, h, 1.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = w / 2; x < w; ++x)
+            img.at(x, y)[0] = img.at(x, y)[1] = img.at(x, y)[2] = 16.0f;
+    for (float e : {1.0f, 0.5f, 0.25f}) {
+        et::DistributionOptions o;
+        o.blur_sigma = 0.0f;
+        o.exponent = e;
+        const et::EnvDistribution d = et::build_env_distribution(img, o);
+        const Table t(d);
+        for (int r = 0; r < h; ++r)
+            EXPECT_NEAR(t.cond_pdf(r, 24) / t.cond_pdf(r, 8), std::pow(16.0, e), 1e-3) << e;
+    }
+    et::DistributionOptions bad;
+    bad.exponent = 1.5f;
+    EXPECT_THROW(et::build_env_distribution(img, bad), et::Error);
+    bad.exponent = 0.0f;
+    EXPECT_THROW(et::build_env_distribution(img, bad), et::Error);
+}
+
 TEST(EnvDistribution, ResamplingToHalfResolutionAveragesCells) {
     // Area resampling by 2: each cell is the mean of the 2x2 full-resolution (unweighted)
     // cells, then weighted by sin(theta) at its own row centre.

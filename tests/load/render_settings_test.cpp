@@ -16,13 +16,24 @@ TEST(RenderSettings, NamesRoundTrip) {
         EXPECT_EQ(et::name_of(et::parse_sampler(n, "t")), n);
     for (const auto& n : et::backend_names())
         EXPECT_EQ(et::name_of(et::parse_backend(n, "t")), n);
-    EXPECT_EQ(et::strategy_names().size(), 5u);
+    for (const auto& n : et::bsdf_sampling_names())
+        EXPECT_EQ(et::name_of(et::parse_bsdf_sampling(n, "t")), n);
+    EXPECT_EQ(et::strategy_names().size(), 6u); // "lights" is chosen by --lights only
 }
 
 TEST(RenderSettings, ValuesAreTheKernelCodes) {
     EXPECT_EQ(static_cast<int>(et::parse_strategy("mis", "t")), ETK_STRATEGY_MIS);
     EXPECT_EQ(static_cast<int>(et::parse_strategy("sis", "t")), ETK_STRATEGY_SIS);
     EXPECT_EQ(static_cast<int>(et::Strategy::lights), ETK_STRATEGY_LIGHTS);
+    EXPECT_EQ(static_cast<int>(et::parse_strategy("compensated", "t")), ETK_STRATEGY_COMPENSATED);
+    // auto: visible normals for the compensated strategy, the paper's sampling for mis.
+    et::RenderSettings st;
+    st.strategy = et::Strategy::mis;
+    EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
+    st.strategy = et::Strategy::compensated;
+    EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf);
+    st.bsdf_sampling = et::BsdfSampling::ndf;
+    EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
     EXPECT_EQ(static_cast<int>(et::parse_sampler("sobol", "t")), ETK_SAMPLER_SOBOL);
     EXPECT_EQ(static_cast<int>(et::parse_heuristic("power", "t")), ETK_HEURISTIC_POWER);
 }

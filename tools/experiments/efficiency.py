@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Efficiency of envtrace's estimators: MSE x time against a converged reference, relative to the
+"""Efficiency of envtrace's estimators: relative MSE x time against a converged reference, relative to the
 paper's MIS (issue 10).
 
     tools/experiments/efficiency.py [--budgets 0.5 2] [--seeds 3] [--maps ...] [--depths 1 5]
@@ -8,7 +8,9 @@ paper's MIS (issue 10).
 The suite: five maps (a tiny intense sun: royal_esplanade_1k, spot1Lux; few small sources:
 grace; broad light: pedestrian_overpass_1k, venice_sunset_1k), each lighting one scene of five
 spheres in a row on a diffuse ground -- diffuse, plastic (GGX alpha 0.3), metal alpha 0.2, metal
-alpha 0.05, mirror -- at path depth 1 and 5. Every sphere has its own band of image columns, so
+alpha 0.05, mirror -- at path depth 1 and 5. Strategies are --strategy names with options:
+`mis+vndf` (--bsdf-sampling vndf), `compensated+ndf`, `compensated+x0.5` (the distribution built
+on luminance^0.5, the paper's tone-mapped future-work item). Every sphere has its own band of image columns, so
 one render measures every material.
 
 For each scene, strategy, wall-clock budget and seed: a render with --time-limit BUDGET (the
@@ -19,7 +21,8 @@ time; the table gives it relative to `mis` (the paper's estimator): 2.0 means th
 the same error in half the time. Per scene, the gain is the geometric mean over the budgets.
 
 The reference: two renders with `mis`, different seeds, --time-limit REF/2 each; their mean is the
-reference and half their difference estimates its own noise, which is subtracted from every
+reference and half their difference estimates its own noise (relative error: per pixel
+channel (x - ref)^2 / (ref^2 + (0.01 mean ref)^2)), which is subtracted from every
 measured MSE (so a reference that is not quite converged does not flatten the ratios). Cached in
 OUT/ref/ by scene and duration.
 
@@ -90,21 +93,32 @@ def bands(width):
 
 
 def render(scene, out, strategy, budget, seed, extra):
-    args = ["--time-limit", str(budget), "--seed", str(seed)] + strategy_args(strategy) + extra
+    args, exponent = strategy_args(strategy)
+    if exponent is not None:  # a scene variant with a tone-mapped distribution
+        with open(scene) as f:
+            s = json.load(f)
+        s["environment"]["distribution_exponent"] = exponent
+        scene = out + ".json"
+        with open(scene, "w") as f:
+            json.dump(s, f)
+    args = ["--time-limit", str(budget), "--seed", str(seed)] + args + extra
     stats = common.render(scene, out, args)
     return read_pfm(out), stats
 
 
 def strategy_args(strategy):
-    """A strategy of the table: a --strategy name, optionally with +options (e.g. mis+vndf)."""
+    """A strategy of the table: a --strategy name, optionally with +options: ndf or vndf (GGX
+    sampling), xE (the map's distribution built on luminance^E, E < 1: tone-mapped)."""
     parts = strategy.split("+")
-    a = ["--strategy", parts[0]]
+    a, exponent = ["--strategy", parts[0]], None
     for opt in parts[1:]:
         if opt in ("ndf", "vndf"):
             a += ["--bsdf-sampling", opt]
+        elif opt.startswith("x"):
+            exponent = float(opt[1:])
         else:
             sys.exit(f"efficiency: unknown strategy option '{opt}' in '{strategy}'")
-    return a
+    return a, exponent
 
 
 def reference(scene, name, ref_seconds, cache, extra):
@@ -155,14 +169,18 @@ def main():
             ref, ref_var = reference(scene, f"{name}-{width}x{height}", ref_seconds, cache, extra)
             ref_max = float(ref.mean(axis=2).max())
             regions = [(0, width)] + bands(width)
-            ref_noise = [float(ref_var[:, c0:c1].mean()) for c0, c1 in regions]
+            rel_denom = ref ** 2 + (0.01 * float(ref.mean())) ** 2
+            ref_noise = [float((ref_var / rel_denom)[:, c0:c1].mean()) for c0, c1 in regions]
             for budget in a.budgets:
                 for strategy in strategies:
                     for seed in range(1, a.seeds + 1):
                         out = os.path.join(work, f"{name}-{strategy}-{budget:g}-{seed}.pfm")
                         img, stats = render(scene, out, strategy, budget, seed, extra)
                         finite = bool(np.isfinite(img).all())
-                        err = (np.nan_to_num(img, nan=0.0, posinf=0.0) - ref) ** 2
+                        # Relative squared error per pixel channel: (x - ref)^2 / (ref^2 + eps),
+                        # eps = (1% of the image mean)^2, so that dark and bright pixels weigh
+                        # alike (the measure of Karlik et al. and of most sampling papers).
+                        err = (np.nan_to_num(img, nan=0.0, posinf=0.0) - ref) ** 2 / rel_denom
                         mse = [max(float(err[:, c0:c1].mean()) - n, 0.0)
                                for (c0, c1), n in zip(regions, ref_noise)]
                         rows.append({
@@ -207,7 +225,7 @@ def geomean(xs):
 
 def write_tables(rows, strategies, band_names, a, ref_seconds, out_dir):
     scenes, g = gains(rows, strategies, "mse")
-    lines = [f"Efficiency (1 / (MSE x time)) relative to the paper's MIS; budgets "
+    lines = [f"Efficiency (1 / (relative MSE x time)) relative to the paper's MIS; budgets "
              f"{', '.join(f'{b:g} s' for b in a.budgets)}, {a.seeds} seeds, "
              f"{a.size[0]}x{a.size[1]}, native back end, reference {ref_seconds:g} s of MIS. "
              f"Command: `tools/experiments/efficiency.py --budgets {' '.join(f'{b:g}' for b in a.budgets)} "

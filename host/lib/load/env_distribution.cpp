@@ -130,6 +130,7 @@ template <typename T> double build_1d(const T* f, int n, float* pdf, float* cdf,
 // Everything that depends only on the map and the options, shared by the worker threads.
 struct Plan {
     int w, h, dw, dh, r, k;
+    float exponent; // luminance^exponent is the function filtered (DistributionOptions)
     std::vector<float> taps;
     bool resampled;
     std::vector<Span> sx, sy;
@@ -164,8 +165,12 @@ void build_rows(const Plan& p, const RgbImage& image, int o0, int o1) {
     auto filter_row = [&](int sy) {
         const float* src = rgb + 3 * static_cast<size_t>(sy) * w;
         float* lum = pad.data() + r;
-        for (int x = 0; x < w; ++x)
-            lum[x] = luminance(src + 3 * x);
+        if (p.exponent == 1.0f)
+            for (int x = 0; x < w; ++x)
+                lum[x] = luminance(src + 3 * x);
+        else
+            for (int x = 0; x < w; ++x)
+                lum[x] = std::pow(luminance(src + 3 * x), p.exponent);
         for (int x = 0; x < r; ++x) {
             pad[x] = lum[((x - r) % w + w) % w];
             pad[w + r + x] = lum[x % w];
@@ -287,6 +292,10 @@ DistributionBuilder::DistributionBuilder(int width, int height, const Distributi
         throw Error("a map of " + std::to_string(p.w) + "x" + std::to_string(p.h) +
                     " texels has no distribution");
     p.taps = filter_taps(options.blur_sigma);
+    if (!(options.exponent >= kMinDistributionExponent && options.exponent <= 1.0f))
+        throw Error("a distribution exponent of " + std::to_string(options.exponent) +
+                    " is out of range [" + std::to_string(kMinDistributionExponent) + ", 1]");
+    p.exponent = options.exponent;
     p.k = static_cast<int>(p.taps.size());
     p.r = p.k / 2;
     p.resampled = p.dw != p.w || p.dh != p.h;

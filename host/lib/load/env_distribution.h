@@ -13,6 +13,7 @@ namespace et {
 // blur of at most 64 texels (its filter has 2 * ceil(3 sigma) + 3 taps per pass).
 constexpr int kMaxDistributionSide = 65536;
 constexpr float kMaxBlurSigma = 64.0f;
+constexpr float kMinDistributionExponent = 0.05f;
 
 // Entries of the table of a w x h distribution (kernels/piecewise_constant.h), in 64 bits.
 uint64_t distribution_table_entries(int w, int h);
@@ -24,7 +25,11 @@ void check_distribution_size(int w, int h);
 struct DistributionOptions {
     int width = 0, height = 0; // 0: the map's resolution
     float blur_sigma = 0.5f;   // Gaussian blur of luminance, in texels; 0 disables it
-    int threads = 0;           // rows built on this many threads (0: all cores); same result
+    // The function sampled is luminance^exponent: 1 is the paper's (linear) distribution; below
+    // 1 a compressive, tone-mapping-like transform that moves samples from the brightest texels
+    // to dimmer ones (the paper's future work; measured in docs/results.md).
+    float exponent = 1.0f;
+    int threads = 0; // rows built on this many threads (0: all cores); same result
 };
 
 struct EnvDistribution {

@@ -14,8 +14,8 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     const JsonReader r = JsonReader(where).at("environment");
     if (!env.is_object())
         r.fail("expected an object with \"map\" or \"sky\", got " + json_excerpt(env));
-    r.warn_unknown_keys(env,
-                        {"map", "sky", "intensity", "rotation", "distribution_resolution", "blur"});
+    r.warn_unknown_keys(env, {"map", "sky", "intensity", "rotation", "distribution_resolution",
+                              "blur", "distribution_exponent"});
     if (env.contains("distribution_resolution")) {
         const auto& res = env["distribution_resolution"];
         const JsonReader rd = r.at("distribution_resolution");
@@ -33,6 +33,8 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     }
     options.blur_sigma =
         static_cast<float>(r.number(env, "blur", options.blur_sigma, 0.0, kMaxBlurSigma));
+    options.exponent = static_cast<float>(
+        r.number(env, "distribution_exponent", options.exponent, kMinDistributionExponent, 1.0));
     const float scale = static_cast<float>(r.number(env, "intensity", 1.0, 0.0, 1e30));
     const float rotation = static_cast<float>(r.number(env, "rotation", 0.0, -1e6, 1e6));
     EnvMap map;
