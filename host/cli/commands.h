@@ -6,6 +6,7 @@ namespace et::cli {
 
 struct Globals {
     int device = 0;
+    int exit_code = 0; // main's status when a command ends without an error (e.g. 130: SIGINT)
 };
 
 void add_devices_command(CLI::App& app, Globals& g);

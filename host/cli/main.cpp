@@ -44,5 +44,5 @@ int main(int argc, char** argv) {
         std::cerr << "envtrace: error: unexpected exception (not a std::exception)\n";
         return 1;
     }
-    return 0;
+    return globals.exit_code;
 }

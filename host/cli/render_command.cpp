@@ -9,6 +9,9 @@
 #include "util/timer.h"
 #include "render/renderer.h"
 #include "prepare/sis.h"
+#include "render/render_state.h"
+#include "util/interrupt.h"
+#include "util/output_batch.h"
 
 #include <nlohmann/json.hpp>
 
@@ -30,6 +33,9 @@ struct RenderArgs {
     int spp = 0, max_depth = 0, paths = -1, threads = 0;
     long long seed = -1;
     double time_limit = -1.0;
+    double checkpoint = -1.0; // --checkpoint: seconds between saved states (< 0: none)
+    bool resume = false;
+    std::string state; // --state: the state file (default: beside the image)
 };
 
 // out.exr -> (out.exr, out.png); out.png -> (out.exr, out.png).
@@ -115,7 +121,55 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     return st;
 }
 
-void run(const RenderArgs& a, const Globals& g) {
+// The state file of a render to `exr_name`: "out.exr" -> "out.envtrace-state".
+std::string default_state_path(const std::string& exr_name) {
+    return fs::path(exr_name).replace_extension(".envtrace-state").string();
+}
+
+nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const DeviceScene& ds,
+                          Renderer& renderer, const ProgramBuildInfo& build,
+                          const LightSet& light_set, const SisResult& sis, int done,
+                          int resumed_from, int sig, double render_s) {
+    const RenderStats& s = renderer.stats();
+    const int rendered = done - resumed_from;
+    nlohmann::json j;
+    j["scene"] = a.scene;
+    j["backend"] = renderer.name();
+    j["width"] = ds.width();
+    j["height"] = ds.height();
+    j["spp"] = done;
+    j["resumed_from_spp"] = resumed_from;
+    j["interrupted"] = sig ? signal_name(sig) : "no";
+    j["max_depth"] = st.max_depth;
+    j["strategy"] = name_of(st.strategy);
+    if (st.strategy == Strategy::lights)
+        j["lights"] = {{"file", st.lights}, {"count", light_set.lights.size()}};
+    if (st.strategy == Strategy::sis)
+        j["sis"] = {{"samples", st.sis_samples},
+                    {"precompute_seconds", sis.seconds},
+                    {"level_samples", sis.level_samples}};
+    j["sampler"] = name_of(st.sampler);
+    j["render_seconds"] = render_s;
+    j["seconds_per_spp"] = render_s / std::max(1, rendered);
+    j["nonfinite_samples"] = s.nonfinite_samples;
+    j["rays"] = {{"camera", s.camera_rays},
+                 {"continuation", s.continuation_rays},
+                 {"shadow", s.shadow_rays}};
+    j["mrays_per_second"] = s.rays() / render_s * 1e-6;
+    j["samples_per_second"] = double(rendered) * ds.width() * ds.height() / render_s;
+    j["program_build_seconds"] = build.seconds;
+    j["program_from_cache"] = build.from_cache;
+    j["bvh"] = {{"nodes", ds.bvh.nodes},
+                {"depth", ds.bvh.depth},
+                {"sah_cost", ds.bvh.sah_cost},
+                {"build_seconds", ds.bvh.build_seconds}};
+    j["environment_build_seconds"] = ds.map_build_seconds;
+    for (const auto& [name, t] : s.stage_seconds)
+        j["stage_seconds"][name] = t;
+    return j;
+}
+
+void run(const RenderArgs& a, Globals& g) {
     Timer total;
     Scene scene = load_scene(a.scene);
     const RenderSettings st = settings_for(a, g, scene.settings);
@@ -124,12 +178,10 @@ void run(const RenderArgs& a, const Globals& g) {
                                               : fs::path(a.scene).stem().string() + ".exr";
     auto [exr_name, png_name] = output_names(out);
     // Fail on an unwritable destination before spending the render time.
-    fs::path dir = fs::path(exr_name).parent_path();
-    std::error_code ec;
-    if (!dir.empty() && !fs::is_directory(dir, ec))
-        throw Error(exr_name + ": cannot write: folder '" + dir.string() + "' does not exist");
     check_writable_format(exr_name);
     check_writable_format(png_name);
+    const bool keep_state = a.checkpoint >= 0 || a.resume;
+    const std::string state_path = !a.state.empty() ? a.state : default_state_path(exr_name);
 
     // Directional lights and SIS strata: the light directions the shade stages sum or draw.
     LightSet light_set;
@@ -139,6 +191,20 @@ void run(const RenderArgs& a, const Globals& g) {
         std::printf("light set %s: %zu directional lights (%s)\n", st.lights.c_str(),
                     light_set.lights.size(), light_set.method.c_str());
     }
+    RenderState state;
+    if (a.resume)
+        state = read_render_state(state_path);
+
+    // Every output, reserved now that every input has been read: none may be an input (the
+    // state continues itself), none may be two, and all are written together at the end.
+    std::vector<std::string> targets = {exr_name, png_name};
+    if (!a.stats_file.empty())
+        targets.push_back(a.stats_file);
+    if (keep_state)
+        targets.push_back(state_path);
+    OutputBatch outputs(targets, a.resume ? std::vector<std::string>{state_path}
+                                          : std::vector<std::string>{});
+
     if (st.strategy == Strategy::sis) {
         SisOptions so;
         so.samples = st.sis_samples;
@@ -155,6 +221,15 @@ void run(const RenderArgs& a, const Globals& g) {
                 a.scene.c_str(), ds.triangle_count, ds.bvh.nodes, ds.bvh.depth, ds.bvh.sah_cost,
                 ds.bvh.build_seconds * 1e3, ds.map_width, ds.map_height,
                 ds.map_build_seconds * 1e3);
+    if (a.resume) {
+        check_render_state(state, ds, state_path);
+        if (st.time_limit <= 0 && state.spp > st.spp)
+            throw Error(state_path + ": the render state has " + std::to_string(state.spp) +
+                        " spp, more than the --spp " + std::to_string(st.spp) +
+                        " asked for; samples cannot be taken away");
+    }
+    if (keep_state)
+        state.key = render_key(ds);
 
     ProgramBuildInfo build;
     std::unique_ptr<Renderer> renderer_ptr = make_renderer(ds, &build);
@@ -162,6 +237,13 @@ void run(const RenderArgs& a, const Globals& g) {
     if (st.backend == Backend::opencl)
         std::printf("OpenCL program build %.3f s (%s)\n", build.seconds,
                     build.from_cache ? "cached binary" : "compiled");
+    int done = 0;
+    if (a.resume) {
+        renderer.resume(state.film);
+        done = state.spp;
+        std::printf("resumed from %s at %d spp\n", state_path.c_str(), done);
+    }
+    const int resumed_from = done;
     std::printf(
         "backend %s: %dx%d, %s spp, depth %d, strategy %s, sampler %s, %d paths in flight\n",
         renderer.name().c_str(), ds.width(), ds.height(),
@@ -169,23 +251,42 @@ void run(const RenderArgs& a, const Globals& g) {
         name_of(st.strategy), name_of(st.sampler), renderer.paths());
     std::fflush(stdout);
 
+    // From here on a first SIGINT/SIGTERM keeps the samples: the pass in flight ends, the
+    // outputs are written, and the status tells the signal. At least one sample is always
+    // rendered (a --time-limit shorter than a pass still gives one).
+    InterruptHandler interrupts;
     Progress progress(st.spp, st.time_limit);
-    Timer render;
-    int done = 0;
+    Timer render, since_checkpoint;
     for (;;) {
-        if (st.time_limit > 0 ? render.seconds() >= st.time_limit : done >= st.spp)
+        if (InterruptHandler::signal())
+            break;
+        if (done > 0 && (st.time_limit > 0 ? render.seconds() >= st.time_limit : done >= st.spp))
             break;
         renderer.render_sample(static_cast<uint32_t>(done));
         ++done;
         progress.update(done, render.seconds());
+        if (a.checkpoint >= 0 && since_checkpoint.seconds() >= a.checkpoint &&
+            !InterruptHandler::signal()) {
+            state.spp = done;
+            state.film = renderer.film();
+            write_render_state(state_path, state);
+            since_checkpoint = Timer();
+        }
     }
     progress.finish();
+    const int sig = InterruptHandler::signal();
+    if (sig)
+        std::fprintf(stderr, "envtrace: %s: stopped at %d spp; writing the image (a second "
+                             "signal stops at once)\n",
+                     signal_name(sig), done);
     const double render_s = render.seconds();
     std::vector<float> img = renderer.image();
     const RenderStats& s = renderer.stats();
 
     std::vector<std::pair<std::string, std::string>> meta = {
         {"envtrace:spp", std::to_string(done)},
+        {"envtrace:interrupted", sig ? signal_name(sig) : "no"},
+        {"envtrace:resumed_from_spp", std::to_string(resumed_from)},
         {"envtrace:strategy", name_of(st.strategy)},
         {"envtrace:mis_heuristic", name_of(st.heuristic)},
         {"envtrace:sampler", name_of(st.sampler)},
@@ -197,17 +298,29 @@ void run(const RenderArgs& a, const Globals& g) {
         {"envtrace:sis_seconds", std::to_string(sis.seconds)},
         {"Software", "envtrace " ENVTRACE_VERSION},
     };
-    write_image(exr_name, ds.width(), ds.height(), 3, img, meta);
+    write_image(outputs, exr_name, ds.width(), ds.height(), 3, img, meta);
     RgbImage film{ds.width(), ds.height(), img};
-    write_image(png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
+    write_image(outputs, png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
+    if (!a.stats_file.empty())
+        write_json_file(outputs, a.stats_file,
+                        stats_json(a, st, ds, renderer, build, light_set, sis, done, resumed_from,
+                                   sig, render_s),
+                        2);
+    if (keep_state) {
+        state.spp = done;
+        state.film = renderer.film();
+        write_render_state(outputs, state_path, state);
+    }
+    outputs.commit();
 
+    const int rendered = done - resumed_from;
     const double mrays = s.rays() / render_s * 1e-6;
     std::printf(
         "rendered %d spp in %.2f s: %.2f Mrays/s (%llu camera, %llu continuation, %llu shadow), "
         "%.3g samples/s, %.4f s/spp\n",
-        done, render_s, mrays, (unsigned long long)s.camera_rays,
+        rendered, render_s, mrays, (unsigned long long)s.camera_rays,
         (unsigned long long)s.continuation_rays, (unsigned long long)s.shadow_rays,
-        double(done) * ds.width() * ds.height() / render_s, render_s / std::max(1, done));
+        double(rendered) * ds.width() * ds.height() / render_s, render_s / std::max(1, rendered));
     if (s.nonfinite_samples > 0)
         warn(a.scene + ": " + std::to_string(s.nonfinite_samples) +
              " samples were not finite and counted as zero (a renderer bug: please "
@@ -215,44 +328,11 @@ void run(const RenderArgs& a, const Globals& g) {
     std::printf("%s time per stage:", st.backend == Backend::cpu ? "thread" : "device");
     for (const auto& [name, t] : s.stage_seconds)
         std::printf(" %s %.3fs", name.c_str(), t);
-    std::printf("\nwrote %s and %s (total %.2f s)\n", exr_name.c_str(), png_name.c_str(),
-                total.seconds());
-
-    if (!a.stats_file.empty()) {
-        nlohmann::json j;
-        j["scene"] = a.scene;
-        j["backend"] = renderer.name();
-        j["width"] = ds.width();
-        j["height"] = ds.height();
-        j["spp"] = done;
-        j["max_depth"] = st.max_depth;
-        j["strategy"] = name_of(st.strategy);
-        if (st.strategy == Strategy::lights)
-            j["lights"] = {{"file", st.lights}, {"count", light_set.lights.size()}};
-        if (st.strategy == Strategy::sis)
-            j["sis"] = {{"samples", st.sis_samples},
-                        {"precompute_seconds", sis.seconds},
-                        {"level_samples", sis.level_samples}};
-        j["sampler"] = name_of(st.sampler);
-        j["render_seconds"] = render_s;
-        j["seconds_per_spp"] = render_s / std::max(1, done);
-        j["nonfinite_samples"] = s.nonfinite_samples;
-        j["rays"] = {{"camera", s.camera_rays},
-                     {"continuation", s.continuation_rays},
-                     {"shadow", s.shadow_rays}};
-        j["mrays_per_second"] = mrays;
-        j["samples_per_second"] = double(done) * ds.width() * ds.height() / render_s;
-        j["program_build_seconds"] = build.seconds;
-        j["program_from_cache"] = build.from_cache;
-        j["bvh"] = {{"nodes", ds.bvh.nodes},
-                    {"depth", ds.bvh.depth},
-                    {"sah_cost", ds.bvh.sah_cost},
-                    {"build_seconds", ds.bvh.build_seconds}};
-        j["environment_build_seconds"] = ds.map_build_seconds;
-        for (const auto& [name, t] : s.stage_seconds)
-            j["stage_seconds"][name] = t;
-        write_json_file(a.stats_file, j, 2);
-    }
+    std::printf("\nwrote %s and %s%s%s at %d spp (total %.2f s)\n", exr_name.c_str(),
+                png_name.c_str(), keep_state ? " and the state " : "",
+                keep_state ? state_path.c_str() : "", done, total.seconds());
+    if (sig)
+        g.exit_code = 128 + sig;
 }
 
 } // namespace
@@ -285,6 +365,15 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--paths", a->paths, "Paths in flight (0: the whole film, capped by memory)")
         ->check(CLI::Range(0, 1 << 26));
     cmd->add_option("--stats", a->stats_file, "Write the render summary as JSON");
+    cmd->add_option("--checkpoint", a->checkpoint,
+                    "Save a resumable state every SECONDS of rendering (0: every pass), when "
+                    "interrupted, and at the end")
+        ->check(CLI::Range(0.0, 1e7));
+    cmd->add_flag("--resume", a->resume,
+                  "Continue from the saved state (same scene and settings; --spp is the total)");
+    cmd->add_option("--state", a->state,
+                    "The state file of --checkpoint and --resume (default: OUTPUT.envtrace-state "
+                    "beside the image)");
     cmd->add_option("--backend", a->backend,
                     "opencl (default) or cpu (native C++, same kernels/ sources)")
         ->check(CLI::IsMember(backend_names()));

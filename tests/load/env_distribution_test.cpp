@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <random>
 
 namespace {
@@ -394,6 +396,40 @@ TEST(EnvDistribution, ThreadsGiveTheSameTable) {
     one.height = four.height = 96;
     EXPECT_EQ(et::build_env_distribution(img, one).table,
               et::build_env_distribution(img, four).table);
+}
+
+// Every finite, non-negative map bounded by kMaxRadiance has a finite, normalised table
+// (fuzz finding F6: a grey TIFF of denormal texels, ~1e-44, made densities n / sum with a sum so
+// small that n / sum overflowed float: +Inf densities, NaN where f was 0). Tiny, huge and mixed
+// maps, with and without blur and resampling.
+TEST(EnvDistribution, TinyAndHugeTexelsGiveFiniteNormalisedTables) {
+    const float tiny[] = {std::numeric_limits<float>::denorm_min(), 8.68805e-44f,
+                          std::numeric_limits<float>::min(), 1e-30f};
+    std::vector<std::pair<std::string, et::RgbImage>> maps;
+    for (float v : tiny) {
+        et::RgbImage img = ett::constant_image(16, 8, 0.0f);
+        for (int y = 0; y < 5; ++y) // the shape of F6: a few lit columns in the upper rows
+            for (int x = 0; x < 16; x += 4)
+                set_grey(img, x, y, v * (1 + x + y));
+        char value[32];
+        std::snprintf(value, sizeof value, "%g", double(v));
+        maps.push_back({std::string("sparse ") + value, img});
+        maps.push_back({std::string("constant ") + value, ett::constant_image(16, 8, v)});
+    }
+    maps.push_back({"max radiance", ett::constant_image(64, 32, et::kMaxRadiance)});
+    et::RgbImage mixed = random_map(64, 32, 3, 0.5f);
+    for (int x = 0; x < 64; x += 3)
+        set_grey(mixed, x, x % 32, x % 2 ? et::kMaxRadiance : tiny[0]);
+    maps.push_back({"mixed", mixed});
+    for (const auto& [name, img] : maps)
+        for (float blur : {0.0f, 0.5f, 4.0f})
+            for (int dw : {0, 7}) {
+                SCOPED_TRACE(name + ", blur " + std::to_string(blur) + ", width " +
+                             std::to_string(dw));
+                const et::EnvDistribution d = build(img, blur, dw, dw ? 5 : 0);
+                ASSERT_TRUE(std::isfinite(d.total));
+                expect_valid_table(d);
+            }
 }
 
 } // namespace

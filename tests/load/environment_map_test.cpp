@@ -5,6 +5,8 @@
 #include "cli_run.h"
 #include "test_data.h"
 
+#include <OpenImageIO/imageio.h>
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -13,6 +15,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -356,6 +359,126 @@ TEST(EnvmapBadInput, HugeTexelsAndIntensityAreBounded) {
     et::bound_intensity(env, "scene.json: environment.intensity");
     EXPECT_LE(double(env.scale) * env.max_texel, double(et::kMaxRadiance) * 1.0000001);
     EXPECT_EQ(w.count_containing("scene.json: environment.intensity"), 1u);
+}
+
+// A map of w x h texels spanning several decades, a third of it black, as float RGB.
+std::vector<float> random_texels(int w, int h, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<float> px(static_cast<size_t>(w) * h * 3);
+    for (size_t p = 0; p < px.size(); p += 3) {
+        const float s = u(rng) < 0.33f ? 0.0f : std::pow(10.0f, 5.0f * u(rng) - 2.0f);
+        for (int c = 0; c < 3; ++c)
+            px[p + c] = s * u(rng);
+    }
+    return px;
+}
+
+// load_envmap decodes the map in bands on one thread while the others build the distribution's
+// blocks: the texels and the table must be exactly those of make_envmap(read_rgb_image(...)),
+// whatever the thread count, the blur (its halo crosses bands) and the resampling.
+TEST(EnvmapLoad, PipelinedLoadEqualsSequentialForAnyThreadCount) {
+    const std::string dir = ett::scratch_dir("pipelined");
+    const int w = 1200, h = 600; // three bands of decoding, three blocks of distribution rows
+    const std::string path = dir + "/map.exr";
+    ett::write_raw_exr(path, w, h, random_texels(w, h, 17));
+    std::vector<et::DistributionOptions> variants(3);
+    variants[1].blur_sigma = 3.0f;
+    variants[2].blur_sigma = 0.0f;
+    variants[2].width = 100;
+    variants[2].height = 45;
+    for (et::DistributionOptions opt : variants) {
+        opt.threads = 1;
+        const et::EnvMap ref = et::make_envmap(path, et::read_rgb_image(path), opt);
+        for (int threads : {1, 2, 3, 8}) {
+            SCOPED_TRACE("blur " + std::to_string(opt.blur_sigma) + ", " + std::to_string(threads) +
+                         " threads");
+            opt.threads = threads;
+            const et::EnvMap env = et::load_envmap(path, opt);
+            EXPECT_EQ(env.image.rgb, ref.image.rgb);
+            EXPECT_EQ(env.dist.width, ref.dist.width);
+            EXPECT_EQ(env.dist.table, ref.dist.table);
+            EXPECT_EQ(env.dist.total, ref.dist.total);
+            EXPECT_EQ(env.max_texel, ref.max_texel);
+        }
+    }
+}
+
+// A file that breaks off part-way is an et::Error naming it on every thread count: the threads
+// waiting for rows that never come are released.
+TEST(EnvmapLoad, TruncatedFileIsAnErrorOnAnyThreadCount) {
+    const std::string dir = ett::scratch_dir("truncated");
+    const int w = 1200, h = 600;
+    const std::vector<float> px = random_texels(w, h, 5);
+    for (const char* name : {"/cut.exr", "/cut.hdr"}) {
+        const std::string path = dir + name;
+        if (std::string(name) == "/cut.exr")
+            ett::write_raw_exr(path, w, h, px);
+        else
+            et::write_image(path, w, h, 3, px);
+        fs::resize_file(path, fs::file_size(path) * 3 / 5);
+        for (int threads : {1, 2, 4}) {
+            et::DistributionOptions opt;
+            opt.threads = threads;
+            try {
+                et::load_envmap(path, opt);
+                ADD_FAILURE() << path << " loaded on " << threads << " threads";
+            } catch (const et::Error& e) {
+                EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+            }
+        }
+    }
+}
+
+// Fuzz finding F6 as a file: a one-channel float TIFF of denormal texels loads with a finite,
+// normalised distribution and samples fine.
+TEST(EnvmapBadInput, GreyTiffOfDenormalsHasAFiniteDistribution) {
+    const std::string path = ett::scratch_dir("f6") + "/grey.tif";
+    const int w = 16, h = 8;
+    std::vector<float> grey(w * h, 0.0f);
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < w; x += 4)
+            grey[y * w + x] = 1.4013e-45f * (1 + 10 * x + 7 * y);
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, 1, OIIO::TypeDesc::FLOAT);
+    spec.attribute("compression", "zip");
+    ASSERT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, grey.data()) &&
+                out->close())
+        << out->geterror();
+    const et::EnvMap env = et::load_envmap(path, {});
+    EXPECT_TRUE(env.dist.has_light());
+    EXPECT_TRUE(std::isfinite(env.dist.total));
+    expect_clean_outcome(path);
+}
+
+// sanitize_texels checks blocks of texels at once (one vectorised unsigned max over their bits)
+// and fixes the blocks that fail texel by texel: each bad texel counts once, in its first kind,
+// the largest channel is found in clean and fixed blocks alike, and -0 is left as it is.
+TEST(EnvmapBadInput, SanitizeCountsEachBadTexelOnceAndFindsTheMaximum) {
+    et::RgbImage img = ett::constant_image(5000, 3, 0.5f); // several blocks of 4096 texels
+    img.at(10, 0)[1] = -0.0f;
+    img.at(4100, 0)[0] = NAN;
+    img.at(4100, 0)[2] = -3.0f; // the same texel: non-finite only
+    img.at(100, 1)[0] = INFINITY;
+    img.at(7, 1)[2] = -1.0f;
+    img.at(3000, 2)[1] = 7e11f;
+    et::SanitizeReport r = et::sanitize_texels(img);
+    EXPECT_EQ(r.non_finite, 2u);
+    EXPECT_EQ(r.negative, 1u);
+    EXPECT_EQ(r.too_bright, 0u);
+    EXPECT_EQ(r.max_value, 7e11f);
+    EXPECT_EQ(img.at(4100, 0)[0], 0.0f);
+    EXPECT_EQ(img.at(4100, 0)[2], 0.0f);
+    EXPECT_EQ(img.at(100, 1)[0], 0.0f);
+    EXPECT_EQ(img.at(7, 1)[2], 0.0f);
+    EXPECT_TRUE(img.at(10, 0)[1] == 0.0f && std::signbit(img.at(10, 0)[1]));
+    img.at(4999, 2)[0] = 2e12f;
+    r = et::sanitize_texels(img);
+    EXPECT_EQ(r.non_finite + r.negative, 0u);
+    EXPECT_EQ(r.too_bright, 1u);
+    EXPECT_EQ(r.max_value, et::kMaxRadiance);
+    EXPECT_EQ(img.at(4999, 2)[0], et::kMaxRadiance);
 }
 
 } // namespace

@@ -1,10 +1,13 @@
 // Reading images as linear RGB floats and writing images without ever leaving a half-written
 // file behind.
 #pragma once
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace et {
+
+class OutputBatch;
 
 struct RgbImage {
     int width = 0, height = 0;
@@ -17,16 +20,43 @@ struct RgbImage {
 // here). Only regular files of at most kMaxImageBytes are opened, and the declared size is
 // checked against the memory budget and the file's size before any pixel is read. 8- and 16-bit
 // images are decoded from sRGB to linear. One channel is replicated to RGB; otherwise the R, G, B
-// channels are used (the first three when they are not named so). Throws et::Error naming the
-// file and the problem.
+// channels are used (the first three when they are not named so), as stored: alpha is ignored,
+// colour is never multiplied or divided by it. Throws et::Error naming the file and the problem.
 RgbImage read_rgb_image(const std::string& path);
 
+// read_rgb_image a band of rows at a time, from the top, so that a caller can work on the first
+// rows while later ones decode (load_envmap builds the distribution meanwhile).
+class RgbImageReader {
+  public:
+    // Opens the file and checks its header, as read_rgb_image does; throws et::Error.
+    explicit RgbImageReader(const std::string& path);
+    ~RgbImageReader();
+    RgbImageReader(const RgbImageReader&) = delete;
+    RgbImageReader& operator=(const RgbImageReader&) = delete;
+
+    int width() const;
+    int height() const;
+    // Rows per call that suit the file (whole blocks of its compression or tiles).
+    int band_rows() const;
+    // Decodes the next `rows` rows (fewer at the bottom) into dst, 3 floats per pixel; returns
+    // how many it decoded. Throws et::Error when the file is corrupt.
+    int read_rows(int rows, float* dst);
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
 // Writes `channels`-channel float pixels. .exr/.hdr/.pfm keep linear floats; .png/.jpg expect
-// display values in [0,1] and store 8 bits. Writes to a temporary file beside `path` and renames
-// it into place. `attributes` are name/value string metadata. NaN and Inf are written as 0 with a
-// warning: no output of envtrace holds them.
+// display values in [0,1] and store 8 bits. `attributes` are name/value string metadata. NaN and
+// Inf are written as 0 with a warning: no output of envtrace holds them. All-or-nothing: written
+// to a temporary and renamed into place (util/output_batch.h), never over an input of the run.
 void write_image(const std::string& path, int width, int height, int channels,
                  const std::vector<float>& pixels,
+                 const std::vector<std::pair<std::string, std::string>>& attributes = {});
+// The same as one file of a batch: renamed into place with the others by batch.commit().
+void write_image(OutputBatch& batch, const std::string& path, int width, int height,
+                 int channels, const std::vector<float>& pixels,
                  const std::vector<std::pair<std::string, std::string>>& attributes = {});
 
 // Throws et::Error "PATH: problem" unless an image can be written at `path`: a supported

@@ -3,12 +3,13 @@
 #include "util/error.h"
 #include "util/file_check.h"
 #include "util/parallel.h"
+#include "util/prefault.h"
 
 #include "kernels/piecewise_constant.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
-#include <thread>
 
 // One streaming pass over the map, a row at a time: luminance into a wrap-padded row, the
 // horizontal filter into a ring of 2r+1 filtered rows, the vertical filter (clamped at the poles)
@@ -68,7 +69,7 @@ constexpr int kChains = 8;
 // local[i + 1] = sum of f over [segment start, i] for kChains contiguous segments of n / kChains
 // elements and a short tail; seg_offset[j] = sum of f before segment j (kChains + 2 entries).
 // Returns the sum of f. Every partial sum is exact to double rounding of float inputs.
-double prefix_sums(const float* f, int n, double* local, double* seg_offset) {
+template <typename T> double prefix_sums(const T* f, int n, double* local, double* seg_offset) {
     const int len = n / kChains;
     double acc[kChains] = {};
     for (int i = 0; i < len; ++i)
@@ -92,8 +93,9 @@ double prefix_sums(const float* f, int n, double* local, double* seg_offset) {
     return run;
 }
 
-// build_piecewise_constant_1d with pdf allowed to alias f, using scratch of n + 1 doubles.
-double build_1d(const float* f, int n, float* pdf, float* cdf, double* local) {
+// build_piecewise_constant_1d with pdf allowed to alias f, using scratch of n + 1 doubles. f is
+// float (a row) or double (the row masses of the marginal).
+template <typename T> double build_1d(const T* f, int n, float* pdf, float* cdf, double* local) {
     double seg_offset[kChains + 2];
     const double sum = prefix_sums(f, n, local, seg_offset);
     cdf[0] = 0.0f;
@@ -107,13 +109,16 @@ double build_1d(const float* f, int n, float* pdf, float* cdf, double* local) {
         return 0.0;
     }
     const double inv = 1.0 / sum;
-    const float density_scale = static_cast<float>(n * inv);
+    // The densities f n / sum in double: n / sum alone overflows a float when the sum is below
+    // n / FLT_MAX (1e-34 for n = 65536; texels of 1e-44 occur, fuzz finding F6), while each
+    // density is at most n.
+    const double density_scale = n * inv;
     const int len = n / kChains;
     for (int j = 0; j <= kChains; ++j) {
         const int begin = j * len, end = j < kChains ? begin + len : n;
         const double off = seg_offset[j];
         for (int i = begin; i < end; ++i) {
-            pdf[i] = f[i] * density_scale;
+            pdf[i] = static_cast<float>(f[i] * density_scale);
             cdf[i + 1] = static_cast<float>((off + local[i + 1]) * inv);
         }
     }
@@ -124,24 +129,23 @@ double build_1d(const float* f, int n, float* pdf, float* cdf, double* local) {
 
 // Everything that depends only on the map and the options, shared by the worker threads.
 struct Plan {
-    const RgbImage* image;
     int w, h, dw, dh, r, k;
     std::vector<float> taps;
     bool resampled;
     std::vector<Span> sx, sy;
     float* cond_pdf;
     float* cond_cdf;
-    float* row_mass;
+    double* row_mass; // double: a float would round a row of denormal densities to 0
 };
 
 // Works on distribution rows [o0, o1): filters the input rows they need, writes their densities
 // and CDFs and their masses. Rows are independent, so ranges can run on separate threads.
-void build_rows(const Plan& p, int o0, int o1) {
+void build_rows(const Plan& p, const RgbImage& image, int o0, int o1) {
     if (o0 >= o1)
         return;
     const int w = p.w, h = p.h, dw = p.dw, dh = p.dh, r = p.r, k = p.k;
     const float* taps = p.taps.data();
-    const float* rgb = p.image->rgb.data();
+    const float* rgb = image.rgb.data();
 
     // Input rows needed: the area spans of the output rows (all of [o0, o1) without resampling).
     int y0 = o0, y1 = o1;
@@ -181,8 +185,8 @@ void build_rows(const Plan& p, int o0, int o1) {
         const float sin_theta = std::sin(static_cast<float>(M_PI) * (o + 0.5f) / dh);
         for (int x = 0; x < dw; ++x)
             fr[x] = std::max(0.0f, fr[x]) * sin_theta; // max: filters never go negative, NaN-safe
-        p.row_mass[o] = static_cast<float>(
-            build_1d(fr, dw, fr, p.cond_cdf + static_cast<size_t>(o) * (dw + 1), scratch.data()));
+        p.row_mass[o] =
+            build_1d(fr, dw, fr, p.cond_cdf + static_cast<size_t>(o) * (dw + 1), scratch.data());
     };
 
     int o_next = o0; // resampled case: first output row not yet finished
@@ -264,13 +268,24 @@ double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf
     return build_1d(f, n, pdf, cdf, scratch.data());
 }
 
-EnvDistribution build_env_distribution(const RgbImage& image, const DistributionOptions& options) {
+struct DistributionBuilder::State {
     Plan p;
-    p.image = &image;
-    p.w = image.width;
-    p.h = image.height;
+    EnvDistribution d;
+    std::vector<double> row_mass;
+    std::vector<int> block_start; // first distribution row of each block, then dh
+};
+
+DistributionBuilder::DistributionBuilder(int width, int height, const DistributionOptions& options)
+    : s_(std::make_unique<State>()) {
+    Plan& p = s_->p;
+    p.w = width;
+    p.h = height;
     p.dw = options.width > 0 ? options.width : p.w;
     p.dh = options.height > 0 ? options.height : p.h;
+    check_distribution_size(p.dw, p.dh); // 32-bit offsets below are then exact
+    if (p.w < 1 || p.h < 1)
+        throw Error("a map of " + std::to_string(p.w) + "x" + std::to_string(p.h) +
+                    " texels has no distribution");
     p.taps = filter_taps(options.blur_sigma);
     p.k = static_cast<int>(p.taps.size());
     p.r = p.k / 2;
@@ -280,26 +295,62 @@ EnvDistribution build_env_distribution(const RgbImage& image, const Distribution
         p.sy = area_weights(p.h, p.dh);
     }
 
-    check_distribution_size(p.dw, p.dh); // 32-bit offsets below are then exact
-    EnvDistribution d;
+    EnvDistribution& d = s_->d;
     d.width = p.dw;
     d.height = p.dh;
-    d.table.assign(distribution_table_entries(p.dw, p.dh), 0.0f);
+    d.table = prefaulted_vector<float>(distribution_table_entries(p.dw, p.dh));
     p.cond_pdf = d.table.data() + etk::etk_dist2d_conditional_pdf(p.dh);
     p.cond_cdf = d.table.data() + etk::etk_dist2d_conditional_cdf(p.dw, p.dh);
-    std::vector<float> row_mass(p.dh);
-    p.row_mass = row_mass.data();
+    s_->row_mass.assign(p.dh, 0.0);
+    p.row_mass = s_->row_mass.data();
 
-    const int threads = std::clamp(thread_count(options.threads), 1, std::max(1, p.dh / 16));
-    run_on_threads(threads, [&](int t) {
-        build_rows(p, static_cast<int>(int64_t(p.dh) * t / threads),
-                   static_cast<int>(int64_t(p.dh) * (t + 1) / threads));
-    });
+    // Blocks of about 256 map rows (more for wide filters): each block filters the 2r rows around
+    // it once more, a few percent here, and a map still decoding is followed closely.
+    const int64_t map_rows = std::max(256, 8 * p.k);
+    const int rows = static_cast<int>(std::clamp<int64_t>(map_rows * p.dh / p.h, 1, p.dh));
+    for (int o = 0; o < p.dh; o += rows)
+        s_->block_start.push_back(o);
+    s_->block_start.push_back(p.dh);
+}
 
+DistributionBuilder::~DistributionBuilder() = default;
+
+int DistributionBuilder::blocks() const {
+    return static_cast<int>(s_->block_start.size()) - 1;
+}
+
+int DistributionBuilder::rows_needed(int block) const {
+    const Plan& p = s_->p;
+    const int o1 = s_->block_start[block + 1];
+    const int y1 =
+        p.resampled ? p.sy[o1 - 1].first + static_cast<int>(p.sy[o1 - 1].weights.size()) : o1;
+    return std::min(p.h, y1 + p.r);
+}
+
+void DistributionBuilder::build_block(const RgbImage& image, int block) {
+    build_rows(s_->p, image, s_->block_start[block], s_->block_start[block + 1]);
+}
+
+EnvDistribution DistributionBuilder::finish() {
+    const Plan& p = s_->p;
+    EnvDistribution d = std::move(s_->d);
     std::vector<double> scratch(static_cast<size_t>(p.dh) + 1);
-    d.total = build_1d(row_mass.data(), p.dh, d.table.data(),
+    d.total = build_1d(s_->row_mass.data(), p.dh, d.table.data(),
                        d.table.data() + etk::etk_dist2d_marginal_cdf(p.dh), scratch.data());
+    s_.reset();
     return d;
+}
+
+EnvDistribution build_env_distribution(const RgbImage& image, const DistributionOptions& options) {
+    DistributionBuilder builder(image.width, image.height, options);
+    const int blocks = builder.blocks();
+    const int threads = std::clamp(thread_count(options.threads), 1, blocks);
+    std::atomic<int> next{0};
+    run_on_threads(threads, [&](int) {
+        for (int b = next++; b < blocks; b = next++)
+            builder.build_block(image, b);
+    });
+    return builder.finish();
 }
 
 } // namespace et

@@ -4,6 +4,7 @@
 #include "image/image_io.h"
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace et {
@@ -39,6 +40,32 @@ struct EnvDistribution {
 // area-resampled to the distribution resolution and weighted by sin(theta) at the row centre.
 // Texels must already be finite and non-negative (see envmap.h).
 EnvDistribution build_env_distribution(const RgbImage& image, const DistributionOptions& options);
+
+// build_env_distribution in pieces, for a map whose rows are still arriving: load_envmap builds
+// blocks of rows as soon as the rows they read are decoded. A block is a band of distribution
+// rows; its result does not depend on which thread builds it or when, so the table is the same
+// for any number of threads.
+class DistributionBuilder {
+  public:
+    // Plans the distribution of a width x height map and allocates its table (zeroed); throws
+    // et::Error when the resolution is out of range (check_distribution_size).
+    DistributionBuilder(int width, int height, const DistributionOptions& options);
+    ~DistributionBuilder();
+    DistributionBuilder(const DistributionBuilder&) = delete;
+    DistributionBuilder& operator=(const DistributionBuilder&) = delete;
+
+    int blocks() const;
+    // Block b reads map rows [0, rows_needed(b)): they must be final before build_block(b).
+    int rows_needed(int block) const;
+    // Builds one block from `image` (width x height). Distinct blocks may be built concurrently.
+    void build_block(const RgbImage& image, int block);
+    // The marginal distribution, once every block is built; leaves the builder empty.
+    EnvDistribution finish();
+
+  private:
+    struct State;
+    std::unique_ptr<State> s_;
+};
 
 // Rec. 709 luminance of an RGB texel (kernels/color.h).
 inline float luminance(const float* rgb) {

@@ -4,11 +4,17 @@
 #include "util/error.h"
 #include "util/json_file.h"
 #include "util/parallel.h"
+#include "util/prefault.h"
 #include "util/timer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <cstring>
+#include <memory>
+#include <mutex>
 
 namespace et {
 
@@ -26,6 +32,89 @@ etk::EtkEnvMap EnvMap::desc() const {
     return d;
 }
 
+namespace {
+
+// Sanitises n texels from rgb on, adding to r.
+void sanitize_range(float* rgb, size_t n, SanitizeReport& r) {
+    // The bits of a float in [+0, kMaxRadiance], read as an unsigned int, are at most those of
+    // kMaxRadiance and ordered as the floats are; negative values (-0 too), NaN and Inf are above.
+    // So one unsigned max over a block, which vectorises (float compares did not), tells whether
+    // the block is clean and gives its largest value.
+    uint32_t max_bits;
+    std::memcpy(&max_bits, &kMaxRadiance, sizeof max_bits);
+    constexpr size_t kBlock = 4096; // texels checked at once
+    for (size_t b = 0; b < n; b += kBlock) {
+        const size_t e = std::min(n, b + kBlock);
+        const float* v = rgb + 3 * b;
+        uint32_t top = 0;
+        for (size_t i = 0, m = 3 * (e - b); i < m; ++i) {
+            uint32_t u;
+            std::memcpy(&u, v + i, sizeof u);
+            top = u > top ? u : top;
+        }
+        if (top <= max_bits) {
+            float mx;
+            std::memcpy(&mx, &top, sizeof mx);
+            r.max_value = std::max(r.max_value, mx);
+            continue;
+        }
+        for (size_t p = b; p < e; ++p) {
+            float* t = rgb + 3 * p;
+            bool bad = false, neg = false, bright = false;
+            for (int c = 0; c < 3; ++c) {
+                if (!std::isfinite(t[c])) {
+                    t[c] = 0.0f;
+                    bad = true;
+                } else if (t[c] < 0.0f) {
+                    t[c] = 0.0f;
+                    neg = true;
+                } else if (t[c] > kMaxRadiance) {
+                    t[c] = kMaxRadiance;
+                    bright = true;
+                }
+                r.max_value = std::max(r.max_value, t[c]);
+            }
+            r.non_finite += bad;
+            r.negative += neg && !bad;
+            r.too_bright += bright && !neg && !bad;
+        }
+    }
+}
+
+void warn_sanitized(const std::string& name, const SanitizeReport& r) {
+    if (r.non_finite + r.negative > 0)
+        warn(name + ": " + std::to_string(r.non_finite) + " non-finite and " +
+             std::to_string(r.negative) +
+             " negative texels set to zero (they are ignored for lighting and sampling)");
+    if (r.too_bright > 0)
+        warn(name + ": " + std::to_string(r.too_bright) +
+             " texels brighter than 1e12 clamped to it (no output may overflow)");
+}
+
+// What make_envmap and load_envmap check before building (load_envmap before decoding).
+void check_map(const std::string& name, int width, int height, const DistributionOptions& options) {
+    if (width != 2 * height)
+        warn(name + ": " + std::to_string(width) + "x" + std::to_string(height) +
+             " is not a 2:1 lat-long map; it is stretched over the sphere as it is");
+    if (3 * static_cast<uint64_t>(width) * static_cast<uint64_t>(height) > kMaxDeviceIndex)
+        throw Error(name + ": " + std::to_string(width) + "x" + std::to_string(height) +
+                    " texels: more than the device indexes");
+    if (options.width < 0 || options.height < 0)
+        throw Error(name + ": distribution resolution " + std::to_string(options.width) + "x" +
+                    std::to_string(options.height) + " is out of range");
+    if (!(options.blur_sigma >= 0.0f && options.blur_sigma <= kMaxBlurSigma))
+        throw Error(name + ": blur " + std::to_string(options.blur_sigma) + " is outside [0, " +
+                    std::to_string(int(kMaxBlurSigma)) + "] texels");
+    try {
+        check_distribution_size(options.width > 0 ? options.width : width,
+                                options.height > 0 ? options.height : height);
+    } catch (const Error& e) {
+        throw Error(name + ": " + e.what());
+    }
+}
+
+} // namespace
+
 SanitizeReport sanitize_texels(RgbImage& image) {
     // In slices on every core: a 16k map has 400M channels.
     const size_t n = image.rgb.size() / 3;
@@ -33,43 +122,8 @@ SanitizeReport sanitize_texels(RgbImage& image) {
         std::clamp<size_t>(n / (1 << 20), 1, static_cast<size_t>(thread_count(0))));
     std::vector<SanitizeReport> parts(threads);
     run_on_threads(threads, [&](int part) {
-        SanitizeReport& r = parts[part];
         const size_t first = n * part / threads, last = n * (part + 1) / threads;
-        constexpr size_t kBlock = 4096; // texels checked at once, branch-free (vectorised)
-        for (size_t b = first; b < last; b += kBlock) {
-            const size_t e = std::min(last, b + kBlock);
-            const float* v = &image.rgb[3 * b];
-            bool ok = true;
-            float mx = r.max_value;
-            for (size_t i = 0, m = 3 * (e - b); i < m; ++i) {
-                ok &= v[i] >= 0.0f && v[i] <= kMaxRadiance; // false for NaN
-                mx = v[i] > mx ? v[i] : mx;
-            }
-            if (ok) {
-                r.max_value = mx;
-                continue;
-            }
-            for (size_t p = b; p < e; ++p) {
-                float* t = &image.rgb[3 * p];
-                bool bad = false, neg = false, bright = false;
-                for (int c = 0; c < 3; ++c) {
-                    if (!std::isfinite(t[c])) {
-                        t[c] = 0.0f;
-                        bad = true;
-                    } else if (t[c] < 0.0f) {
-                        t[c] = 0.0f;
-                        neg = true;
-                    } else if (t[c] > kMaxRadiance) {
-                        t[c] = kMaxRadiance;
-                        bright = true;
-                    }
-                    r.max_value = std::max(r.max_value, t[c]);
-                }
-                r.non_finite += bad;
-                r.negative += neg && !bad;
-                r.too_bright += bright && !neg && !bad;
-            }
-        }
+        sanitize_range(image.rgb.data() + 3 * first, last - first, parts[part]);
     });
     SanitizeReport r;
     for (const SanitizeReport& p : parts) {
@@ -86,34 +140,9 @@ EnvMap make_envmap(std::string name, RgbImage image, const DistributionOptions& 
     env.name = std::move(name);
     env.image = std::move(image);
     SanitizeReport r = sanitize_texels(env.image);
-    if (r.non_finite + r.negative > 0)
-        warn(env.name + ": " + std::to_string(r.non_finite) + " non-finite and " +
-             std::to_string(r.negative) +
-             " negative texels set to zero (they are ignored for lighting and sampling)");
-    if (r.too_bright > 0)
-        warn(env.name + ": " + std::to_string(r.too_bright) +
-             " texels brighter than 1e12 clamped to it (no output may overflow)");
+    warn_sanitized(env.name, r);
     env.max_texel = r.max_value;
-    if (env.image.width != 2 * env.image.height)
-        warn(env.name + ": " + std::to_string(env.image.width) + "x" +
-             std::to_string(env.image.height) +
-             " is not a 2:1 lat-long map; it is stretched over the sphere as it is");
-    if (3 * static_cast<uint64_t>(env.image.width) * static_cast<uint64_t>(env.image.height) >
-        kMaxDeviceIndex)
-        throw Error(env.name + ": " + std::to_string(env.image.width) + "x" +
-                    std::to_string(env.image.height) + " texels: more than the device indexes");
-    if (options.width < 0 || options.height < 0)
-        throw Error(env.name + ": distribution resolution " + std::to_string(options.width) + "x" +
-                    std::to_string(options.height) + " is out of range");
-    if (!(options.blur_sigma >= 0.0f && options.blur_sigma <= kMaxBlurSigma))
-        throw Error(env.name + ": blur " + std::to_string(options.blur_sigma) + " is outside [0, " +
-                    std::to_string(int(kMaxBlurSigma)) + "] texels");
-    try {
-        check_distribution_size(options.width > 0 ? options.width : env.image.width,
-                                options.height > 0 ? options.height : env.image.height);
-    } catch (const Error& e) {
-        throw Error(env.name + ": " + e.what());
-    }
+    check_map(env.name, env.image.width, env.image.height, options);
     Timer t;
     env.dist = build_env_distribution(env.image, options);
     env.build_seconds = t.seconds();
@@ -123,11 +152,93 @@ EnvMap make_envmap(std::string name, RgbImage image, const DistributionOptions& 
 }
 
 EnvMap load_envmap(const std::string& path, const DistributionOptions& options) {
-    Timer t;
-    RgbImage img = read_rgb_image(path);
-    double load = t.seconds();
-    EnvMap env = make_envmap(path, std::move(img), options);
-    env.load_seconds = load;
+    Timer total;
+    RgbImageReader reader(path);
+    const int w = reader.width(), h = reader.height();
+    check_map(path, w, h, options); // before a texel is decoded
+    EnvMap env;
+    env.name = path;
+    env.image.width = w;
+    env.image.height = h;
+
+    // Thread 0 decodes and sanitises the map a band of rows at a time; the others build the
+    // distribution's blocks as soon as the rows they read are final, and thread 0 joins them when
+    // the map is decoded. Only the builders ever wait, and only for rows, so a part run late on
+    // the calling thread (run_on_threads' fallback) never waits for one that has not run yet.
+    std::mutex mutex;
+    std::condition_variable rows_cv;
+    int rows_ready = 0;              // under mutex
+    std::atomic<bool> failed{false}; // a part threw: the others stop
+    std::mutex builder_mutex;
+    std::unique_ptr<DistributionBuilder> builder; // made by the first part to need it
+    std::atomic<int> next_block{0};
+    std::atomic<int64_t> build_ns{0}; // thread time spent on the distribution
+    SanitizeReport report;
+
+    auto timed = [&](auto&& work) {
+        Timer t;
+        work();
+        build_ns += static_cast<int64_t>(t.seconds() * 1e9);
+    };
+    auto build_blocks = [&] {
+        DistributionBuilder* b = nullptr;
+        {
+            std::lock_guard<std::mutex> lock(builder_mutex);
+            if (!builder && !failed)
+                timed([&] { builder = std::make_unique<DistributionBuilder>(w, h, options); });
+            b = builder.get();
+        }
+        if (!b)
+            return;
+        for (int k = next_block++; k < b->blocks(); k = next_block++) {
+            {
+                std::unique_lock<std::mutex> lock(mutex);
+                const int need = b->rows_needed(k);
+                rows_cv.wait(lock, [&] { return failed || rows_ready >= need; });
+            }
+            if (failed)
+                return;
+            timed([&] { b->build_block(env.image, k); });
+        }
+    };
+    // A map of one band and one block gains nothing from a second thread.
+    const int threads = h > 256 ? thread_count(options.threads) : 1;
+    run_on_threads(threads, [&](int part) {
+        try {
+            if (part == 0) {
+                env.image.rgb = prefaulted_vector<float>(static_cast<size_t>(w) * h * 3);
+                const int band = reader.band_rows();
+                for (int y = 0; y < h && !failed;) {
+                    float* rows = env.image.at(0, y);
+                    const int n = reader.read_rows(band, rows);
+                    sanitize_range(rows, static_cast<size_t>(n) * w, report);
+                    y += n;
+                    {
+                        std::lock_guard<std::mutex> lock(mutex);
+                        rows_ready = y;
+                    }
+                    rows_cv.notify_all();
+                }
+                env.load_seconds = total.seconds();
+            }
+            build_blocks();
+        } catch (...) {
+            {
+                std::lock_guard<std::mutex> lock(mutex);
+                failed = true;
+            }
+            rows_cv.notify_all();
+            throw;
+        }
+    });
+    const int builders = std::min(threads, builder->blocks());
+    timed([&] { env.dist = builder->finish(); });
+    env.build_seconds = build_ns * 1e-9 / builders;
+
+    warn_sanitized(path, report);
+    env.max_texel = report.max_value;
+    if (!env.dist.has_light())
+        warn(env.name + ": the map is black everywhere; it emits no light");
     return env;
 }
 

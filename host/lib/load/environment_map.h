@@ -21,6 +21,8 @@ struct EnvMap {
     float scale = 1.0f;
     float rotation_degrees = 0.0f; // about the up (+Y) axis
     float max_texel = 0.0f;        // the largest channel value of `image`
+    // load_envmap: seconds until the texels were decoded and sanitised, and the distribution's
+    // thread time over the threads that built it (it overlaps the decoding).
     double load_seconds = 0.0, build_seconds = 0.0;
 
     etk::EtkEnvMap desc() const;
@@ -36,7 +38,8 @@ struct SanitizeReport {
 SanitizeReport sanitize_texels(RgbImage& image);
 
 // Reads the map (warning once about texels it had to zero, and about a non-2:1 aspect) and
-// builds its distribution.
+// builds its distribution, on options.threads threads: the distribution's rows are built while
+// the map's later rows are still decoding. The result does not depend on the thread count.
 EnvMap load_envmap(const std::string& path, const DistributionOptions& options);
 
 // Wraps an in-memory image (e.g. the procedural sky) the same way.

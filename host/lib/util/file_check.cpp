@@ -1,4 +1,5 @@
 #include "util/file_check.h"
+#include "util/input_files.h"
 
 #include "util/error.h"
 
@@ -35,6 +36,8 @@ uint64_t check_stat(const std::string& path, const struct stat& st, uint64_t max
     if (size > max_bytes)
         throw Error(path + ": " + what + " is " + byte_text(size) + ", more than the " +
                     byte_text(max_bytes) + " read at most");
+    note_input_file(path, what, static_cast<unsigned long long>(st.st_dev),
+                    static_cast<unsigned long long>(st.st_ino));
     return size;
 }
 

@@ -2,6 +2,7 @@
 
 #include "util/error.h"
 #include "util/file_check.h"
+#include "util/output_batch.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -129,32 +130,25 @@ json read_json_file(const std::string& path, const char* what) {
     }
 }
 
-void write_json_file(const std::string& path, const json& j, int indent) {
-    namespace fs = std::filesystem;
-    const std::string tmp = path + ".tmp" + std::to_string(::getpid());
-    std::error_code ec;
-    if (fs::is_directory(path, ec))
-        throw Error(path + ": cannot write: it is a folder");
-    const fs::path dir = fs::path(path).parent_path();
-    if (!dir.empty() && !fs::is_directory(dir, ec))
-        throw Error(path + ": cannot write: folder '" + dir.string() + "' does not exist");
-    {
+void write_json_file(OutputBatch& batch, const std::string& path, const json& j, int indent) {
+    batch.write(path, [&](const std::string& file) {
         errno = 0;
-        std::ofstream f(tmp);
+        std::ofstream f(file);
         if (f)
             f << j.dump(indent, ' ', false, json::error_handler_t::replace) << "\n";
+        f.close();
         if (!f) {
             const int err = errno;
-            fs::remove(tmp, ec);
             throw Error(path + ": cannot write" +
                         (err ? std::string(": ") + std::strerror(err) : std::string()));
         }
-    }
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw Error(path + ": cannot write: " + ec.message());
-    }
+    });
+}
+
+void write_json_file(const std::string& path, const json& j, int indent) {
+    OutputBatch batch({path});
+    write_json_file(batch, path, j, indent);
+    batch.commit();
 }
 
 void warn_unknown_keys(const json& object, const std::vector<std::string>& known,

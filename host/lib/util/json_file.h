@@ -9,6 +9,8 @@
 
 namespace et {
 
+class OutputBatch;
+
 // Deepest nesting of arrays and objects accepted in an input file.
 constexpr int kMaxJsonDepth = 64;
 
@@ -17,9 +19,12 @@ constexpr int kMaxJsonDepth = 64;
 // numbers outside the range of a double (1e999); `what` names the kind of file in messages.
 nlohmann::json read_json_file(const std::string& path, const char* what = "JSON file");
 
-// Writes `j` (indented by `indent`) to a temporary file beside `path` and renames it into
-// place; on failure removes the temporary and throws et::Error naming `path`.
+// Writes `j` (indented by `indent`) all-or-nothing (util/output_batch.h): to a temporary beside
+// `path`, renamed into place; on failure throws et::Error naming `path`.
 void write_json_file(const std::string& path, const nlohmann::json& j, int indent = 2);
+// The same as one file of a batch, renamed into place with the others by batch.commit().
+void write_json_file(OutputBatch& batch, const std::string& path, const nlohmann::json& j,
+                     int indent = 2);
 
 // At most `max` bytes of `text` (cut at a UTF-8 character boundary), with "..." when cut.
 std::string excerpt(const std::string& text, size_t max = 60);

@@ -1,0 +1,175 @@
+#include "render/render_state.h"
+
+#include "opencl/kernel_sources.h"
+#include "util/error.h"
+#include "util/file_check.h"
+#include "util/output_batch.h"
+
+#include <xxhash.h>
+
+#include <cstring>
+#include <fstream>
+
+namespace et {
+namespace {
+
+// File layout (little-endian, as written by this host): magic, then the header fields below, then
+// the film's arrays (ETK_FILM_FIELDS order), then an XXH3 checksum of everything before it.
+constexpr char kMagic[16] = {'e', 'n', 'v', 't', 'r', 'a', 'c', 'e', '-', 's', 't', 'a', 't', 'e', '\n', 0};
+constexpr uint32_t kVersion = 1;
+constexpr uint32_t kByteOrder = 0x01020304;
+
+struct Header {
+    char magic[16];
+    uint32_t version, byte_order;
+    uint64_t key;
+    int32_t width, height, spp, pad;
+    uint64_t film_bytes;
+};
+
+uint64_t film_bytes(int width, int height) {
+    uint64_t per_pixel = 0;
+#define ET_FIELD_BYTES(type, name) per_pixel += sizeof(type);
+    ETK_FILM_FIELDS(ET_FIELD_BYTES)
+#undef ET_FIELD_BYTES
+    return per_pixel * static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
+}
+
+class Hash {
+  public:
+    Hash() : s_(XXH3_createState()) {
+        if (!s_)
+            throw std::bad_alloc();
+        XXH3_64bits_reset(s_);
+    }
+    ~Hash() { XXH3_freeState(s_); }
+    void add(const void* data, size_t bytes) { XXH3_64bits_update(s_, data, bytes); }
+    void add(const std::string& s) {
+        add_value(static_cast<uint64_t>(s.size()));
+        add(s.data(), s.size());
+    }
+    template <class T> void add_value(const T& v) { add(&v, sizeof v); }
+    uint64_t digest() const { return XXH3_64bits_digest(s_); }
+
+  private:
+    XXH3_state_t* s_;
+};
+
+} // namespace
+
+uint64_t render_key(const DeviceScene& scene) {
+    Hash h;
+    h.add(std::string("envtrace render key 1 " ENVTRACE_VERSION));
+    h.add(std::string(name_of(scene.settings.backend)));
+    h.add_value(static_cast<int64_t>(scene.settings.device));
+    for (const auto& [name, text] : embedded_kernel_sources()) { // a std::map: sorted
+        h.add(name);
+        h.add(text);
+    }
+    // The buffers are arrays of 4-byte scalars and float4: no padding bytes to hash.
+#define ET_HASH_BUFFER(type, name)                                                                 \
+    h.add(std::string(#name));                                                                     \
+    h.add_value(static_cast<uint64_t>(scene.name.size()));                                        \
+    h.add(scene.name.data(), scene.name.size() * sizeof(type));
+    ETK_SCENE_BUFFERS(ET_HASH_BUFFER)
+#undef ET_HASH_BUFFER
+    etk::EtkParams p = scene.params; // 4-byte members only (kernels/params.h)
+    p.sample_index = 0;
+    p.first_pixel = 0;
+    p.pad = 0;
+    h.add_value(p);
+    return h.digest();
+}
+
+void write_render_state(OutputBatch& batch, const std::string& path, const RenderState& state) {
+    const Film& f = state.film;
+    Header hd{};
+    std::memcpy(hd.magic, kMagic, sizeof kMagic);
+    hd.version = kVersion;
+    hd.byte_order = kByteOrder;
+    hd.key = state.key;
+    hd.width = f.width();
+    hd.height = f.height();
+    hd.spp = state.spp;
+    hd.film_bytes = film_bytes(f.width(), f.height());
+    batch.write(path, [&](const std::string& file) {
+        std::ofstream out(file, std::ios::binary);
+        Hash h;
+        auto put = [&](const void* data, size_t bytes) {
+            out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+            h.add(data, bytes);
+        };
+        put(&hd, sizeof hd);
+#define ET_PUT_FIELD(type, name) put(f.name.data(), f.name.size() * sizeof(type));
+        ETK_FILM_FIELDS(ET_PUT_FIELD)
+#undef ET_PUT_FIELD
+        const uint64_t sum = h.digest();
+        out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
+        out.flush();
+        out.close();
+        if (!out)
+            throw Error(path + ": cannot write the render state: " + std::strerror(errno));
+    });
+}
+
+void write_render_state(const std::string& path, const RenderState& state) {
+    OutputBatch batch({path}, {path});
+    write_render_state(batch, path, state);
+    batch.commit();
+}
+
+RenderState read_render_state(const std::string& path) {
+    const uint64_t size = check_regular_file(path, uint64_t(1) << 40, "render state");
+    const std::string bad = path + ": not an intact envtrace render state: ";
+    Header hd{};
+    if (size < sizeof hd + sizeof(uint64_t))
+        throw Error(bad + "too short (" + byte_text(size) + ")");
+    std::ifstream in(path, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(&hd), sizeof hd))
+        throw Error(path + ": cannot read the render state");
+    if (std::memcmp(hd.magic, kMagic, sizeof kMagic) != 0)
+        throw Error(bad + "it does not start like one");
+    if (hd.byte_order != kByteOrder)
+        throw Error(bad + "written on a machine of the other byte order");
+    if (hd.version != kVersion)
+        throw Error(bad + "format version " + std::to_string(hd.version) + ", this envtrace reads " +
+                    std::to_string(kVersion));
+    if (hd.width <= 0 || hd.height <= 0 || hd.width > 65536 || hd.height > 65536 || hd.spp < 0 ||
+        hd.film_bytes != film_bytes(hd.width, hd.height) ||
+        size != sizeof hd + hd.film_bytes + sizeof(uint64_t))
+        throw Error(bad + "its header does not match its size (" + byte_text(size) +
+                    "): truncated or corrupt");
+    RenderState st;
+    st.key = hd.key;
+    st.spp = hd.spp;
+    st.film = Film(hd.width, hd.height);
+    Hash h;
+    h.add(&hd, sizeof hd);
+#define ET_GET_FIELD(type, name)                                                                   \
+    in.read(reinterpret_cast<char*>(st.film.name.data()),                                          \
+            static_cast<std::streamsize>(st.film.name.size() * sizeof(type)));                     \
+    h.add(st.film.name.data(), st.film.name.size() * sizeof(type));
+    ETK_FILM_FIELDS(ET_GET_FIELD)
+#undef ET_GET_FIELD
+    uint64_t sum = 0;
+    in.read(reinterpret_cast<char*>(&sum), sizeof sum);
+    if (!in)
+        throw Error(path + ": cannot read the render state (truncated while read?)");
+    if (sum != h.digest())
+        throw Error(bad + "its checksum does not match: corrupt");
+    return st;
+}
+
+void check_render_state(const RenderState& state, const DeviceScene& scene,
+                        const std::string& path) {
+    if (state.film.width() != scene.width() || state.film.height() != scene.height())
+        throw Error(path + ": the render state is of a " + std::to_string(state.film.width()) +
+                    "x" + std::to_string(state.film.height()) + " film, this render is " +
+                    std::to_string(scene.width()) + "x" + std::to_string(scene.height()));
+    if (state.key != render_key(scene))
+        throw Error(path + ": the render state is of another render: the scene, its inputs, the "
+                           "settings (depth, strategy, heuristic, sampler, seed), the back end or "
+                           "envtrace itself differ; resuming would not give the same image");
+}
+
+} // namespace et

@@ -1,0 +1,40 @@
+// A render's resumable state: the film's sums, the samples per pixel reached, and a key of
+// everything the film depends on. The sampler is a function of pixel, sample index and
+// dimension, so a render resumed from a state and run to N samples is bit-identical to one that
+// ran to N without a break (Renderer::resume).
+#pragma once
+#include "prepare/device_scene.h"
+#include "render/film.h"
+
+#include <cstdint>
+#include <string>
+
+namespace et {
+
+class OutputBatch;
+
+// A hash (XXH3, 64 bits) of what the film's values depend on: every scene buffer, the per-pass
+// parameters (camera, film size, environment, depth, strategy, heuristic, sampler, seed), the
+// back end and device, and envtrace's version and kernel sources. Not the target spp, time
+// limit, paths in flight or threads, which do not change any sample.
+uint64_t render_key(const DeviceScene& scene);
+
+struct RenderState {
+    uint64_t key = 0;
+    int spp = 0; // samples per pixel in the film
+    Film film;
+};
+
+// Writes the state as one file of `batch` (binary: header, film sums, checksum).
+void write_render_state(OutputBatch& batch, const std::string& path, const RenderState& state);
+// Written on its own, atomically.
+void write_render_state(const std::string& path, const RenderState& state);
+
+// Reads a state; throws et::Error naming the file on anything but an intact state file.
+RenderState read_render_state(const std::string& path);
+
+// Throws et::Error unless `state` continues a render of `scene` (same key and film size).
+void check_render_state(const RenderState& state, const DeviceScene& scene,
+                        const std::string& path);
+
+} // namespace et

@@ -1,0 +1,153 @@
+#include "util/output_batch.h"
+
+#include "util/error.h"
+#include "util/input_files.h"
+
+#include <cerrno>
+#include <csignal>
+#include <filesystem>
+#include <pthread.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace et {
+namespace {
+
+std::string folder_of(const std::string& target) {
+    const fs::path dir = fs::path(target).parent_path();
+    return dir.empty() ? std::string(".") : dir.string();
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+    struct stat sa, sb;
+    if (::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0)
+        return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    // Neither exists yet: compare the names with the folders resolved.
+    std::error_code ec1, ec2;
+    const fs::path ca = fs::weakly_canonical(a, ec1), cb = fs::weakly_canonical(b, ec2);
+    return !ec1 && !ec2 && ca == cb;
+}
+
+// Holds SIGINT, SIGTERM and SIGHUP back while the renames run (they arrive afterwards).
+class SignalHold {
+  public:
+    SignalHold() {
+        sigset_t set;
+        sigemptyset(&set);
+        sigaddset(&set, SIGINT);
+        sigaddset(&set, SIGTERM);
+        sigaddset(&set, SIGHUP);
+        pthread_sigmask(SIG_BLOCK, &set, &old_);
+    }
+    ~SignalHold() { pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
+
+  private:
+    sigset_t old_;
+};
+
+} // namespace
+
+std::string temporary_path(const std::string& target, long pid) {
+    const fs::path p(target);
+    return (fs::path(folder_of(target)) /
+            ("." + p.stem().string() + ".tmp" + std::to_string(pid) + p.extension().string()))
+        .string();
+}
+
+int remove_stale_temporaries(const std::string& target) {
+    const fs::path p(target);
+    const std::string prefix = "." + p.stem().string() + ".tmp", suffix = p.extension().string();
+    std::error_code ec;
+    fs::directory_iterator it(folder_of(target), ec), end;
+    int removed = 0;
+    for (; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) ||
+            name.compare(name.size() - suffix.size(), suffix.size(), suffix))
+            continue;
+        const std::string digits =
+            name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+        if (digits.empty() || digits.size() > 9 ||
+            digits.find_first_not_of("0123456789") != std::string::npos)
+            continue;
+        const long pid = std::stol(digits);
+        // A live process (this one, or another render writing the same output) keeps its file.
+        if (pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
+            continue;
+        std::error_code rm;
+        if (it->is_regular_file(rm) && fs::remove(it->path(), rm))
+            ++removed;
+    }
+    return removed;
+}
+
+OutputBatch::OutputBatch(const std::vector<std::string>& targets,
+                         const std::vector<std::string>& may_replace) {
+    for (const auto& t : targets) {
+        std::error_code ec;
+        if (t.empty())
+            throw Error("an output path is empty");
+        if (fs::is_directory(t, ec))
+            throw Error(t + ": cannot write: it is a folder");
+        const std::string dir = folder_of(t);
+        if (!fs::is_directory(dir, ec))
+            throw Error(t + ": cannot write: folder '" + dir + "' does not exist");
+        bool replaceable = false;
+        for (const auto& m : may_replace)
+            replaceable = replaceable || same_file(t, m);
+        const std::string input = input_file_named(t);
+        if (!input.empty() && !replaceable)
+            throw Error(t + ": refusing to write an output over " + input +
+                        ", an input of this run; choose another output name");
+        for (const auto& e : entries_)
+            if (same_file(e.target, t))
+                throw Error(t + ": two outputs of this run would be the same file ('" + e.target +
+                            "' and '" + t + "')");
+        entries_.push_back({t, temporary_path(t, ::getpid())});
+    }
+    for (const auto& e : entries_)
+        remove_stale_temporaries(e.target);
+}
+
+OutputBatch::~OutputBatch() {
+    if (committed_)
+        return;
+    for (const auto& e : entries_) {
+        std::error_code ec;
+        fs::remove(e.temporary, ec);
+    }
+}
+
+void OutputBatch::write(const std::string& target,
+                        const std::function<void(const std::string&)>& writer) {
+    for (auto& e : entries_)
+        if (e.target == target) {
+            std::error_code ec;
+            fs::remove(e.temporary, ec);
+            e.written = false;
+            writer(e.temporary);
+            if (!fs::is_regular_file(e.temporary, ec))
+                throw Error(target + ": cannot write: the writer left no file");
+            e.written = true;
+            return;
+        }
+    throw Error(target + ": not an output reserved by this batch (a bug)");
+}
+
+void OutputBatch::commit() {
+    for (const auto& e : entries_)
+        if (!e.written)
+            throw Error(e.target + ": was not written (a bug)");
+    SignalHold hold;
+    for (const auto& e : entries_) {
+        std::error_code ec;
+        fs::rename(e.temporary, e.target, ec);
+        if (ec)
+            throw Error(e.target + ": cannot write: " + ec.message());
+    }
+    committed_ = true;
+}
+
+} // namespace et

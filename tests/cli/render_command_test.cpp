@@ -1,0 +1,251 @@
+// `envtrace render` under interruption and resumption, from the command line: SIGINT / SIGTERM
+// keep the samples so far (exit 130 / 143, metadata saying so); a render killed with SIGKILL and
+// resumed from its state equals the uninterrupted render bit for bit; a state of another render
+// is refused; a time limit shorter than a pass still renders a sample; no output replaces an
+// input of the run.
+#include "cli_run.h"
+#include "image/image_io.h"
+#include "render/render_state.h"
+#include "util/output_batch.h"
+#include "test_data.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sys/wait.h>
+#include <thread>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void write_file(const std::string& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+}
+std::string read_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// DIR/maps/NAME (a small sky, brighter towards +Y) and DIR/s.json rendering a sphere under it.
+std::string write_scene(const std::string& dir, const std::string& map_name = "sky.exr") {
+    fs::create_directories(dir + "/maps");
+    std::vector<float> sky(32 * 16 * 3);
+    for (size_t i = 0; i < sky.size(); ++i)
+        sky[i] = 0.2f + 2.0f * float(16 - (i / 3) / 32) / 16.0f;
+    et::write_image(dir + "/maps/" + map_name, 32, 16, 3, sky);
+    write_file(dir + "/s.json", R"({
+  "camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
+  "film": {"width": 16, "height": 12},
+  "environment": {"map": ")" + dir + "/maps/" + map_name +
+                                    R"("},
+  "materials": {"m": {"type": "plastic", "albedo": 0.6, "roughness": 0.3}},
+  "shapes": [{"type": "sphere", "radius": 0.6, "center": [0, 0.6, 0], "material": "m"},
+             {"type": "quad", "center": [0, 0, 0], "size": 6, "material": "m"}],
+  "render": {"max_depth": 4}
+}
+)");
+    return dir + "/s.json";
+}
+
+std::vector<std::string> args(const std::string& scene, const std::string& out,
+                              std::vector<std::string> more) {
+    std::vector<std::string> a = {"render", scene, "--backend", "cpu", "--threads", "2", "-o", out};
+    a.insert(a.end(), more.begin(), more.end());
+    return a;
+}
+
+// The image's envtrace:KEY metadata, or "" when absent.
+std::string metadata(const std::string& exr, const std::string& key) {
+    auto in = OIIO::ImageInput::open(exr);
+    if (!in)
+        return "";
+    return in->spec().get_string_attribute("envtrace:" + key);
+}
+
+// Waits (up to 60 s) until `path` exists.
+bool wait_for(const std::string& path) {
+    for (int i = 0; i < 12000; ++i) {
+        if (fs::exists(path))
+            return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return false;
+}
+
+// Names in dir that look like temporaries (".NAME.tmpPID.EXT").
+std::vector<std::string> temporaries_in(const std::string& dir) {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string n = e.path().filename().string();
+        if (n[0] == '.' && n.find(".tmp") != std::string::npos)
+            out.push_back(n);
+    }
+    return out;
+}
+
+void expect_exit(const ett::CliRun& r, int code) {
+    ASSERT_FALSE(r.timed_out) << "hung";
+    ASSERT_TRUE(r.exited()) << "killed by signal " << WTERMSIG(r.status) << "; stderr: " << r.err;
+    ASSERT_EQ(r.code(), code) << r.err;
+}
+
+// SIGINT and SIGTERM while rendering: the image of the samples so far, the status 128 + signal.
+TEST(RenderCommand, SignalsKeepTheSamplesSoFar) {
+    for (const int sig : {SIGINT, SIGTERM}) {
+        const std::string dir = ett::scratch_dir("render_signal_" + std::to_string(sig));
+        const std::string scene = write_scene(dir);
+        // --checkpoint 0 writes the state after every pass: its appearance says rendering runs.
+        const ett::CliProcess p = ett::start_envtrace(
+            args(scene, dir + "/out.exr", {"--spp", "16000000", "--checkpoint", "0"}), dir);
+        ASSERT_TRUE(wait_for(dir + "/out.envtrace-state"));
+        kill(p.pid, sig);
+        const ett::CliRun r = ett::finish_envtrace(p, 120);
+        expect_exit(r, 128 + sig);
+        EXPECT_NE(r.err.find(sig == SIGINT ? "SIGINT" : "SIGTERM"), std::string::npos) << r.err;
+        const int spp = std::stoi("0" + metadata(dir + "/out.exr", "spp"));
+        EXPECT_GE(spp, 1);
+        EXPECT_LT(spp, 16000000);
+        EXPECT_EQ(metadata(dir + "/out.exr", "interrupted"), sig == SIGINT ? "SIGINT" : "SIGTERM");
+        EXPECT_TRUE(fs::exists(dir + "/out.png"));
+        // The state written at the end holds the same samples as the image.
+        EXPECT_EQ(et::read_render_state(dir + "/out.envtrace-state").spp, spp);
+        EXPECT_TRUE(temporaries_in(dir).empty()) << temporaries_in(dir)[0];
+    }
+}
+
+// A render killed outright (SIGKILL, nothing caught) and resumed from its last checkpoint equals
+// the render that was never interrupted, bit for bit; the killed run's temporaries are removed.
+TEST(RenderCommand, KilledRenderResumesBitIdentical) {
+    const std::string dir = ett::scratch_dir("render_resume");
+    const std::string scene = write_scene(dir);
+    const std::string state = dir + "/run.envtrace-state";
+    const ett::CliProcess p = ett::start_envtrace(
+        args(scene, dir + "/killed.exr",
+             {"--spp", "16000000", "--checkpoint", "0", "--state", state, "--seed", "7"}),
+        dir);
+    ASSERT_TRUE(wait_for(state));
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    kill(p.pid, SIGKILL);
+    const ett::CliRun killed = ett::finish_envtrace(p, 60);
+    ASSERT_TRUE(WIFSIGNALED(killed.status) && WTERMSIG(killed.status) == SIGKILL);
+    EXPECT_FALSE(fs::exists(dir + "/killed.exr"));
+    const int reached = et::read_render_state(state).spp;
+    ASSERT_GE(reached, 1);
+    // A temporary as a kill in the middle of a checkpoint leaves it.
+    write_file(et::temporary_path(state, 999999), "half a state");
+
+    const int total = reached + 9;
+    expect_exit(ett::run_envtrace(args(scene, dir + "/resumed.exr",
+                                       {"--spp", std::to_string(total), "--resume", "--state",
+                                        state, "--seed", "7"}),
+                                  dir, 120),
+                0);
+    EXPECT_EQ(metadata(dir + "/resumed.exr", "resumed_from_spp"), std::to_string(reached));
+    EXPECT_EQ(metadata(dir + "/resumed.exr", "spp"), std::to_string(total));
+    EXPECT_EQ(et::read_render_state(state).spp, total);
+    EXPECT_TRUE(temporaries_in(dir).empty()) << temporaries_in(dir)[0];
+
+    expect_exit(ett::run_envtrace(args(scene, dir + "/whole.exr",
+                                       {"--spp", std::to_string(total), "--seed", "7"}),
+                                  dir, 120),
+                0);
+    const et::RgbImage a = et::read_rgb_image(dir + "/resumed.exr");
+    const et::RgbImage b = et::read_rgb_image(dir + "/whole.exr");
+    ASSERT_EQ(a.rgb.size(), b.rgb.size());
+    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0)
+        << "the resumed render differs from the uninterrupted one";
+    double sum = 0;
+    for (float v : a.rgb)
+        sum += v;
+    EXPECT_GT(sum, 0.0);
+}
+
+// A state that does not continue this render (another seed, another scene, more samples than
+// asked for, a damaged file) is refused by name, and left as it was.
+TEST(RenderCommand, ForeignStatesAreRefused) {
+    const std::string dir = ett::scratch_dir("render_foreign_state");
+    const std::string scene = write_scene(dir);
+    const std::string state = dir + "/out.envtrace-state";
+    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr", {"--spp", "4", "--checkpoint",
+                                                                 "1000", "--seed", "1"}),
+                                  dir),
+                0);
+    const std::string bytes = read_file(state);
+    ASSERT_FALSE(bytes.empty());
+    auto refused = [&](std::vector<std::string> more, const std::string& words) {
+        more.push_back("--resume");
+        const ett::CliRun r = ett::run_envtrace(args(scene, dir + "/out.exr", more), dir);
+        expect_exit(r, 1);
+        EXPECT_NE(r.err.find("envtrace: error: "), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(state), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+        EXPECT_TRUE(read_file(state) == bytes) << "the state was changed";
+    };
+    refused({"--spp", "8", "--seed", "2"}, "of another render");
+    refused({"--spp", "8", "--seed", "1", "--max-depth", "2"}, "of another render");
+    refused({"--spp", "2", "--seed", "1"}, "more than");
+    // The right state resumes.
+    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr",
+                                       {"--spp", "8", "--seed", "1", "--resume"}),
+                                  dir),
+                0);
+    const std::string missing = dir + "/none.envtrace-state";
+    const ett::CliRun r = ett::run_envtrace(
+        args(scene, dir + "/out.exr", {"--spp", "8", "--resume", "--state", missing}), dir);
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find(missing), std::string::npos) << r.err;
+}
+
+// A time limit shorter than one pass renders one sample (never a black image with exit 0).
+TEST(RenderCommand, TinyTimeLimitStillRendersASample) {
+    const std::string dir = ett::scratch_dir("render_time_limit");
+    const std::string scene = write_scene(dir);
+    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr", {"--time-limit", "1e-9"}), dir),
+                0);
+    EXPECT_EQ(metadata(dir + "/out.exr", "spp"), "1");
+    const et::RgbImage img = et::read_rgb_image(dir + "/out.exr");
+    double sum = 0;
+    for (float v : img.rgb)
+        sum += v;
+    EXPECT_GT(sum, 0.0);
+}
+
+// No output (the image, its PNG or EXR twin, --stats, the state) may be an input of the run:
+// refused before rendering, the input unchanged, nothing written.
+TEST(RenderCommand, OutputsNeverReplaceInputs) {
+    const std::string dir = ett::scratch_dir("render_inputs");
+    for (const std::string map_name : {"s.exr", "s.png"}) {
+        const std::string scene = write_scene(dir, map_name);
+        const std::string map = dir + "/maps/" + map_name, map_bytes = read_file(map);
+        const std::string scene_bytes = read_file(scene);
+        auto refused = [&](const std::string& out, std::vector<std::string> more) {
+            more.insert(more.end(), {"--spp", "1"});
+            const ett::CliRun r = ett::run_envtrace(args(scene, out, more), dir);
+            expect_exit(r, 1);
+            EXPECT_NE(r.err.find("an input of this run"), std::string::npos) << r.err;
+            EXPECT_TRUE(read_file(map) == map_bytes) << "the map was changed";
+            EXPECT_TRUE(read_file(scene) == scene_bytes) << "the scene was changed";
+            EXPECT_TRUE(temporaries_in(dir).empty());
+            EXPECT_TRUE(temporaries_in(dir + "/maps").empty());
+        };
+        refused(map, {});                                    // -o the map itself
+        // Outputs whose EXR or PNG twin is the map.
+        const std::vector<std::string> twins =
+            map_name == "s.exr" ? std::vector<std::string>{"s.png", "s.jpg"}
+                                : std::vector<std::string>{"s.exr", "./s.pfm", "s.hdr"};
+        for (const auto& t : twins)
+            refused(dir + "/maps/" + t, {});
+        refused(dir + "/out.exr", {"--stats", scene});       // --stats over the scene
+        refused(dir + "/out.exr", {"--checkpoint", "1", "--state", map}); // the state
+        EXPECT_FALSE(fs::exists(dir + "/out.exr"));
+    }
+}
+
+} // namespace

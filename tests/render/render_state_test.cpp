@@ -1,0 +1,173 @@
+// The resumable render state (host/lib/render/render_state.h): a round trip keeps every film
+// value bit for bit; a truncated, corrupted or foreign file is refused with a message naming it;
+// the key changes with anything a sample depends on and not with what it does not.
+#include "render/render_state.h"
+#include "render_util.h"
+#include "test_data.h"
+#include "util/error.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+et::Scene small_scene() {
+    et::Scene s =
+        ett::base_scene(12, 8, et::make_envmap("sky", ett::constant_image(32, 16, 1.0f), {}));
+    s.camera.eye = {0, 1, 3};
+    s.materials.push_back(ett::diffuse(0.5f));
+    const glm::vec3 p[3] = {{-2, 0, -2}, {2, 0, -2}, {0, 0, 2}};
+    const glm::vec3 n[3] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+    et::add_triangle(s.triangles, p, n, 0);
+    s.settings.max_depth = 3;
+    s.settings.backend = et::Backend::cpu;
+    return s;
+}
+
+std::string read_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+void write_bytes(const std::string& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary) << bytes;
+}
+
+// The error thrown by reading `path`, or "" if it was read.
+std::string read_error(const std::string& path) {
+    try {
+        et::read_render_state(path);
+    } catch (const et::Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(RenderState, RoundTripIsBitExact) {
+    const std::string dir = ett::scratch_dir("render_state_roundtrip");
+    const et::Scene s = small_scene();
+    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+    auto r = et::make_renderer(ds);
+    for (int i = 0; i < 5; ++i)
+        r->render_sample(i);
+    et::RenderState st{et::render_key(ds), 5, r->film()};
+    et::write_render_state(dir + "/a.envtrace-state", st);
+    const et::RenderState back = et::read_render_state(dir + "/a.envtrace-state");
+    EXPECT_EQ(back.key, st.key);
+    EXPECT_EQ(back.spp, 5);
+    ASSERT_EQ(back.film.width(), 12);
+    ASSERT_EQ(back.film.height(), 8);
+    ASSERT_EQ(back.film.film_sum.size(), st.film.film_sum.size());
+    EXPECT_EQ(std::memcmp(back.film.film_sum.data(), st.film.film_sum.data(),
+                          st.film.film_sum.size() * sizeof(et::float4)),
+              0);
+    EXPECT_EQ(std::memcmp(back.film.film_sq.data(), st.film.film_sq.data(),
+                          st.film.film_sq.size() * sizeof(et::float4)),
+              0);
+    EXPECT_NO_THROW(et::check_render_state(back, ds, "a"));
+    // Nothing but the state itself is left in the folder (no temporary).
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+}
+
+TEST(RenderState, DamagedFilesAreRefusedByName) {
+    const std::string dir = ett::scratch_dir("render_state_damaged");
+    const et::Scene s = small_scene();
+    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+    et::RenderState st{et::render_key(ds), 3, et::Film(12, 8)};
+    st.film.film_sum[7] = etk::make_float4(1, 2, 3, 3);
+    const std::string good = dir + "/good.envtrace-state";
+    et::write_render_state(good, st);
+    const std::string bytes = read_bytes(good);
+    ASSERT_GT(bytes.size(), 100u);
+
+    const std::string p = dir + "/bad.envtrace-state";
+    // Every truncation, from empty to one byte short.
+    for (size_t n : {size_t(0), size_t(5), size_t(16), size_t(40), bytes.size() / 2,
+                     bytes.size() - 1}) {
+        write_bytes(p, bytes.substr(0, n));
+        const std::string e = read_error(p);
+        EXPECT_NE(e.find(p), std::string::npos) << n << ": " << e;
+    }
+    // One flipped bit anywhere: in the header, in the film, in the checksum.
+    for (size_t at : {size_t(0), size_t(20), bytes.size() / 2, bytes.size() - 1}) {
+        std::string b = bytes;
+        b[at] = static_cast<char>(b[at] ^ 0x10);
+        write_bytes(p, b);
+        const std::string e = read_error(p);
+        EXPECT_NE(e.find(p), std::string::npos) << at << ": " << e;
+    }
+    // Trailing bytes, another file type, a missing file.
+    write_bytes(p, bytes + "x");
+    EXPECT_NE(read_error(p).find(p), std::string::npos);
+    write_bytes(p, "P3\n1 1\n255\n0 0 0\n");
+    EXPECT_NE(read_error(p).find(p), std::string::npos);
+    EXPECT_NE(read_error(dir + "/missing").find("missing"), std::string::npos);
+    EXPECT_EQ(read_error(good), "");
+}
+
+TEST(RenderState, KeyFollowsWhatSamplesDependOn) {
+    const et::Scene s = small_scene();
+    const uint64_t base = et::render_key(et::prepare_device_scene(s, s.settings));
+    EXPECT_EQ(base, et::render_key(et::prepare_device_scene(s, s.settings)));
+
+    auto key_with = [&](auto change) {
+        et::Scene c = s;
+        change(c, c.settings);
+        return et::render_key(et::prepare_device_scene(c, c.settings));
+    };
+    // Not: the target spp, the time limit, paths in flight, threads.
+    EXPECT_EQ(base, key_with([](et::Scene&, et::RenderSettings& st) {
+                  st.spp = 999;
+                  st.time_limit = 3;
+                  st.paths = 17;
+                  st.threads = 1;
+              }));
+    // But: the seed, the depth, the strategy, the sampler, the camera, a material, geometry, the
+    // map's texels, the back end.
+    EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) { st.seed += 1; }));
+    EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) { st.max_depth = 2; }));
+    EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) {
+                  st.strategy = et::Strategy::bsdf;
+              }));
+    EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) {
+                  st.sampler = st.sampler == et::SamplerKind::random ? et::SamplerKind::sobol
+                                                                : et::SamplerKind::random;
+              }));
+    EXPECT_NE(base, key_with([](et::Scene& c, et::RenderSettings&) { c.camera.eye.x += 1e-3f; }));
+    EXPECT_NE(base, key_with([](et::Scene& c, et::RenderSettings&) {
+                  c.materials[0] = ett::diffuse(0.51f);
+              }));
+    EXPECT_NE(base, key_with([](et::Scene& c, et::RenderSettings&) {
+                  const glm::vec3 p[3] = {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
+                  const glm::vec3 n[3] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+                  et::add_triangle(c.triangles, p, n, 0);
+              }));
+    EXPECT_NE(base, key_with([](et::Scene& c, et::RenderSettings&) {
+                  c.env = et::make_envmap("sky", ett::constant_image(32, 16, 1.5f), {});
+              }));
+    EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) {
+                  st.backend = et::Backend::opencl;
+              }));
+}
+
+TEST(RenderState, ForeignStateIsRefused) {
+    const et::Scene s = small_scene();
+    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+    et::RenderSettings other = s.settings;
+    other.seed += 1;
+    const et::DeviceScene ds2 = et::prepare_device_scene(s, other);
+    et::RenderState st{et::render_key(ds2), 3, et::Film(12, 8)};
+    try {
+        et::check_render_state(st, ds, "x.envtrace-state");
+        FAIL() << "accepted a state of another seed";
+    } catch (const et::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("x.envtrace-state"), std::string::npos) << e.what();
+    }
+}
+
+} // namespace

@@ -1,0 +1,142 @@
+// Outputs written all-or-nothing (host/lib/util/output_batch.h): nothing reaches a target before
+// commit; an abandoned batch leaves neither targets nor temporaries; inputs of the run, folders,
+// missing folders and two names of one file are refused before anything is written; stale
+// temporaries of dead processes are removed, those of live ones kept.
+#include "util/output_batch.h"
+#include "util/error.h"
+#include "util/file_check.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void put(const std::string& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+}
+std::string get(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+size_t entries(const std::string& dir) {
+    return static_cast<size_t>(
+        std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+auto writes(const std::string& text) {
+    return [text](const std::string& tmp) { put(tmp, text); };
+}
+// The message of the et::Error thrown by f, or "" when none was.
+template <class F> std::string error_of(F f) {
+    try {
+        f();
+    } catch (const et::Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(OutputBatch, NothingReachesATargetBeforeCommit) {
+    const std::string dir = ett::scratch_dir("batch_commit");
+    put(dir + "/a.exr", "old a");
+    put(dir + "/b.png", "old b");
+    {
+        et::OutputBatch batch({dir + "/a.exr", dir + "/b.png"});
+        batch.write(dir + "/a.exr", writes("new a"));
+        EXPECT_EQ(get(dir + "/a.exr"), "old a");
+        batch.write(dir + "/b.png", writes("new b"));
+        EXPECT_EQ(get(dir + "/b.png"), "old b");
+        batch.commit();
+    }
+    EXPECT_EQ(get(dir + "/a.exr"), "new a");
+    EXPECT_EQ(get(dir + "/b.png"), "new b");
+    EXPECT_EQ(entries(dir), 2u) << "a temporary was left";
+}
+
+TEST(OutputBatch, AFailingWriterLeavesEveryOldOutput) {
+    const std::string dir = ett::scratch_dir("batch_abandon");
+    put(dir + "/a.exr", "old a");
+    put(dir + "/b.png", "old b");
+    const std::string e = error_of([&] {
+        et::OutputBatch batch({dir + "/a.exr", dir + "/b.png", dir + "/c.json"});
+        batch.write(dir + "/a.exr", writes("new a"));
+        batch.write(dir + "/b.png", [](const std::string&) { throw et::Error("b: disk full"); });
+        batch.commit();
+    });
+    EXPECT_EQ(e, "b: disk full");
+    EXPECT_EQ(get(dir + "/a.exr"), "old a");
+    EXPECT_EQ(get(dir + "/b.png"), "old b");
+    EXPECT_FALSE(fs::exists(dir + "/c.json"));
+    EXPECT_EQ(entries(dir), 2u) << "a temporary was left";
+    // A commit with a target not written is a bug, and writes nothing either.
+    EXPECT_NE(error_of([&] {
+                  et::OutputBatch batch({dir + "/a.exr", dir + "/b.png"});
+                  batch.write(dir + "/a.exr", writes("new a"));
+                  batch.commit();
+              }).find("b.png"),
+              std::string::npos);
+    EXPECT_EQ(get(dir + "/a.exr"), "old a");
+    EXPECT_EQ(entries(dir), 2u);
+}
+
+TEST(OutputBatch, RefusesInputsFoldersAndTwins) {
+    const std::string dir = ett::scratch_dir("batch_refuse");
+    put(dir + "/map.exr", "texels");
+    et::check_regular_file(dir + "/map.exr", et::kGiB, "environment map"); // as every reader does
+    // The input itself, under another spelling, and through a hard link.
+    for (const std::string& t : {dir + "/map.exr", dir + "/./map.exr", dir + "/link.exr"}) {
+        if (t == dir + "/link.exr")
+            fs::create_hard_link(dir + "/map.exr", t);
+        const std::string e = error_of([&] { et::OutputBatch b({dir + "/out.png", t}); });
+        EXPECT_NE(e.find("an input of this run"), std::string::npos) << t << ": " << e;
+        EXPECT_NE(e.find("map.exr"), std::string::npos) << e;
+    }
+    // ... unless the caller says it may be replaced (a render state continuing itself).
+    EXPECT_EQ(error_of([&] { et::OutputBatch b({dir + "/map.exr"}, {dir + "/map.exr"}); }), "");
+    // Two targets that are one file; a folder; a missing folder; an empty name.
+    EXPECT_NE(error_of([&] { et::OutputBatch b({dir + "/x.exr", dir + "/../" +
+                                                fs::path(dir).filename().string() + "/x.exr"}); })
+                  .find("same file"),
+              std::string::npos);
+    fs::create_directories(dir + "/folder.exr");
+    EXPECT_NE(error_of([&] { et::OutputBatch b({dir + "/folder.exr"}); }).find("is a folder"),
+              std::string::npos);
+    EXPECT_NE(error_of([&] { et::OutputBatch b({dir + "/none/x.exr"}); }).find("does not exist"),
+              std::string::npos);
+    EXPECT_NE(error_of([&] { et::OutputBatch b({""}); }), "");
+    EXPECT_EQ(get(dir + "/map.exr"), "texels");
+}
+
+TEST(OutputBatch, StaleTemporariesOfDeadProcessesAreRemoved) {
+    const std::string dir = ett::scratch_dir("batch_stale");
+    // A process that has ended: its pid is free (until reused, which the test cannot see).
+    const pid_t child = fork();
+    if (child == 0)
+        _exit(0);
+    waitpid(child, nullptr, 0);
+    const std::string dead = et::temporary_path(dir + "/out.exr", child);
+    const std::string live = et::temporary_path(dir + "/out.exr", getppid());
+    const std::string other = et::temporary_path(dir + "/other.exr", child);
+    EXPECT_EQ(dead, dir + "/.out.tmp" + std::to_string(child) + ".exr");
+    put(dead, "half");
+    put(live, "in progress elsewhere");
+    put(other, "not ours");
+    put(dir + "/.out.tmpabc.exr", "not a pid");
+    {
+        et::OutputBatch batch({dir + "/out.exr"});
+        EXPECT_FALSE(fs::exists(dead));
+        EXPECT_TRUE(fs::exists(live));
+        EXPECT_TRUE(fs::exists(other));
+        EXPECT_TRUE(fs::exists(dir + "/.out.tmpabc.exr"));
+    }
+    EXPECT_FALSE(fs::exists(dir + "/out.exr"));
+}
+
+} // namespace
