@@ -35,7 +35,13 @@ int main(int argc, char** argv) {
         std::cerr << "envtrace: error: out of memory\n";
         return 1;
     } catch (const std::exception& e) {
+        // Not one of ours: a library or standard exception a loader did not turn into
+        // et::Error. Still one line and exit status 1, with what it says.
         std::cerr << "envtrace: error: " << e.what() << "\n";
+        return 1;
+    } catch (...) {
+        // Anything else thrown (not derived from std::exception): never std::terminate.
+        std::cerr << "envtrace: error: unexpected exception (not a std::exception)\n";
         return 1;
     }
     return globals.exit_code;

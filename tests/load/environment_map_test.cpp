@@ -67,6 +67,46 @@ void write_bytes(const std::string& path, const std::string& bytes) {
     std::ofstream(path, std::ios::binary) << bytes;
 }
 
+std::string be32(uint32_t v) {
+    return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+}
+
+std::string png_chunk(const std::string& type, const std::string& data) {
+    const std::string td = type + data;
+    uint32_t crc = 0xffffffffu;
+    for (unsigned char c : td) {
+        crc ^= c;
+        for (int k = 0; k < 8; ++k)
+            crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    return be32(static_cast<uint32_t>(data.size())) + td + be32(~crc);
+}
+
+// An 8-bit PNG (colour type 0 grey, 2 RGB) whose header declares w x h pixels and whose data is a
+// zlib stream of one stored (uncompressed) deflate block of 5000 zero bytes: far less than the
+// pixels it declares.
+std::string png_declaring(uint32_t w, uint32_t h, char colour_type) {
+    const std::string ihdr = be32(w) + be32(h) + std::string{8, colour_type, 0, 0, 0};
+    std::string idat = "\x78\x01";
+    idat += std::string{1, char(5000 & 0xff), char(5000 >> 8), char(~5000 & 0xff),
+                        char((~5000 >> 8) & 0xff)};
+    idat += std::string(5000, '\0');
+    idat += be32(0x1387138d); // adler32 of the zeros is not checked before the size
+    return "\x89PNG\r\n\x1a\n" + png_chunk("IHDR", ihdr) + png_chunk("IDAT", idat) +
+           png_chunk("IEND", "");
+}
+
+// Resident memory of this process in bytes: now ("VmRSS") or at its peak ("VmHWM").
+int64_t proc_status_bytes(const char* key) {
+    std::ifstream f("/proc/self/status");
+    std::string line;
+    const std::string k = std::string(key) + ":";
+    while (std::getline(f, line))
+        if (line.rfind(k, 0) == 0)
+            return std::atoll(line.c_str() + k.size()) * 1024; // "VmRSS:   1234 kB"
+    return -1;
+}
+
 TEST(EnvmapBadInput, MissingZeroByteDirectoryCorrupt) {
     const std::string dir = ett::scratch_dir("bad-input");
     expect_error(dir + "/missing.hdr", "missing");
@@ -224,28 +264,7 @@ TEST(EnvmapBadInputDeathTest, HugeDeclaredSizesAreRefusedBeforeAllocating) {
     write_bytes(dir + "/claims.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8000 +X 16000\n");
     write_bytes(dir + "/huge.pfm", "PF\n30000 15000\n-1.0\n" + std::string(64, '\0'));
     // A PNG claiming 30000x15000 RGB with 5 kB of (compressed zero) data.
-    auto be32 = [](uint32_t v) {
-        return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
-    };
-    auto chunk = [&](const std::string& type, const std::string& data) {
-        const std::string td = type + data;
-        uint32_t crc = 0xffffffffu;
-        for (unsigned char c : td) {
-            crc ^= c;
-            for (int k = 0; k < 8; ++k)
-                crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-        }
-        return be32(static_cast<uint32_t>(data.size())) + td + be32(~crc);
-    };
-    const std::string ihdr = be32(30000) + be32(15000) + std::string{8, 2, 0, 0, 0};
-    // A stored (uncompressed) deflate block of 5000 zero bytes inside a zlib stream.
-    std::string idat = "\x78\x01";
-    idat += std::string{1, char(5000 & 0xff), char(5000 >> 8), char(~5000 & 0xff),
-                        char((~5000 >> 8) & 0xff)};
-    idat += std::string(5000, '\0');
-    idat += be32(0x1387138d); // adler32 of the zeros is not checked before the size
-    write_bytes(dir + "/huge.png", "\x89PNG\r\n\x1a\n" + chunk("IHDR", ihdr) + chunk("IDAT", idat) +
-                                       chunk("IEND", ""));
+    write_bytes(dir + "/huge.png", png_declaring(30000, 15000, 2));
     for (const char* name : {"huge.hdr", "claims.hdr", "huge.pfm", "huge.png"}) {
         const std::string path = dir + "/" + name;
         SCOPED_TRACE(path);
@@ -274,6 +293,48 @@ TEST(EnvmapBadInputDeathTest, HugeDeclaredSizesAreRefusedBeforeAllocating) {
                 } catch (...) {
                     std::_Exit(4); // bad_alloc: it allocated first
                 }
+            },
+            ::testing::ExitedWithCode(0), "");
+    }
+}
+
+// Fuzz finding F7: a header may declare a size within the budget and the 100000:1 bound that its
+// file cannot hold (a 5 kB grey PNG declaring 16000x8000 pixels: 1.5 GB of float texels and a
+// 1 GB distribution). The texels grow as bands decode and the distribution's table is allocated
+// after the first band, so the load fails on the missing data having touched a few megabytes,
+// not the declared size (it touched 3 GB and more before). Measured as the peak resident memory
+// of a child process, on every path that reads a map.
+TEST(EnvmapBadInputDeathTest, DeclaredSizeBeyondTheDataFailsBeforeTouchingIt) {
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    const std::string path = ett::scratch_dir("declared-size") + "/claims.png";
+    write_bytes(path, png_declaring(16000, 8000, 0));
+    for (int how = 0; how < 3; ++how) {
+        SCOPED_TRACE(how == 0 ? "load_envmap, 2 threads" : how == 1 ? "load_envmap, 1 thread" : "read_rgb_image");
+        EXPECT_EXIT(
+            {
+                et::set_warning_sink([](const std::string&) {});
+                // Reset the peak to what is resident now (Linux 4.0+); where that is refused the
+                // peak so far is that of a fresh test process, small as well.
+                std::ofstream("/proc/self/clear_refs") << "5";
+                const int64_t before = proc_status_bytes("VmRSS");
+                int code = 2; // loaded
+                try {
+                    et::DistributionOptions opt;
+                    opt.threads = how == 1 ? 1 : 2;
+                    if (how < 2)
+                        et::load_envmap(path, opt);
+                    else
+                        et::read_rgb_image(path);
+                } catch (const et::Error& e) {
+                    const std::string m = e.what();
+                    code = m.rfind(path, 0) == 0 && m.find('\n') == std::string::npos ? 0 : 3;
+                } catch (...) {
+                    code = 4;
+                }
+                const int64_t grew = proc_status_bytes("VmHWM") - before;
+                if (code == 0 && (before < 0 || grew > (int64_t(256) << 20)))
+                    code = 5; // touched (a good part of) the declared size
+                std::_Exit(code);
             },
             ::testing::ExitedWithCode(0), "");
     }

@@ -5,8 +5,6 @@
 #pragma once
 #include "util/error.h"
 
-#include <nlohmann/json.hpp>
-
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -65,19 +63,6 @@ inline void silence_warnings() {
 inline bool masks_on() {
     static const bool on = std::getenv("ENVTRACE_FUZZ_NO_MASKS") == nullptr;
     return on;
-}
-
-// F1 (util/json_file.cpp): read_json_file turns json::parse_error into et::Error but not
-// json::out_of_range, which nlohmann::json throws for a number that overflows a double (1e400):
-// it escapes from load_scene and read_lights.
-inline bool hits_json_number_overflow(const uint8_t* data, size_t size) {
-    try {
-        (void)nlohmann::json::parse(data, data + size);
-    } catch (const nlohmann::json::out_of_range&) {
-        return true;
-    } catch (const nlohmann::json::exception&) {
-    }
-    return false;
 }
 
 } // namespace etfuzz

@@ -643,9 +643,15 @@ RgbImage read_rgb_image(const std::string& path) {
     RgbImage img;
     img.width = reader.width();
     img.height = reader.height();
-    img.rgb = prefaulted_vector<float>(static_cast<size_t>(img.width) * img.height * 3);
-    for (int y = 0; y < img.height;)
-        y += reader.read_rows(reader.band_rows(), img.at(0, y));
+    // Reserved whole (address space only) and grown a band at a time as the file decodes: a
+    // file that declares more pixels than it holds fails before that memory is touched (F7).
+    const size_t row = static_cast<size_t>(img.width) * 3;
+    img.rgb.reserve(row * img.height);
+    const int band = reader.band_rows();
+    for (int y = 0; y < img.height;) {
+        grow_in_place(img.rgb, row * std::min(img.height, y + band));
+        y += reader.read_rows(band, img.rgb.data() + row * y);
+    }
     return img;
 }
 

@@ -141,12 +141,11 @@ struct Plan {
 
 // Works on distribution rows [o0, o1): filters the input rows they need, writes their densities
 // and CDFs and their masses. Rows are independent, so ranges can run on separate threads.
-void build_rows(const Plan& p, const RgbImage& image, int o0, int o1) {
+void build_rows(const Plan& p, const float* rgb, int o0, int o1) {
     if (o0 >= o1)
         return;
     const int w = p.w, h = p.h, dw = p.dw, dh = p.dh, r = p.r, k = p.k;
     const float* taps = p.taps.data();
-    const float* rgb = image.rgb.data();
 
     // Input rows needed: the area spans of the output rows (all of [o0, o1) without resampling).
     int y0 = o0, y1 = o1;
@@ -336,8 +335,8 @@ int DistributionBuilder::rows_needed(int block) const {
     return std::min(p.h, y1 + p.r);
 }
 
-void DistributionBuilder::build_block(const RgbImage& image, int block) {
-    build_rows(s_->p, image, s_->block_start[block], s_->block_start[block + 1]);
+void DistributionBuilder::build_block(const float* rgb, int block) {
+    build_rows(s_->p, rgb, s_->block_start[block], s_->block_start[block + 1]);
 }
 
 EnvDistribution DistributionBuilder::finish() {
@@ -357,7 +356,7 @@ EnvDistribution build_env_distribution(const RgbImage& image, const Distribution
     std::atomic<int> next{0};
     run_on_threads(threads, [&](int) {
         for (int b = next++; b < blocks; b = next++)
-            builder.build_block(image, b);
+            builder.build_block(image.rgb.data(), b);
     });
     return builder.finish();
 }

@@ -62,8 +62,9 @@ class DistributionBuilder {
     int blocks() const;
     // Block b reads map rows [0, rows_needed(b)): they must be final before build_block(b).
     int rows_needed(int block) const;
-    // Builds one block from `image` (width x height). Distinct blocks may be built concurrently.
-    void build_block(const RgbImage& image, int block);
+    // Builds one block from the map's texels (width x height x RGB, row-major, of which rows
+    // [0, rows_needed(block)) are read). Distinct blocks may be built concurrently.
+    void build_block(const float* rgb, int block);
     // The marginal distribution, once every block is built; leaves the builder empty.
     EnvDistribution finish();
 

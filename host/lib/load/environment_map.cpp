@@ -174,6 +174,8 @@ EnvMap load_envmap(const std::string& path, const DistributionOptions& options) 
     std::atomic<int> next_block{0};
     std::atomic<int64_t> build_ns{0}; // thread time spent on the distribution
     SanitizeReport report;
+    env.image.rgb.reserve(static_cast<size_t>(w) * h * 3);
+    float* const texels = env.image.rgb.data(); // fixed: the vector only grows within capacity
 
     auto timed = [&](auto&& work) {
         Timer t;
@@ -181,6 +183,13 @@ EnvMap load_envmap(const std::string& path, const DistributionOptions& options) 
         build_ns += static_cast<int64_t>(t.seconds() * 1e9);
     };
     auto build_blocks = [&] {
+        {
+            // The distribution's table (as many cells as texels by default) is allocated once the
+            // first band has decoded, not before: a file that declares a huge size and holds
+            // little fails first (F7).
+            std::unique_lock<std::mutex> lock(mutex);
+            rows_cv.wait(lock, [&] { return failed || rows_ready > 0; });
+        }
         DistributionBuilder* b = nullptr;
         {
             std::lock_guard<std::mutex> lock(builder_mutex);
@@ -198,7 +207,7 @@ EnvMap load_envmap(const std::string& path, const DistributionOptions& options) 
             }
             if (failed)
                 return;
-            timed([&] { b->build_block(env.image, k); });
+            timed([&] { b->build_block(texels, k); });
         }
     };
     // A map of one band and one block gains nothing from a second thread.
@@ -206,10 +215,15 @@ EnvMap load_envmap(const std::string& path, const DistributionOptions& options) 
     run_on_threads(threads, [&](int part) {
         try {
             if (part == 0) {
-                env.image.rgb = prefaulted_vector<float>(static_cast<size_t>(w) * h * 3);
+                // The texels are reserved whole (address space only) and grown a band at a time
+                // as the file decodes, never moving (the builders read them meanwhile through
+                // `texels`): a file that declares more pixels than it holds fails before that
+                // memory is touched (fuzz finding F7).
+                const size_t row = static_cast<size_t>(w) * 3;
                 const int band = reader.band_rows();
                 for (int y = 0; y < h && !failed;) {
-                    float* rows = env.image.at(0, y);
+                    grow_in_place(env.image.rgb, row * std::min(h, y + band));
+                    float* rows = texels + row * y;
                     const int n = reader.read_rows(band, rows);
                     sanitize_range(rows, static_cast<size_t>(n) * w, report);
                     y += n;
