@@ -5,7 +5,8 @@
 //
 // Sample dimensions (pairs, regenerated from pixel, sample index, pair; never stored):
 //   pair 0: pixel jitter; for bounce d: pair 1+3d light sample, 2+3d BSDF direction,
-//   3+3d (BSDF lobe, Russian roulette).
+//   3+3d (BSDF lobe, Russian roulette); the adaptive strategy's technique choices:
+//   ETK_PAIR_SHARE + d (etk_shade). Pairs are hashed, so these need not be contiguous.
 #ifndef ETK_INTEGRATOR_H
 #define ETK_INTEGRATOR_H
 #include "bsdf.h"
@@ -33,12 +34,60 @@ ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
     return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
+#define ETK_PAIR_SHARE 0x40000000u
+
 // The distribution light samples are drawn from, and weighted by in MIS. The compensated one
 // (Karlik et al. 2019) is used only where a BSDF sample can reach the same direction: the MIS
-// strategies at non-delta vertices. Delta vertices draw no light sample, and rays they scatter
-// count in full (escaped stage), so nothing needs the full distribution in this strategy.
+// strategies at non-delta vertices (the adaptive strategy keeps a BSDF share, below). Delta
+// vertices draw no light sample, and rays they scatter count in full (escaped stage), so
+// nothing needs the full distribution in these strategies.
 ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p) {
     return p.strategy == ETK_STRATEGY_COMPENSATED ? S.env_dist_comp : S.env_dist;
+}
+
+// Adaptive allocation (ETK_STRATEGY_ADAPTIVE). A vertex draws two samples -- A, traced as the
+// shadow ray, and B, the continuation -- each from the light distribution or the BSDF, so that
+// s of the two are light samples in expectation: A is a light sample with probability min(s, 1),
+// B with probability max(s - 1, 0) (s <= 1 below the last bounce, where B must be a BSDF
+// sample to carry the path on). With expected counts n_light = s, n_bsdf = 2 - s, a sample
+// drawn by technique t counts f cos L w_t / (n_t p_t) for weights w_t that sum to one:
+// unbiased for every s, as long as the BSDF keeps a share (s < 2) where the compensated
+// distribution is zero. The weights are the MIS heuristic's on n_t p_t (balance: the sample
+// counts f cos L / (s p_light + (2 - s) p_bsdf)); s = 1 is exactly the compensated strategy,
+// one sample of each. Each material bin also picks the light distribution (full or
+// compensated) and the GGX sampling (ETK_BIN_*); the host learns all three per bin from the
+// first passes (host/lib/render/light_share.h). Returns s; *flags: the bin's ETK_BIN_*.
+ETK_FN float etk_vertex_config(EtkScene S, EtkParams p, int prim, int pixel, int last, int* flags) {
+    float s;
+    if (p.learn) {
+        int k = etk_learning_candidate(p.seed, pixel);
+        s = etk_learning_share(k, last);
+        *flags = etk_learning_flags(k);
+    } else {
+        int bin = S.material_bin[S.tri_material[prim]];
+        s = p.light_share[bin];
+        *flags = p.bin_flags[bin];
+    }
+    return last ? s : fmin(s, 1.0f);
+}
+// The continuation's record of its vertex for the escaped stage (beta.w): the share, +4 if it
+// is a light sample, +8 if the vertex sampled the compensated distribution.
+ETK_FN float etk_share_code(float s, int from_light, int flags) {
+    return s + (from_light ? 4.0f : 0.0f) + ((flags & ETK_BIN_COMPENSATED) ? 8.0f : 0.0f);
+}
+// w_t / (n_t p_t) of a sample drawn by the light (from_light) or the BSDF at share s.
+ETK_FN float etk_share_weight(int heuristic, float s, float pl, float pb, int from_light) {
+    float a = s * pl, b = (2.0f - s) * pb;
+    if (heuristic == ETK_HEURISTIC_POWER) {
+        float d = a * a + b * b;
+        return d > 0.0f ? (from_light ? a : b) / d : 0.0f;
+    }
+    return a + b > 0.0f ? 1.0f / (a + b) : 0.0f;
+}
+// The density continuation B was drawn from at a vertex of share s.
+ETK_FN float etk_share_continuation_density(float s, float pl, float pb) {
+    float cb = fmax(s - 1.0f, 0.0f);
+    return cb * pl + (1.0f - cb) * pb;
 }
 
 // The surface a path's ray hit (its hit record, stored by the intersect stage).
@@ -63,6 +112,8 @@ ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
     P.beta[i] = make_float4(1.0f, 1.0f, 1.0f, 0.0f);
     P.radiance[i] = make_float4(0.0f, 0.0f, 0.0f, 0.0f);
     P.pixel[i] = pixel;
+    if (p.learn) // no bin unless the camera ray hits a non-delta surface
+        P.learn_bin[i] = -1;
     Q.ray_out[i] = i;
 }
 
@@ -89,8 +140,17 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
     float4 d = P.ray_d[slot];
     float2 uv = etk_env_uv(p.env, etk_xyz(d));
     float w = 1.0f;
-    if (d.w >= 0.0f) { // made by a non-delta BSDF sample
-        if (etk_strategy_is_mis(p.strategy))
+    if (d.w >= 0.0f) {                             // made by a non-delta BSDF sample
+        if (p.strategy == ETK_STRATEGY_ADAPTIVE) { // d.w: p_bsdf of the direction (etk_shade)
+            float s = P.beta[slot].w;
+            int comp = s >= 8.0f;
+            s = comp ? s - 8.0f : s;
+            int from_light = s >= 4.0f;
+            s = from_light ? s - 4.0f : s;
+            float pl = etk_env_pdf_uv(comp ? S.env_dist_comp : S.env_dist, p.env, uv);
+            w = etk_share_continuation_density(s, pl, d.w) *
+                etk_share_weight(p.heuristic, s, pl, d.w, from_light);
+        } else if (etk_strategy_is_mis(p.strategy))
             w = etk_mis_weight(p.heuristic, d.w, etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv));
         else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
@@ -103,7 +163,7 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
 }
 
 // Stage 4: at a surface: one light sample (pushed as a shadow ray) and one BSDF sample (pushed as
-// the continuation ray).
+// the continuation ray); for the adaptive strategy, samples A and B chosen by the vertex's share.
 ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     (void)F;
     int slot = Q.shade[i];
@@ -114,9 +174,25 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     EtkMaterial m = s.m;
     float3 beta = etk_xyz(P.beta[slot]);
     uint pair = 1u + 3u * (uint)depth;
+    int last = depth + 1 >= p.max_depth;
+    int adaptive = p.strategy == ETK_STRATEGY_ADAPTIVE;
+    int delta = etk_bsdf_is_delta(m);
+    // Adaptive: this vertex's share, distribution and GGX sampling; learning passes note the
+    // first hit's bin.
+    float share = 1.0f;
+    int flags = 0;
+    ETK_GLOBAL const float* dist = etk_light_dist(S, p);
+    if (adaptive && !delta) {
+        int prim = (int)as_uint(P.hit[slot].y);
+        share = etk_vertex_config(S, p, prim, pixel, last, &flags);
+        dist = (flags & ETK_BIN_COMPENSATED) ? S.env_dist_comp : S.env_dist;
+        m.vndf = (flags & ETK_BIN_VNDF) ? 1 : 0;
+        if (p.learn && depth == 0)
+            P.learn_bin[slot] = S.material_bin[S.tri_material[prim]];
+    }
 
-    // Light sample.
-    if (p.strategy != ETK_STRATEGY_BSDF && !etk_bsdf_is_delta(m)) {
+    // Light sample (sample A of the adaptive strategy).
+    if (p.strategy != ETK_STRATEGY_BSDF && !delta) {
         float2 u = etk_dims(p, pixel, pair);
         float3 c = make_float3(0.0f, 0.0f, 0.0f);
         float3 wi_world;
@@ -130,6 +206,36 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             wi_world = normalize(etk_env_to_world(p.env, md));
             float3 E = etk_xyz(S.lights[2 * k + 1]) * (float)p.light_count;
             c = beta * etk_dl_unshadowed(s, wi_world, E);
+        } else if (adaptive) {
+            // One pair of technique choices per vertex: (A's technique, A's BSDF lobe) when
+            // share < 1 (B is then a BSDF sample), (B's technique, -) when share > 1 (A is then
+            // a light sample); share = 1 needs neither.
+            float2 sel = share < 1.0f ? etk_dims(p, pixel, ETK_PAIR_SHARE + (uint)depth)
+                                      : make_float2(0.0f, 0.0f);
+            float2 light_uv;
+            float pl = 0.0f;
+            int ok, from_light = sel.x < fmin(share, 1.0f);
+            if (from_light) {
+                EtkEnvSample ls = etk_env_sample(dist, p.env, u);
+                wi_world = ls.dir;
+                light_uv = ls.uv;
+                pl = ls.pdf;
+                ok = ls.pdf > 0.0f;
+            } else {
+                EtkBsdfSample bs = etk_bsdf_sample(m, wo, u, sel.y);
+                wi_world = etk_from_local(bs.wi, t, b, ns);
+                light_uv = etk_env_uv(p.env, wi_world);
+                pl = etk_env_pdf_uv(dist, p.env, light_uv);
+                ok = bs.pdf > 0.0f;
+            }
+            float3 wi = etk_to_local(wi_world, t, b, ns);
+            if (ok && wi.z > 0.0f && dot(wi_world, ng) > 0.0f) {
+                float pb = etk_bsdf_pdf(m, wo, wi);
+                float wq = etk_share_weight(p.heuristic, share, pl, pb, from_light);
+                if (wq > 0.0f)
+                    c = beta * etk_bsdf_eval(m, wo, wi) *
+                        etk_env_radiance_uv(S.env_texels, p.env, light_uv) * (wi.z * wq);
+            }
         } else {
             float2 light_uv; // map coordinates of the light direction
             float pdf_light;
@@ -138,7 +244,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 light_uv = etk_env_uv(p.env, wi_world);
                 pdf_light = 0.25f * ETK_INV_PI;
             } else {
-                EtkEnvSample ls = etk_env_sample(etk_light_dist(S, p), p.env, u);
+                EtkEnvSample ls = etk_env_sample(dist, p.env, u);
                 wi_world = ls.dir;
                 light_uv = ls.uv;
                 pdf_light = ls.pdf;
@@ -164,19 +270,43 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
 
     // BSDF sample: the continuation. Not needed when nothing it could reach would count.
     // SIS (like the light set) renders direct lighting from its strata alone: no continuation.
-    int last = depth + 1 >= p.max_depth;
-    if (p.strategy == ETK_STRATEGY_SIS ||
-        (last && p.strategy != ETK_STRATEGY_BSDF && !etk_strategy_is_mis(p.strategy) &&
-         !etk_bsdf_is_delta(m)))
+    if (p.strategy == ETK_STRATEGY_SIS || (last && p.strategy != ETK_STRATEGY_BSDF &&
+                                           !etk_strategy_is_mis(p.strategy) && !adaptive && !delta))
         return;
     float2 rr = etk_dims(p, pixel, pair + 2u);
-    EtkBsdfSample bs = etk_bsdf_sample(m, wo, etk_dims(p, pixel, pair + 1u), rr.x);
-    if (!(bs.pdf > 0.0f))
-        return;
-    float3 wi_world = etk_from_local(bs.wi, t, b, ns);
+    float2 u = etk_dims(p, pixel, pair + 1u);
+    float3 wi_world, weight;
+    float pdf; // p_bsdf of the direction for the adaptive strategy; else the pdf it was drawn with
+    int delta_sample, b_from_light = 0;
+    if (adaptive && !delta && share > 1.0f &&
+        etk_dims(p, pixel, ETK_PAIR_SHARE + (uint)depth).x < share - 1.0f) {
+        // Continuation B drawn from the light distribution (last bounce, share > 1).
+        EtkEnvSample ls = etk_env_sample(dist, p.env, u);
+        wi_world = ls.dir;
+        float3 wi = etk_to_local(wi_world, t, b, ns);
+        pdf = etk_bsdf_pdf(m, wo, wi);
+        if (!(ls.pdf > 0.0f) || !(pdf > 0.0f) || wi.z <= 0.0f)
+            return;
+        weight =
+            etk_bsdf_eval(m, wo, wi) * (wi.z / etk_share_continuation_density(share, ls.pdf, pdf));
+        delta_sample = 0;
+        b_from_light = 1;
+    } else {
+        EtkBsdfSample bs = etk_bsdf_sample(m, wo, u, rr.x);
+        if (!(bs.pdf > 0.0f))
+            return;
+        wi_world = etk_from_local(bs.wi, t, b, ns);
+        weight = bs.weight;
+        pdf = bs.pdf;
+        delta_sample = bs.delta;
+        if (adaptive && !delta && share > 1.0f) { // drawn from the mixture, not the BSDF alone
+            float pl = etk_env_pdf_uv(dist, p.env, etk_env_uv(p.env, wi_world));
+            weight = weight * (pdf / etk_share_continuation_density(share, pl, pdf));
+        }
+    }
     if (dot(wi_world, ng) <= 0.0f)
         return; // below the geometric surface: the shading normal would leak light
-    beta = beta * bs.weight;
+    beta = beta * weight;
     if (depth + 1 >= p.rr_depth) {
         float survive = fmin(0.95f, etk_max3(beta));
         if (!(rr.y < survive))
@@ -186,8 +316,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     if (!(etk_max3(beta) > 0.0f) || !isfinite(etk_max3(beta)))
         return;
     P.ray_o[slot] = etk_f4(origin, (float)(depth + 1));
-    P.ray_d[slot] = etk_f4(normalize(wi_world), bs.delta ? -1.0f : bs.pdf);
-    P.beta[slot] = etk_f4(beta, 0.0f);
+    P.ray_d[slot] = etk_f4(normalize(wi_world), delta_sample ? -1.0f : pdf);
+    P.beta[slot] = etk_f4(beta, etk_share_code(share, b_from_light, flags));
     Q.ray_out[ETK_ATOMIC_INC(Q.counters + ETK_Q_RAY_OUT)] = slot;
 }
 

@@ -13,14 +13,42 @@
 #define ETK_STRATEGY_SIS 4         // structured importance sampling: one stratum per sample
 #define ETK_STRATEGY_LIGHTS 5      // a directional light set, all lights at every hit
 #define ETK_STRATEGY_COMPENSATED 6 // MIS with the compensated map distribution (env_dist_comp)
+#define ETK_STRATEGY_ADAPTIVE 7    // compensated map, light/BSDF share learned per material bin
 #define ETK_HEURISTIC_BALANCE 0
 #define ETK_HEURISTIC_POWER 1
+// Material bins of the adaptive strategy's light shares (host/lib/render/light_share.h).
+#define ETK_SHARE_BINS 32
 
 ETK_BEGIN
 
 // The strategies that draw one light and one BSDF sample and weight them by MIS.
 ETK_FN int etk_strategy_is_mis(int strategy) {
     return strategy == ETK_STRATEGY_MIS || strategy == ETK_STRATEGY_COMPENSATED;
+}
+
+// Adaptive strategy: how a material bin samples, as flags beside its light share.
+#define ETK_BIN_COMPENSATED 1 // light samples from the compensated distribution (else the full)
+#define ETK_BIN_VNDF 2        // GGX lobes sampled from visible normals (else D(h) cos)
+// Learning passes: every pixel renders with one of ETK_SHARE_CANDIDATES configurations, picked
+// by a hash of the pixel and seed, so that the host can compare their variance per material
+// (host/lib/render/light_share.h). Candidate 0 is the paper's estimator.
+#define ETK_SHARE_CANDIDATES 5
+ETK_FN int etk_learning_candidate(uint seed, int pixel) {
+    uint x = (uint)pixel * 0x9e3779b9u ^ seed * 0x85ebca6bu;
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    return (int)(x % (uint)ETK_SHARE_CANDIDATES);
+}
+// Candidate k: (share, flags). 0: full distribution, s = 1, D(h) cos sampling (the paper's
+// MIS); 1: the same with visible normals; 2: compensated, s = 1 (the compensated strategy);
+// 3: compensated, s = 0.5 (more BSDF samples); 4: full, s = 1.5 at the last bounce (more light
+// samples), 0.5 below it.
+ETK_FN float etk_learning_share(int k, int last) {
+    return k == 3 ? 0.5f : k == 4 ? (last ? 1.5f : 0.5f) : 1.0f;
+}
+ETK_FN int etk_learning_flags(int k) {
+    return k == 0 ? 0 : (k == 2 || k == 3) ? ETK_BIN_COMPENSATED | ETK_BIN_VNDF : ETK_BIN_VNDF;
 }
 
 // 4-byte members only: passed by value to kernels, so host and device layouts agree.
@@ -38,7 +66,11 @@ typedef struct {
     int light_count;   // directional lights or SIS strata (EtkScene.lights)
     int strata_width, strata_height; // SIS: the texel grid of the strata
     int bsdf_sampling; // GGX lobes: 1 visible normals, 0 the distribution of normals (bsdf.h)
-    int pad;
+    int learn;         // adaptive: a learning pass (shares per pixel: etk_learning_share)
+    // Adaptive: expected light samples (of the two at a vertex) per material bin, in [0, 2),
+    // and how the bin samples (ETK_BIN_*).
+    float light_share[ETK_SHARE_BINS];
+    int bin_flags[ETK_SHARE_BINS];
 } EtkParams;
 
 ETK_END

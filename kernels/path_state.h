@@ -12,9 +12,10 @@
     X(float4, tris)         /* v0, e1, e2 per triangle */                                          \
     X(float4, normals)      /* three vertex normals per triangle */                                \
     X(int, tri_material)    /* material index per triangle */                                      \
+    X(int, material_bin)    /* adaptive strategy: light-share bin per material */                  \
     X(float4, materials)    /* two float4 per material (bsdf.h) */                                 \
     X(float, env_dist)      /* the map's 2D distribution (piecewise_constant.h) */                 \
-    X(float, env_dist_comp) /* its MIS-compensated twin (ETK_STRATEGY_COMPENSATED only) */         \
+    X(float, env_dist_comp) /* its MIS-compensated twin (compensated and adaptive strategies) */   \
     X(float, env_texels)    /* the map's RGB texels */                                             \
     X(float4, lights)       /* directional lights / SIS strata: direction, power */                \
     X(int, strata_texels)   /* SIS: texels sorted by stratum */                                    \
@@ -25,13 +26,15 @@
 #define ETK_PATH_FIELDS(X)                                                                         \
     X(float4, ray_o)    /* origin; w: depth (surface interactions so far) */                       \
     X(float4, ray_d)    /* direction; w: pdf of the BSDF sample that made it, < 0 if none */       \
-    X(float4, beta)     /* throughput */                                                           \
+    X(float4, beta)     /* throughput; w: adaptive: share of the vertex that made the ray, +4 if a \
+                           light sample */                                                         \
     X(float4, radiance) /* accumulated along the path */                                           \
     X(float4, hit)      /* t, triangle (int bits), b1, b2 */                                       \
     X(float4, shadow_o) /* shadow ray origin */                                                    \
     X(float4, shadow_d) /* shadow ray direction; w: its length */                                  \
     X(float4, shadow_L) /* tentative contribution of the shadow ray */                             \
-    X(int, pixel)       /* film pixel of the path */
+    X(int, pixel)       /* film pixel of the path */                                               \
+    X(int, learn_bin)   /* adaptive learning passes: light-share bin of the first hit, -1: none */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces.

@@ -29,7 +29,8 @@ namespace {
 struct RenderArgs {
     std::string scene, output, stats_file, strategy, heuristic, sampler, backend = "opencl";
     std::string bsdf_sampling;
-    std::string lights; // --lights: render with this directional light set
+    std::string light_share; // --light-share: "auto" or a number
+    std::string lights;      // --lights: render with this directional light set
     int sis_samples = 64;
     int spp = 0, max_depth = 0, paths = -1, threads = 0;
     long long seed = -1;
@@ -96,6 +97,8 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.sampler = parse_sampler(a.sampler, cli);
     if (!a.bsdf_sampling.empty())
         st.bsdf_sampling = parse_bsdf_sampling(a.bsdf_sampling, cli);
+    if (!a.light_share.empty())
+        st.light_share = parse_light_share(a.light_share, cli + ": --light-share");
     if (a.seed >= 0)
         st.seed = static_cast<uint32_t>(a.seed);
     if (a.time_limit >= 0)
@@ -153,6 +156,23 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                     {"level_samples", sis.level_samples}};
     j["sampler"] = name_of(st.sampler);
     j["bsdf_sampling"] = name_of(resolved_bsdf_sampling(st));
+    if (st.strategy == Strategy::adaptive) {
+        // Per material: the light share its bin rendered with after learning.
+        nlohmann::json shares = nlohmann::json::object();
+        const auto& sh = renderer.light_shares();
+        const auto& fl = renderer.bin_flags();
+        for (size_t m = 0; m < ds.material_names.size() && m < ds.material_bin.size(); ++m) {
+            const size_t b = static_cast<size_t>(ds.material_bin[m]);
+            shares[ds.material_names[m]] = {
+                {"light_share", sh[b]},
+                {"distribution", (fl[b] & ETK_BIN_COMPENSATED) ? "compensated" : "full"},
+                {"ggx_sampling", (fl[b] & ETK_BIN_VNDF) ? "vndf" : "ndf"},
+                {"candidate", renderer.choices()[b]}};
+        }
+        j["light_share"] = {{"learned", st.light_share < 0.0f},
+                            {"learning_passes_extra", s.learning_passes},
+                            {"materials", shares}};
+    }
     j["render_seconds"] = render_s;
     j["seconds_per_spp"] = render_s / std::max(1, rendered);
     j["nonfinite_samples"] = s.nonfinite_samples;
@@ -357,7 +377,8 @@ void add_render_command(CLI::App& app, Globals& g) {
         ->check(CLI::Range(1, 1000));
     cmd->add_option("--strategy", a->strategy,
                     "light | bsdf | mis (the paper's) | compensated (MIS with a compensated light "
-                    "distribution) | uniform | sis (structured importance sampling)")
+                    "distribution) | adaptive (compensated, light/BSDF shares learned per "
+                    "material) | uniform | sis (structured importance sampling)")
         ->check(CLI::IsMember(strategy_names()));
     cmd->add_option("--sis-samples", a->sis_samples,
                     "SIS strata (one shadow ray per sample; --spp a multiple of it)")
@@ -370,8 +391,11 @@ void add_render_command(CLI::App& app, Globals& g) {
         ->check(CLI::IsMember(sampler_names()));
     cmd->add_option("--bsdf-sampling", a->bsdf_sampling,
                     "GGX lobes: vndf (visible normals) | ndf (the paper's) | auto (vndf for "
-                    "compensated, ndf otherwise)")
+                    "compensated and adaptive, ndf otherwise)")
         ->check(CLI::IsMember(bsdf_sampling_names()));
+    cmd->add_option("--light-share", a->light_share,
+                    "Adaptive strategy: expected light samples of the two at a vertex, 0 .. "
+                    "1.875, or auto (learned per material from the first passes)");
     cmd->add_option("--seed", a->seed, "Sampler seed")->check(CLI::Range(0LL, 4294967295LL));
     cmd->add_option("--paths", a->paths, "Paths in flight (0: the whole film, capped by memory)")
         ->check(CLI::Range(0, 1 << 26));

@@ -1,4 +1,5 @@
-// The light, bsdf, mis and compensated strategies (and either GGX sampling) estimate the same
+// The light, bsdf, mis, compensated and adaptive strategies (and either GGX sampling, and any
+// light share) estimate the same
 // integral, so they converge to the same image; and the error of an unbiased estimator with
 // independent samples falls as 1/sqrt(spp).
 //
@@ -65,6 +66,15 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     et::Scene vndf_scene = scene(env, "mis", depth, 6);
     vndf_scene.settings.bsdf_sampling = et::BsdfSampling::vndf;
     const auto mis_vndf = ett::render(vndf_scene, "cpu", spp);
+    // Adaptive allocation: shares learned from the first passes, and fixed shares at both ends
+    // of the range (mostly BSDF samples; mostly light samples, the continuation too at the
+    // last bounce).
+    const auto adaptive = ett::render(scene(env, "adaptive", depth, 7), "cpu", spp);
+    et::Scene low = scene(env, "adaptive", depth, 8), high = scene(env, "adaptive", depth, 9);
+    low.settings.light_share = 0.125f;
+    high.settings.light_share = et::kMaxLightShare;
+    const auto adaptive_low = ett::render(low, "cpu", spp);
+    const auto adaptive_high = ett::render(high, "cpu", spp);
     const std::string d = " depth " + std::to_string(depth);
     // The noise estimate itself: two seeds of one strategy.
     const ett::Agreement self = ett::agreement(light, light2);
@@ -76,6 +86,9 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     expect_agree(light, comp, "light vs compensated" + d);
     expect_agree(mis, comp, "mis vs compensated" + d);
     expect_agree(light, mis_vndf, "light vs mis+vndf" + d);
+    expect_agree(mis, adaptive, "mis vs adaptive" + d);
+    expect_agree(light, adaptive_low, "light vs adaptive s=0.125" + d);
+    expect_agree(mis, adaptive_high, "mis vs adaptive s=1.875" + d);
 }
 
 INSTANTIATE_TEST_SUITE_P(Depth, Strategies, ::testing::Values(1, 3));

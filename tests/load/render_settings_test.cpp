@@ -18,7 +18,7 @@ TEST(RenderSettings, NamesRoundTrip) {
         EXPECT_EQ(et::name_of(et::parse_backend(n, "t")), n);
     for (const auto& n : et::bsdf_sampling_names())
         EXPECT_EQ(et::name_of(et::parse_bsdf_sampling(n, "t")), n);
-    EXPECT_EQ(et::strategy_names().size(), 6u); // "lights" is chosen by --lights only
+    EXPECT_EQ(et::strategy_names().size(), 7u); // "lights" is chosen by --lights only
 }
 
 TEST(RenderSettings, ValuesAreTheKernelCodes) {
@@ -26,6 +26,7 @@ TEST(RenderSettings, ValuesAreTheKernelCodes) {
     EXPECT_EQ(static_cast<int>(et::parse_strategy("sis", "t")), ETK_STRATEGY_SIS);
     EXPECT_EQ(static_cast<int>(et::Strategy::lights), ETK_STRATEGY_LIGHTS);
     EXPECT_EQ(static_cast<int>(et::parse_strategy("compensated", "t")), ETK_STRATEGY_COMPENSATED);
+    EXPECT_EQ(static_cast<int>(et::parse_strategy("adaptive", "t")), ETK_STRATEGY_ADAPTIVE);
     // auto: visible normals for the compensated strategy, the paper's sampling for mis.
     et::RenderSettings st;
     st.strategy = et::Strategy::mis;
@@ -36,6 +37,20 @@ TEST(RenderSettings, ValuesAreTheKernelCodes) {
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
     EXPECT_EQ(static_cast<int>(et::parse_sampler("sobol", "t")), ETK_SAMPLER_SOBOL);
     EXPECT_EQ(static_cast<int>(et::parse_heuristic("power", "t")), ETK_HEURISTIC_POWER);
+}
+
+TEST(RenderSettings, LightShares) {
+    EXPECT_EQ(et::parse_light_share("auto", "t"), -1.0f);
+    EXPECT_EQ(et::parse_light_share("0.5", "t"), 0.5f);
+    EXPECT_EQ(et::parse_light_share("1.875", "t"), et::kMaxLightShare);
+    for (const char* bad : {"2", "-0.1", "1.5x", "", "nan", "inf"}) {
+        try {
+            et::parse_light_share(bad, "command line: --light-share");
+            ADD_FAILURE() << "accepted '" << bad << "'";
+        } catch (const et::Error& e) {
+            EXPECT_NE(std::string(e.what()).find("--light-share"), std::string::npos) << e.what();
+        }
+    }
 }
 
 TEST(RenderSettings, UnknownNamesAreClearErrors) {

@@ -75,8 +75,11 @@ TEST_P(Backends, DepthOneEqualUpToRounding) {
     s.settings.sampler = et::SamplerKind::sobol;
     s.settings.seed = 11;
     const int spp = 16;
-    // The paper's MIS, and MIS with the compensated distribution and visible-normal sampling.
-    for (et::Strategy strategy : {et::Strategy::mis, et::Strategy::compensated}) {
+    // The paper's MIS, MIS with the compensated distribution and visible-normal sampling, and
+    // the adaptive strategy (its light shares learned from the first passes on each back end:
+    // equal records give equal shares).
+    for (et::Strategy strategy :
+         {et::Strategy::mis, et::Strategy::compensated, et::Strategy::adaptive}) {
         SCOPED_TRACE(et::name_of(strategy));
         s.settings.strategy = strategy;
         const auto cl = ett::render(s, "opencl", spp, false);

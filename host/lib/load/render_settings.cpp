@@ -2,6 +2,9 @@
 
 #include "util/error.h"
 
+#include <exception>
+#include <string>
+
 namespace et {
 namespace {
 
@@ -10,10 +13,10 @@ template <typename E> struct Named {
     const char* name;
 };
 constexpr Named<Strategy> kStrategies[] = {
-    {Strategy::light, "light"},  {Strategy::bsdf, "bsdf"},
-    {Strategy::mis, "mis"},      {Strategy::uniform, "uniform"},
-    {Strategy::sis, "sis"},      {Strategy::compensated, "compensated"},
-    {Strategy::lights, "lights"}};
+    {Strategy::light, "light"},       {Strategy::bsdf, "bsdf"},
+    {Strategy::mis, "mis"},           {Strategy::uniform, "uniform"},
+    {Strategy::sis, "sis"},           {Strategy::compensated, "compensated"},
+    {Strategy::adaptive, "adaptive"}, {Strategy::lights, "lights"}};
 constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::balance, "balance"},
                                                {MisHeuristic::power, "power"}};
 constexpr Named<SamplerKind> kSamplers[] = {{SamplerKind::sobol, "sobol"},
@@ -50,7 +53,7 @@ E parse_in(const Named<E> (&table)[N], const std::string& s, const std::string& 
     throw Error(what + ": unknown " + kind + " '" + shown + "' (use " + choices + ")");
 }
 
-constexpr size_t kUserStrategies = 6; // all but "lights"
+constexpr size_t kUserStrategies = 7; // all but "lights"
 
 } // namespace
 
@@ -79,7 +82,27 @@ std::vector<std::string> bsdf_sampling_names() {
 BsdfSampling resolved_bsdf_sampling(const RenderSettings& st) {
     if (st.bsdf_sampling != BsdfSampling::automatic)
         return st.bsdf_sampling;
-    return st.strategy == Strategy::compensated ? BsdfSampling::vndf : BsdfSampling::ndf;
+    return st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive
+               ? BsdfSampling::vndf
+               : BsdfSampling::ndf;
+}
+
+float parse_light_share(const std::string& s, const std::string& what) {
+    if (s == "auto")
+        return -1.0f;
+    size_t used = 0;
+    double v = -1.0;
+    try {
+        v = std::stod(s, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != s.size() || !(v >= 0.0 && v <= kMaxLightShare)) {
+        const std::string shown = s.size() > 40 ? s.substr(0, 40) + "..." : s;
+        throw Error(what + ": light share '" + shown + "' is not auto or a number in 0 .. " +
+                    std::to_string(kMaxLightShare).substr(0, 5));
+    }
+    return static_cast<float>(v);
 }
 
 Strategy parse_strategy(const std::string& s, const std::string& what) {

@@ -18,10 +18,12 @@ enum class Strategy : int {
     uniform = ETK_STRATEGY_UNIFORM,
     sis = ETK_STRATEGY_SIS,
     compensated = ETK_STRATEGY_COMPENSATED, // MIS, light samples from the compensated map
-    lights = ETK_STRATEGY_LIGHTS, // a directional light set (--lights), never named by a user
+    adaptive = ETK_STRATEGY_ADAPTIVE, // compensated map, light/BSDF shares learned per material
+    lights = ETK_STRATEGY_LIGHTS,     // a directional light set (--lights), never named by a user
 };
-// How GGX lobes are sampled (kernels/bsdf.h): automatic picks vndf for the compensated strategy
-// and ndf, the paper's, for the others, so that `mis` stays the paper's estimator.
+// How GGX lobes are sampled (kernels/bsdf.h): automatic picks vndf for the compensated and
+// adaptive strategies and ndf, the paper's, for the others, so that `mis` stays the paper's
+// estimator.
 enum class BsdfSampling : int { automatic = -1, ndf = 0, vndf = 1 };
 enum class MisHeuristic : int { balance = ETK_HEURISTIC_BALANCE, power = ETK_HEURISTIC_POWER };
 enum class SamplerKind : int { random = ETK_SAMPLER_RANDOM, sobol = ETK_SAMPLER_SOBOL };
@@ -39,6 +41,8 @@ MisHeuristic parse_heuristic(const std::string& s, const std::string& what);
 SamplerKind parse_sampler(const std::string& s, const std::string& what);
 Backend parse_backend(const std::string& s, const std::string& what);
 BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what);
+// "auto" (-1: learned) or a number in [0, kMaxLightShare].
+float parse_light_share(const std::string& s, const std::string& what);
 
 // The names a user may give (for the command line's choices).
 std::vector<std::string> strategy_names(); // without "lights", which --lights selects
@@ -46,6 +50,8 @@ std::vector<std::string> heuristic_names();
 std::vector<std::string> sampler_names();
 std::vector<std::string> backend_names();
 std::vector<std::string> bsdf_sampling_names();
+
+constexpr float kMaxLightShare = 1.875f; // below 2: a BSDF share is always left
 
 struct RenderSettings;
 // bsdf_sampling with automatic resolved for the strategy.
@@ -63,6 +69,9 @@ struct RenderSettings {
     double time_limit = 0.0; // seconds; 0: none
     int rr_depth = 3;
     int paths = 0; // paths in flight; 0: the film, capped by memory
+    // Adaptive strategy: expected light samples of the two at a vertex, in [0, kMaxLightShare];
+    // negative: learned per material bin from the first passes (render/light_share.h).
+    float light_share = -1.0f;
     // From the command line only.
     Backend backend = Backend::opencl;
     int device = 0;       // OpenCL device index

@@ -4,6 +4,8 @@
 #include "prepare/bvh_build.h"
 #include "util/error.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace et {
@@ -53,6 +55,32 @@ void add_triangles(const Scene& scene, DeviceScene& d) {
     d.triangle_count = n;
 }
 
+// The adaptive strategy's light-share bins: one per material while they fit, else one per
+// (type, roughness octave), in order of first use, wrapped when even those do not fit.
+std::vector<int> share_bins(const std::vector<Material>& materials) {
+    std::vector<int> bins;
+    if (materials.size() <= ETK_SHARE_BINS) {
+        for (size_t i = 0; i < materials.size(); ++i)
+            bins.push_back(static_cast<int>(i));
+    } else {
+        std::vector<std::pair<int, int>> keys;
+        for (const Material& m : materials) {
+            const int octave =
+                m.type == ETK_MAT_MICROFACET
+                    ? static_cast<int>(std::floor(std::log2(std::max(m.roughness, 1e-3f))))
+                    : 0;
+            const std::pair<int, int> key{m.type, octave};
+            auto it = std::find(keys.begin(), keys.end(), key);
+            if (it == keys.end())
+                it = keys.insert(keys.end(), key);
+            bins.push_back(static_cast<int>(it - keys.begin()) % ETK_SHARE_BINS);
+        }
+    }
+    if (bins.empty())
+        bins.push_back(0);
+    return bins;
+}
+
 void add_materials(const Scene& scene, DeviceScene& d) {
     for (const auto& m : scene.materials) {
         uint32_t type = static_cast<uint32_t>(m.type);
@@ -64,6 +92,9 @@ void add_materials(const Scene& scene, DeviceScene& d) {
     }
     if (d.materials.empty())
         d.materials.resize(2);
+    d.material_bin = share_bins(scene.materials);
+    for (const auto& m : scene.materials)
+        d.material_names.push_back(m.name);
 }
 
 void add_lights(const std::vector<DirectionalLight>& lights, DeviceScene& d) {
@@ -115,6 +146,9 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     p.seed = st.seed;
     p.bsdf_sampling = static_cast<int>(resolved_bsdf_sampling(st));
     p.ray_epsilon = kRayEpsilon;
+    const float share = st.light_share >= 0.0f ? std::min(st.light_share, kMaxLightShare) : 1.0f;
+    std::fill(p.light_share, p.light_share + ETK_SHARE_BINS, share);
+    std::fill(p.bin_flags, p.bin_flags + ETK_SHARE_BINS, ETK_BIN_COMPENSATED | ETK_BIN_VNDF);
     add_triangles(scene, d);
     add_materials(scene, d);
     if (st.strategy == Strategy::lights) {
@@ -131,7 +165,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     d.map_width = scene.env.image.width;
     d.map_height = scene.env.image.height;
     d.map_build_seconds = scene.env.build_seconds;
-    if (st.strategy == Strategy::compensated)
+    if (st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive)
         d.env_dist_comp = compensate_distribution(scene.env.dist).table;
     d.env_dist = std::move(scene.env.dist.table);
     d.env_texels = std::move(scene.env.image.rgb);

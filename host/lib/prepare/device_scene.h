@@ -20,6 +20,7 @@ struct DeviceScene {
     etk::EtkParams params{}; // camera, film, environment, settings; sample index set per pass
     RenderSettings settings;
     std::string scene_path, map_name;
+    std::vector<std::string> material_names; // by material index
     size_t triangle_count = 0;
     int map_width = 0, map_height = 0;
     double map_build_seconds = 0.0;

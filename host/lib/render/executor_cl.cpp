@@ -113,6 +113,10 @@ void ClDevice::read_counters(uint32_t* out) {
                              sizeof(cl_uint) * etk::ETK_Q_COUNT, out);
 }
 
+void ClDevice::read_learning(int n, int* bins) {
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_learn_bin], CL_TRUE, 0, sizeof(cl_int) * n, bins);
+}
+
 void ClDevice::launch(int stage, int n, const etk::EtkParams& params) {
     if (n <= 0)
         return;

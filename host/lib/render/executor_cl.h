@@ -30,6 +30,7 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     void bind_queues(bool swapped) override;
     void reset_counters() override;
     void read_counters(uint32_t* counters) override;
+    void read_learning(int n, int* bins) override;
     void launch(int stage, int n, const etk::EtkParams& params) override;
 
   private:

@@ -38,6 +38,9 @@ class CpuDevice::Lane : public StageExecutor {
     void read_counters(uint32_t* out) override {
         std::copy(counters_, counters_ + etk::ETK_Q_COUNT, out);
     }
+    void read_learning(int n, int* bins) override {
+        std::copy(learn_bin_.begin(), learn_bin_.begin() + n, bins);
+    }
 
     void launch(int stage, int n, const etk::EtkParams& p) override {
         if (n <= 0)

@@ -15,7 +15,8 @@ namespace {
 
 // File layout (little-endian, as written by this host): magic, then the header fields below, then
 // the film's arrays (ETK_FILM_FIELDS order), then an XXH3 checksum of everything before it.
-constexpr char kMagic[16] = {'e', 'n', 'v', 't', 'r', 'a', 'c', 'e', '-', 's', 't', 'a', 't', 'e', '\n', 0};
+constexpr char kMagic[16] = {'e', 'n', 'v', 't', 'r', 'a', 'c',  'e',
+                             '-', 's', 't', 'a', 't', 'e', '\n', 0};
 constexpr uint32_t kVersion = 1;
 constexpr uint32_t kByteOrder = 0x01020304;
 
@@ -69,14 +70,14 @@ uint64_t render_key(const DeviceScene& scene) {
     // The buffers are arrays of 4-byte scalars and float4: no padding bytes to hash.
 #define ET_HASH_BUFFER(type, name)                                                                 \
     h.add(std::string(#name));                                                                     \
-    h.add_value(static_cast<uint64_t>(scene.name.size()));                                        \
+    h.add_value(static_cast<uint64_t>(scene.name.size()));                                         \
     h.add(scene.name.data(), scene.name.size() * sizeof(type));
     ETK_SCENE_BUFFERS(ET_HASH_BUFFER)
 #undef ET_HASH_BUFFER
     etk::EtkParams p = scene.params; // 4-byte members only (kernels/params.h)
     p.sample_index = 0;
     p.first_pixel = 0;
-    p.pad = 0;
+    p.learn = 0;
     h.add_value(p);
     return h.digest();
 }
@@ -132,8 +133,8 @@ RenderState read_render_state(const std::string& path) {
     if (hd.byte_order != kByteOrder)
         throw Error(bad + "written on a machine of the other byte order");
     if (hd.version != kVersion)
-        throw Error(bad + "format version " + std::to_string(hd.version) + ", this envtrace reads " +
-                    std::to_string(kVersion));
+        throw Error(bad + "format version " + std::to_string(hd.version) +
+                    ", this envtrace reads " + std::to_string(kVersion));
     if (hd.width <= 0 || hd.height <= 0 || hd.width > 65536 || hd.height > 65536 || hd.spp < 0 ||
         hd.film_bytes != film_bytes(hd.width, hd.height) ||
         size != sizeof hd + hd.film_bytes + sizeof(uint64_t))

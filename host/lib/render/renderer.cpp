@@ -11,20 +11,69 @@
 namespace et {
 
 Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
-    : scene_(scene), film_(scene.width(), scene.height()), device_(make_device(film_)) {}
+    : scene_(scene), film_(scene.width(), scene.height()), device_(make_device(film_)) {
+    std::copy(scene.params.light_share, scene.params.light_share + ETK_SHARE_BINS, shares_.begin());
+    std::copy(scene.params.bin_flags, scene.params.bin_flags + ETK_SHARE_BINS, flags_.begin());
+    choices_.fill(-1);
+    learning_ = scene.settings.strategy == Strategy::adaptive && scene.settings.light_share < 0.0f;
+    options_.last_bounce = scene.settings.max_depth <= 1;
+}
 
 void Renderer::render_sample(uint32_t sample_index) {
     Timer timer;
+    if (learning_ && next_learning_pass_ < options_.learning_passes &&
+        sample_index != static_cast<uint32_t>(next_learning_pass_))
+        learn_on_scratch_film();
+    const bool learn = learning_ && next_learning_pass_ < options_.learning_passes;
+    run(sample_index, learn);
+    stats_.samples_per_pixel += 1;
+    stats_.seconds += timer.seconds();
+}
+
+// Samples 0 .. L-1 rendered to learn, on a zeroed film; the film so far is put back afterwards.
+void Renderer::learn_on_scratch_film() {
+    const Film kept = film();
+    Film scratch(film_.width(), film_.height());
+    resume(scratch);
+    while (next_learning_pass_ < options_.learning_passes) {
+        run(static_cast<uint32_t>(next_learning_pass_), true);
+        ++stats_.learning_passes;
+    }
+    resume(kept);
+}
+
+// One pass of sample `sample_index`; with `learn`, it is learning pass next_learning_pass_.
+void Renderer::run(uint32_t sample_index, bool learn) {
     etk::EtkParams p = scene_.params;
     p.sample_index = sample_index;
-    const RayCounts c = run_pass(*device_, p);
+    std::copy(shares_.begin(), shares_.end(), p.light_share);
+    std::copy(flags_.begin(), flags_.end(), p.bin_flags);
+    LightShareLearner* learner = nullptr;
+    if (learn) {
+        if (!learner_)
+            learner_ = std::make_unique<LightShareLearner>(options_, film_.width(), film_.height(),
+                                                           scene_.params.seed);
+        learner_->begin_pass(film().film_sum);
+        p.learn = 1;
+        learner = learner_.get();
+    }
+    const RayCounts c = run_pass(*device_, p, learner);
+    if (learn) {
+        learner->end_pass(film().film_sum);
+        if (++next_learning_pass_ == options_.learning_passes) {
+            choices_ = learner_->choices();
+            for (int b = 0; b < ETK_SHARE_BINS; ++b) {
+                shares_[b] = etk::etk_learning_share(choices_[b], options_.last_bounce);
+                flags_[b] = etk::etk_learning_flags(choices_[b]);
+            }
+            learner_.reset();
+        }
+    }
     stats_.camera_rays += c.camera;
     stats_.continuation_rays += c.continuation;
     stats_.shadow_rays += c.shadow;
     stats_.nonfinite_samples += c.nonfinite;
     stats_.shaded_hits += c.shaded;
-    stats_.samples_per_pixel += 1;
-    stats_.seconds += timer.seconds();
 }
 
 const Film& Renderer::film() {

@@ -1,5 +1,7 @@
 #include "render/schedule.h"
 
+#include "render/light_share.h"
+
 #include <algorithm>
 #include <atomic>
 #include <vector>
@@ -22,7 +24,8 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
     return *this;
 }
 
-void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts) {
+void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
+              LightShareLearner* learner) {
     p.first_pixel = first;
     // A light set sums all its lights at a hit; every other strategy takes one light sample.
     const int shade =
@@ -52,9 +55,13 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     ex.launch(etk::ETK_STAGE_accumulate, n, p);
     ex.read_counters(c); // the last bounce reset them: this is the film's count
     counts.nonfinite += c[etk::ETK_Q_NONFINITE];
+    if (learner && p.learn) {
+        ex.read_learning(n, learner->bins_of_pass() + first);
+    }
 }
 
-RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params) {
+RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
+                   LightShareLearner* learner) {
     const int pixels = params.width * params.height, wave = device.wave_size();
     std::atomic<int> next{0};
     std::vector<RayCounts> counts(device.lanes());
@@ -63,7 +70,8 @@ RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params) {
             const int first = next.fetch_add(wave);
             if (first >= pixels)
                 break;
-            run_wave(device.lane(k), params, first, std::min(wave, pixels - first), counts[k]);
+            run_wave(device.lane(k), params, first, std::min(wave, pixels - first), counts[k],
+                     learner);
         }
     });
     device.finish();

@@ -27,6 +27,8 @@ class StageExecutor {
     virtual void read_counters(uint32_t counters[etk::ETK_Q_COUNT]) = 0;
     // Runs `stage` over entries 0 .. n-1 of its queue (nothing when n <= 0).
     virtual void launch(int stage, int n, const etk::EtkParams& params) = 0;
+    // Learning passes of the adaptive strategy: the first hit's bin of path slots 0 .. n-1.
+    virtual void read_learning(int n, int* bins) = 0;
 };
 
 struct RayCounts {
@@ -37,6 +39,7 @@ struct RayCounts {
 };
 
 class Film;
+class LightShareLearner;
 
 // A back end: one or more executors ("lanes") that can run waves concurrently, and the film.
 class WavefrontDevice {
@@ -58,10 +61,13 @@ class WavefrontDevice {
 
 // One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
 // the film. Adds the rays traced to `counts`.
-void run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts);
+// With params.learn, hands the first-hit bins of the wave's pixels to `learner`.
+void run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
+              LightShareLearner* learner = nullptr);
 
 // One pass: sample params.sample_index of every pixel, in waves of the device's size handed
-// to its lanes as they free up.
-RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params);
+// to its lanes as they free up (learner: as run_wave).
+RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
+                   LightShareLearner* learner = nullptr);
 
 } // namespace et
