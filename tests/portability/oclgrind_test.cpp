@@ -319,8 +319,8 @@ TEST(Oclgrind, SeveralWavesPerPassEqualPocl) {
 namespace {
 
 // The control, run by ctest with oclgrind_run.sh --expect: a kernel that reads memory nobody
-// wrote and whose work-items all write different values to one address must be reported, or the clean runs above
-// prove nothing.
+// wrote and whose work-items all write different values to one address must be reported, or the
+// clean runs above prove nothing.
 TEST(OclgrindControl, KernelWithErrorsRuns) {
     et::ClRuntime& rt = runtime_on(kOclgrind);
     const char* src = "__kernel void control(__global const float* in, __global float* out) {\n"
