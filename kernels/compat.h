@@ -5,7 +5,15 @@
 #ifndef ETK_COMPAT_H
 #define ETK_COMPAT_H
 
-#ifdef __OPENCL_VERSION__
+// OpenCL C or C++: decided by the language macro __OPENCL_C_VERSION__, which every OpenCL C
+// compiler predefines (the driver's compilers and clang offline alike). __OPENCL_VERSION__ is the
+// device's version and comes from the driver's headers only: an offline clang -target spir64
+// build does not define it.
+#ifdef __OPENCL_C_VERSION__
+#define ETK_OPENCL_C 1
+#endif
+
+#ifdef ETK_OPENCL_C
 
 // No fused multiply-adds: the host compiles with -ffp-contract=off, so both round alike.
 #pragma OPENCL FP_CONTRACT OFF
@@ -182,7 +190,7 @@ inline int isfinite(float x) {
 
 // Plain min/max (one instruction; a NaN operand yields the second): for hot paths whose
 // operands cannot be NaN, where OpenCL's fmin/fmax pay for NaN handling.
-#ifdef __OPENCL_VERSION__
+#ifdef ETK_OPENCL_C
 #define ETK_MINF(a, b) ((a) < (b) ? (a) : (b))
 #define ETK_MAXF(a, b) ((a) > (b) ? (a) : (b))
 #else

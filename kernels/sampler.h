@@ -30,12 +30,19 @@ ETK_FN uint etk_hash_combine(uint a, uint b) {
     return etk_hash(a ^ (etk_hash(b) + 0x9e3779b9u));
 }
 
+// One byte reversed with three multiplications (Sean Anderson's "bit twiddling hacks", 32-bit
+// variant; the wrap-around of the last product leaves bits 16..23 exact).
+ETK_FN uint etk_reverse_byte(uint b) {
+    return (((b * 0x0802u & 0x22110u) | (b * 0x8020u & 0x88440u)) * 0x10101u >> 16) & 0xffu;
+}
+
+// The 32 bits of x in reverse order. Written with multiplications rather than the usual
+// shift-and-mask network on purpose: LLVM recognises that network (and a bit-by-bit loop) and
+// replaces it with the llvm.bitreverse intrinsic, which some OpenCL implementations (Oclgrind)
+// and SPIR-V translators cannot compile. tests/portability checks that no program contains it.
 ETK_FN uint etk_reverse_bits(uint x) {
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-    return (x >> 16) | (x << 16);
+    return (etk_reverse_byte(x & 0xffu) << 24) | (etk_reverse_byte((x >> 8) & 0xffu) << 16) |
+           (etk_reverse_byte((x >> 16) & 0xffu) << 8) | etk_reverse_byte(x >> 24);
 }
 
 // Second Sobol' dimension (the first is the bit-reversed index).

@@ -28,3 +28,12 @@
     }
 
 ETK_STAGES(ETK_STAGE_KERNEL)
+
+// Zeroes n 32-bit words: the queue counters before each bounce and the film before the first
+// pass. A kernel rather than clEnqueueFillBuffer, so that the zeroes are written by the device
+// like every other value (Oclgrind's uninitialised-value check does not count a fill).
+__kernel void zero_words(__global uint* words, int n) {
+    int i = get_global_id(0);
+    if (i < n)
+        words[i] = 0u;
+}

@@ -2,8 +2,11 @@
 
 #include "util/error.h"
 #include "opencl/kernel_sources.h"
+#include "util/file_check.h"
 #include "util/timer.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -41,7 +44,93 @@ std::string build_log(const cl::Program& program, const cl::Device& device) {
     }
 }
 
+std::string lower(std::string s) {
+    for (char& c : s)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
+// A positive byte count from the environment variable `name` (a testing hook), else 0.
+uint64_t env_bytes(const char* name) {
+    const char* v = std::getenv(name);
+    if (!v || !*v)
+        return 0;
+    char* end = nullptr;
+    const unsigned long long x = std::strtoull(v, &end, 10);
+    if (*end != '\0' || x == 0)
+        throw Error(std::string(name) + ": expected a positive number of bytes, got '" + v + "'");
+    return x;
+}
+
+std::string bytes_text(uint64_t bytes) {
+    return std::to_string(bytes) + " bytes (" + byte_text(bytes) + ")";
+}
+
 } // namespace
+
+DeviceLimits query_device_limits(const cl::Device& device) {
+    DeviceLimits l;
+    l.max_alloc = device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+    l.global_mem = device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+    l.max_work_group = device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+    const std::vector<size_t> items = device.getInfo<CL_DEVICE_MAX_WORK_ITEM_SIZES>();
+    l.max_work_item_x = items.empty() ? l.max_work_group : items[0];
+    l.little_endian = device.getInfo<CL_DEVICE_ENDIAN_LITTLE>() != CL_FALSE;
+    l.host_unified = device.getInfo<CL_DEVICE_HOST_UNIFIED_MEMORY>() != CL_FALSE;
+    if (uint64_t v = env_bytes("ENVTRACE_CL_MAX_ALLOC"))
+        l.max_alloc = std::min(l.max_alloc, v);
+    if (uint64_t v = env_bytes("ENVTRACE_CL_GLOBAL_MEM"))
+        l.global_mem = std::min(l.global_mem, v);
+    return l;
+}
+
+void check_device_usable(const DeviceLimits& limits, const std::string& device_name) {
+    if (!limits.little_endian)
+        throw Error("OpenCL device '" + device_name +
+                    "' is big-endian (CL_DEVICE_ENDIAN_LITTLE is false); envtrace needs a "
+                    "little-endian device: integers travel inside float buffers and kernel "
+                    "arguments in the host's byte order");
+}
+
+void check_buffer_sizes(const std::vector<BufferRequest>& buffers, const DeviceLimits& limits,
+                        const std::string& device_name) {
+    uint64_t total = 0;
+    const BufferRequest* largest = nullptr;
+    for (const BufferRequest& b : buffers) {
+        if (b.bytes > limits.max_alloc)
+            throw Error("OpenCL device '" + device_name + "': buffer " + b.name + " needs " +
+                        bytes_text(b.bytes) + ", more than the device allows in one buffer " +
+                        "(CL_DEVICE_MAX_MEM_ALLOC_SIZE = " + bytes_text(limits.max_alloc) + ")");
+        total += b.bytes;
+        if (!largest || b.bytes > largest->bytes)
+            largest = &b;
+    }
+    if (total > limits.global_mem)
+        throw Error("OpenCL device '" + device_name + "': its " + std::to_string(buffers.size()) +
+                    " buffers need " + bytes_text(total) + " in all (the largest, " +
+                    largest->name + ", " + bytes_text(largest->bytes) +
+                    "), more than the device's memory (CL_DEVICE_GLOBAL_MEM_SIZE = " +
+                    bytes_text(limits.global_mem) + ")");
+}
+
+size_t choose_local_size(size_t kernel_max, size_t preferred_multiple, const DeviceLimits& limits,
+                         size_t target) {
+    size_t local = std::max<size_t>(1, target);
+    for (size_t cap : {kernel_max, limits.max_work_group, limits.max_work_item_x})
+        if (cap > 0)
+            local = std::min(local, cap);
+    if (preferred_multiple > 1 && local >= preferred_multiple)
+        local -= local % preferred_multiple;
+    return local;
+}
+
+size_t choose_local_size(const cl::Kernel& kernel, const cl::Device& device,
+                         const DeviceLimits& limits, size_t target) {
+    return choose_local_size(
+        kernel.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(device),
+        kernel.getWorkGroupInfo<CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE>(device), limits,
+        target);
+}
 
 std::string cl_error_name(cl_int code) {
     switch (code) {
@@ -76,8 +165,15 @@ std::vector<DeviceEntry> list_devices() {
     }
     if (platforms.empty())
         throw Error(std::string("no OpenCL platform found: ") + kInstallHint);
+    const char* filter_env = std::getenv("ENVTRACE_CL_PLATFORM");
+    const std::string filter = filter_env ? lower(filter_env) : "";
+    std::string names;
     std::vector<DeviceEntry> out;
     for (auto& p : platforms) {
+        const std::string pname = p.getInfo<CL_PLATFORM_NAME>();
+        names += (names.empty() ? "'" : ", '") + pname + "'";
+        if (!filter.empty() && lower(pname).find(filter) == std::string::npos)
+            continue;
         std::vector<cl::Device> devices;
         try {
             p.getDevices(CL_DEVICE_TYPE_ALL, &devices);
@@ -88,8 +184,7 @@ std::vector<DeviceEntry> list_devices() {
             DeviceEntry e;
             e.platform = p;
             e.device = d;
-            e.platform_name =
-                p.getInfo<CL_PLATFORM_NAME>() + " " + p.getInfo<CL_PLATFORM_VERSION>();
+            e.platform_name = pname + " " + p.getInfo<CL_PLATFORM_VERSION>();
             e.device_name = d.getInfo<CL_DEVICE_NAME>();
             e.device_version = d.getInfo<CL_DEVICE_VERSION>();
             e.driver_version = d.getInfo<CL_DRIVER_VERSION>();
@@ -97,6 +192,9 @@ std::vector<DeviceEntry> list_devices() {
             out.push_back(std::move(e));
         }
     }
+    if (out.empty() && !filter.empty())
+        throw Error("ENVTRACE_CL_PLATFORM='" + std::string(filter_env) +
+                    "' matches no OpenCL platform with a device; the platforms are " + names);
     if (out.empty())
         throw Error(std::string("OpenCL platforms exist but none has a device: ") + kInstallHint);
     return out;
@@ -110,6 +208,13 @@ ClRuntime::ClRuntime(int device_index) {
                                          : "are " + std::to_string(devices.size()) + " devices") +
                     " (see 'envtrace devices')");
     entry_ = devices[device_index];
+    try {
+        limits_ = query_device_limits(entry_.device);
+    } catch (const cl::Error& e) {
+        throw Error("cannot query OpenCL device '" + entry_.device_name +
+                    "': " + cl_error_name(e.err()));
+    }
+    check_device_usable(limits_, entry_.device_name);
     try {
         context_ = cl::Context(entry_.device);
         queue_ = cl::CommandQueue(context_, entry_.device);

@@ -3,10 +3,48 @@
 #pragma once
 #include <CL/opencl.hpp>
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace et {
+
+// What envtrace needs to know of a device before it allocates or launches anything.
+struct DeviceLimits {
+    uint64_t max_alloc = 0;     // CL_DEVICE_MAX_MEM_ALLOC_SIZE
+    uint64_t global_mem = 0;    // CL_DEVICE_GLOBAL_MEM_SIZE
+    size_t max_work_group = 0;  // CL_DEVICE_MAX_WORK_GROUP_SIZE
+    size_t max_work_item_x = 0; // CL_DEVICE_MAX_WORK_ITEM_SIZES[0]
+    bool little_endian = true;  // CL_DEVICE_ENDIAN_LITTLE
+    bool host_unified = false;  // CL_DEVICE_HOST_UNIFIED_MEMORY: reads host memory in place
+};
+
+// The device's limits; ENVTRACE_CL_MAX_ALLOC and ENVTRACE_CL_GLOBAL_MEM (bytes) lower the two
+// memory limits, to exercise the checks below as on a smaller device.
+DeviceLimits query_device_limits(const cl::Device& device);
+
+// Refuses a device envtrace cannot run on (big-endian: integers travel inside float buffers and
+// kernel arguments in the host's byte order), with a message naming it.
+void check_device_usable(const DeviceLimits& limits, const std::string& device_name);
+
+// One device buffer about to be allocated: its name (kernels/path_state.h) and size.
+struct BufferRequest {
+    std::string name;
+    uint64_t bytes = 0;
+};
+// Checks every buffer against the device's largest allocation and their sum against its global
+// memory, before anything is allocated; throws et::Error naming the buffer and the sizes.
+void check_buffer_sizes(const std::vector<BufferRequest>& buffers, const DeviceLimits& limits,
+                        const std::string& device_name);
+
+// The work-group size for a kernel: the largest size <= target that the kernel and device
+// allow (CL_KERNEL_WORK_GROUP_SIZE, device limits), rounded down to the kernel's preferred
+// multiple when that fits.
+size_t choose_local_size(size_t kernel_max, size_t preferred_multiple, const DeviceLimits& limits,
+                         size_t target = 64);
+size_t choose_local_size(const cl::Kernel& kernel, const cl::Device& device,
+                         const DeviceLimits& limits, size_t target = 64);
 
 struct DeviceEntry {
     cl::Platform platform;
@@ -15,8 +53,10 @@ struct DeviceEntry {
     int compute_units = 0;
 };
 
-// Every device of every platform, in a stable order (the index is what --device takes). Throws
-// et::Error with what to install when there is no platform or no device.
+// Every device of every platform, in a stable order (the index is what --device takes). When
+// ENVTRACE_CL_PLATFORM is set, only the platforms whose name contains it (case-insensitive), e.g.
+// ENVTRACE_CL_PLATFORM=oclgrind. Throws et::Error with what to install when there is no platform
+// or no device, and with the platforms' names when none matches.
 std::vector<DeviceEntry> list_devices();
 
 struct ProgramBuildInfo {
@@ -30,6 +70,7 @@ class ClRuntime {
     explicit ClRuntime(int device_index = 0);
 
     const DeviceEntry& device() const { return entry_; }
+    const DeviceLimits& limits() const { return limits_; }
     cl::Context& context() { return context_; }
     cl::CommandQueue& queue() { return queue_; }
 
@@ -47,6 +88,7 @@ class ClRuntime {
 
   private:
     DeviceEntry entry_;
+    DeviceLimits limits_;
     cl::Context context_;
     cl::CommandQueue queue_;
 };

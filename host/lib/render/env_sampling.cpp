@@ -21,6 +21,9 @@ EnvSampleRecord record(const EnvMap& env, const etk::EtkEnvMap& desc, etk::float
 
 EnvSamplerCL::EnvSamplerCL(ClRuntime& rt, const EnvMap& env, ProgramBuildInfo* build)
     : rt_(rt), desc_(env.desc()) {
+    check_buffer_sizes({{"env_dist", env.dist.table.size() * sizeof(float)},
+                        {"env_texels", env.image.rgb.size() * sizeof(float)}},
+                       rt.limits(), rt.device().device_name);
     program_ = rt.build("envmap_sample.cl", "", build);
     try {
         dist_ = cl::Buffer(rt.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
@@ -51,7 +54,7 @@ std::vector<EnvSampleRecord> EnvSamplerCL::run(cl::Kernel& k, int n, int out_arg
         cl::Buffer cells(rt_.context(), CL_MEM_WRITE_ONLY, sizeof(int) * 2 * n);
         k.setArg(out_arg, out);
         k.setArg(out_arg + 1, cells);
-        const int local = 64;
+        const size_t local = choose_local_size(k, rt_.device().device, rt_.limits());
         rt_.queue().enqueueNDRangeKernel(
             k, cl::NullRange, cl::NDRange((n + local - 1) / local * local), cl::NDRange(local));
         std::vector<float> o(8 * static_cast<size_t>(n));

@@ -7,7 +7,10 @@
 namespace et {
 namespace {
 
-constexpr int kLocal = 64; // one fixed work-group size for every kernel
+// The work-group size asked for; each kernel gets the largest size up to it that the kernel and
+// the device allow (choose_local_size). Fixed per kernel for the whole render: PoCL compiles a
+// work-group function per distinct local size.
+constexpr size_t kTargetLocal = 64;
 
 // Device bytes per path in flight: the path fields and the queues (ray_in and ray_out are two
 // buffers that swap).
@@ -17,15 +20,19 @@ constexpr size_t kBytesPerPath = 0 ETK_PATH_FIELDS(ET_FIELD_BYTES) ETK_QUEUES(ET
 #undef ET_FIELD_BYTES
 #undef ET_QUEUE_BYTES
 
-// A read-only buffer over `v`, which the DeviceScene keeps alive for the renderer's lifetime:
-// CL_MEM_USE_HOST_PTR lets a CPU device (PoCL) read the host vector in place instead of holding
-// a second copy of a map that may be gigabytes; a GPU copies it as it would anyway. Device
-// buffers cannot be empty: an empty vector gets one zero element.
-template <typename T> cl::Buffer upload(cl::Context& ctx, const std::vector<T>& v) {
+// A read-only buffer over `v`, which the DeviceScene keeps alive for the renderer's lifetime.
+// On a device that shares the host's memory (PoCL on the CPU) CL_MEM_USE_HOST_PTR reads the
+// host vector in place instead of holding a second copy of a map that may be gigabytes; any
+// other device (a GPU, Oclgrind's simulator) gets its own copy, CL_MEM_COPY_HOST_PTR, which is
+// what it would make anyway and which every implementation counts as initialised memory.
+// Device buffers cannot be empty: an empty vector gets one zero element.
+template <typename T>
+cl::Buffer upload(cl::Context& ctx, const std::vector<T>& v, bool host_unified) {
     static const T zero{};
     const void* data = v.empty() ? &zero : v.data();
-    return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR,
-                      std::max<size_t>(1, v.size()) * sizeof(T), const_cast<void*>(data));
+    const cl_mem_flags where = host_unified ? CL_MEM_USE_HOST_PTR : CL_MEM_COPY_HOST_PTR;
+    return cl::Buffer(ctx, CL_MEM_READ_ONLY | where, std::max<size_t>(1, v.size()) * sizeof(T),
+                      const_cast<void*>(data));
 }
 
 } // namespace
@@ -35,21 +42,48 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     : rt_(std::move(rt_ptr)), pixels_(scene.width() * scene.height()) {
     ClRuntime& rt = *rt_;
     const cl::Device& dev = rt.device().device;
-    const size_t max_alloc = dev.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
-    const size_t global_mem = dev.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+    const DeviceLimits& lim = rt.limits();
+    // Every buffer with its size, checked against the device before anything is allocated. The
+    // fixed ones (scene, film, counters) first; the paths in flight get a share of what is left.
+    std::vector<BufferRequest> buffers;
+#define ET_SCENE_SIZE(type, name)                                                                  \
+    buffers.push_back({#name, std::max<uint64_t>(1, scene.name.size()) * sizeof(type)});
+    ETK_SCENE_BUFFERS(ET_SCENE_SIZE)
+#undef ET_SCENE_SIZE
+#define ET_FILM_SIZE(type, name) buffers.push_back({#name, uint64_t(sizeof(type)) * pixels_});
+    ETK_FILM_FIELDS(ET_FILM_SIZE)
+#undef ET_FILM_SIZE
+    buffers.push_back({"counters", uint64_t(sizeof(cl_uint)) * etk::ETK_Q_COUNT});
+    uint64_t fixed = 0;
+    for (const BufferRequest& b : buffers)
+        fixed += b.bytes;
+    const uint64_t free_mem = lim.global_mem > fixed ? lim.global_mem - fixed : 0;
     const int cap = static_cast<int>(
-        std::min<size_t>({size_t(1) << 22, max_alloc / 16, global_mem / 4 / kBytesPerPath}));
+        std::min<uint64_t>({uint64_t(1) << 22, lim.max_alloc / 16,
+                            std::min(free_mem, lim.global_mem / 4) / kBytesPerPath}));
     paths_ = std::max(1, std::min(paths > 0 ? paths : pixels_, std::min(cap, pixels_)));
+    const uint64_t n = static_cast<uint64_t>(paths_), px = static_cast<uint64_t>(pixels_);
+#define ET_PATH_SIZE(type, name) buffers.push_back({#name, sizeof(type) * n});
+    ETK_PATH_FIELDS(ET_PATH_SIZE)
+#undef ET_PATH_SIZE
+#define ET_QUEUE_SIZE(name) buffers.push_back({#name, sizeof(cl_int) * n});
+    ETK_QUEUES(ET_QUEUE_SIZE)
+#undef ET_QUEUE_SIZE
+    check_buffer_sizes(buffers, lim, rt.device().device_name);
     try {
         queue_ = cl::CommandQueue(rt.context(), dev, CL_QUEUE_PROFILING_ENABLE);
         program_ = rt.build("wavefront.cl", "", build);
-        for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s)
+        for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s) {
             kernels_.emplace_back(program_, stage_name(s));
+            local_.push_back(choose_local_size(kernels_.back(), dev, lim, kTargetLocal));
+        }
+        zero_ = cl::Kernel(program_, "zero_words");
+        zero_local_ = choose_local_size(zero_, dev, lim, kTargetLocal);
         seconds_.assign(etk::ETK_STAGE_COUNT, 0.0);
         auto& ctx = rt.context();
         args_.resize(etk::ETK_ARG_COUNT);
-        const size_t n = static_cast<size_t>(paths_), px = static_cast<size_t>(pixels_);
-#define ET_UPLOAD(type, name) args_[etk::ETK_ARG_##name] = upload(ctx, scene.name);
+#define ET_UPLOAD(type, name)                                                                      \
+    args_[etk::ETK_ARG_##name] = upload(ctx, scene.name, lim.host_unified);
         ETK_SCENE_BUFFERS(ET_UPLOAD)
 #undef ET_UPLOAD
 #define ET_ALLOC(type, name)                                                                       \
@@ -62,7 +96,7 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
         queue_b_ = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
 #define ET_FILM(type, name)                                                                        \
     args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * px);            \
-    queue_.enqueueFillBuffer(args_[etk::ETK_ARG_##name], 0.0f, 0, sizeof(type) * px);
+    zero_words(args_[etk::ETK_ARG_##name], sizeof(type) * px / 4);
         ETK_FILM_FIELDS(ET_FILM)
 #undef ET_FILM
         args_[etk::ETK_ARG_counters] =
@@ -86,9 +120,22 @@ void ClDevice::run_lanes(const std::function<void(int)>& f) {
     }
 }
 
+void ClDevice::zero_words(const cl::Buffer& buffer, uint64_t words) {
+    zero_.setArg(0, buffer);
+    zero_.setArg(1, static_cast<cl_int>(words));
+    queue_.enqueueNDRangeKernel(zero_, cl::NullRange,
+                                cl::NDRange((words + zero_local_ - 1) / zero_local_ * zero_local_),
+                                cl::NDRange(zero_local_));
+}
+
 void ClDevice::finish() {
     queue_.finish();
-    // Profiling times of the finished launches, so that events are not kept for the whole render.
+    collect_events();
+}
+
+void ClDevice::collect_events() {
+    // Profiling times of the finished launches; the events are released here, so a render holds
+    // at most one bounce's worth of them.
     for (auto& [stage, ev] : pending_)
         seconds_[stage] += (ev.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
                             ev.getProfilingInfo<CL_PROFILING_COMMAND_START>()) *
@@ -104,13 +151,14 @@ void ClDevice::bind_queues(bool swapped) {
 }
 
 void ClDevice::reset_counters() {
-    queue_.enqueueFillBuffer(args_[etk::ETK_ARG_counters], cl_uint(0), 0,
-                             sizeof(cl_uint) * etk::ETK_Q_COUNT);
+    zero_words(args_[etk::ETK_ARG_counters], etk::ETK_Q_COUNT);
 }
 
 void ClDevice::read_counters(uint32_t* out) {
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_counters], CL_TRUE, 0,
                              sizeof(cl_uint) * etk::ETK_Q_COUNT, out);
+    // A blocking read on an in-order queue: every launch before it has finished.
+    collect_events();
 }
 
 void ClDevice::read_learning(int n, int* bins) {
@@ -123,9 +171,10 @@ void ClDevice::launch(int stage, int n, const etk::EtkParams& params) {
     cl::Kernel& k = kernels_[stage];
     k.setArg(etk::ETK_ARG_params, sizeof(params), &params);
     k.setArg(etk::ETK_ARG_n, n);
+    const size_t local = local_[stage];
     cl::Event ev;
-    queue_.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + kLocal - 1) / kLocal * kLocal),
-                                cl::NDRange(kLocal), nullptr, &ev);
+    queue_.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + local - 1) / local * local),
+                                cl::NDRange(local), nullptr, &ev);
     pending_.emplace_back(stage, ev);
 }
 

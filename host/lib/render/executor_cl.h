@@ -33,15 +33,26 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     void read_learning(int n, int* bins) override;
     void launch(int stage, int n, const etk::EtkParams& params) override;
 
+    // Events of launches not yet accounted (for tests: stays bounded during a render).
+    size_t pending_events() const { return pending_.size(); }
+    // Work-group size of each stage's kernel (by ETK_STAGE_*), as chosen for this device.
+    const std::vector<size_t>& local_sizes() const { return local_; }
+
   private:
+    void zero_words(const cl::Buffer& buffer, uint64_t words);
+    void collect_events();
+
     std::unique_ptr<ClRuntime> rt_;
     int pixels_, paths_;
     cl::CommandQueue queue_;
     cl::Program program_;
     std::vector<cl::Kernel> kernels_; // by ETK_STAGE_*
-    std::vector<cl::Buffer> args_;    // by ETK_ARG_* (buffers only)
-    cl::Buffer queue_a_, queue_b_;    // bound to ray_in / ray_out
-    std::vector<double> seconds_;     // per stage: finished launches
+    std::vector<size_t> local_;       // work-group size per kernel
+    cl::Kernel zero_;                 // zero_words
+    size_t zero_local_ = 1;
+    std::vector<cl::Buffer> args_; // by ETK_ARG_* (buffers only)
+    cl::Buffer queue_a_, queue_b_; // bound to ray_in / ray_out
+    std::vector<double> seconds_;  // per stage: finished launches
     std::vector<std::pair<int, cl::Event>> pending_;
 };
 
