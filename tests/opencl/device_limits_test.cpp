@@ -142,6 +142,7 @@ class Watch : public et::StageExecutor {
     void bind_queues(bool swapped) override { d_.bind_queues(swapped); }
     void reset_counters() override { d_.reset_counters(); }
     void read_counters(uint32_t* c) override { d_.read_counters(c); }
+    void read_learning(int n, int* bins) override { d_.read_learning(n, bins); }
     void launch(int stage, int n, const etk::EtkParams& p) override {
         d_.launch(stage, n, p);
         ++launches;
