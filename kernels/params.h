@@ -32,7 +32,7 @@ ETK_FN int etk_strategy_is_mis(int strategy) {
 // Learning passes: every pixel renders with one of ETK_SHARE_CANDIDATES configurations, picked
 // by a hash of the pixel and seed, so that the host can compare their variance per material
 // (host/lib/render/light_share.h). Candidate 0 is the paper's estimator.
-#define ETK_SHARE_CANDIDATES 5
+#define ETK_SHARE_CANDIDATES 4
 ETK_FN int etk_learning_candidate(uint seed, int pixel) {
     uint x = (uint)pixel * 0x9e3779b9u ^ seed * 0x85ebca6bu;
     x ^= x >> 16;
@@ -42,10 +42,10 @@ ETK_FN int etk_learning_candidate(uint seed, int pixel) {
 }
 // Candidate k: (share, flags). 0: full distribution, s = 1, D(h) cos sampling (the paper's
 // MIS); 1: the same with visible normals; 2: compensated, s = 1 (the compensated strategy);
-// 3: compensated, s = 0.5 (more BSDF samples); 4: full, s = 1.5 at the last bounce (more light
-// samples), 0.5 below it.
+// 3: compensated, s = 0.5 (more BSDF samples).
 ETK_FN float etk_learning_share(int k, int last) {
-    return k == 3 ? 0.5f : k == 4 ? (last ? 1.5f : 0.5f) : 1.0f;
+    (void)last;
+    return k == 3 ? 0.5f : 1.0f;
 }
 ETK_FN int etk_learning_flags(int k) {
     return k == 0 ? 0 : (k == 2 || k == 3) ? ETK_BIN_COMPENSATED | ETK_BIN_VNDF : ETK_BIN_VNDF;

@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace et {
 namespace {
-
-constexpr int kTile = 8; // weights from 8x8-pixel tile means: less noise than one pixel
 
 double luma(const float4& v) {
     return 0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z;
@@ -39,39 +38,74 @@ LightShareLearner::measure() const {
     std::array<std::array<Cell, ETK_SHARE_CANDIDATES>, ETK_SHARE_BINS> cells{};
     if (last_.empty())
         return cells;
-    // Relative weights 1 / (m^2 + eps): m the tile's mean luminance, eps = (2% of the image's
-    // mean)^2 so that black tiles do not dominate.
-    const int tw = (width_ + kTile - 1) / kTile, th = (height_ + kTile - 1) / kTile;
-    std::vector<double> sum(static_cast<size_t>(tw) * th, 0.0), n(sum.size(), 0.0);
+    // Relative weights 1 / (m^2 + eps): m the pixel's mean luminance over the other learning
+    // passes, eps = (2% of the image's mean)^2 so that black pixels do not dominate.
     double all = 0.0, all_n = 0.0;
-    for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x) {
-            const float4& v = last_[static_cast<size_t>(y) * width_ + x];
-            const double l = std::isfinite(luma(v)) ? luma(v) : 0.0;
-            const size_t t = static_cast<size_t>(y / kTile) * tw + x / kTile;
-            sum[t] += l;
-            n[t] += v.w;
-            all += l;
-            all_n += v.w;
-        }
+    for (const float4& v : last_) {
+        all += std::isfinite(luma(v)) ? luma(v) : 0.0;
+        all_n += v.w;
+    }
     const double mean = all_n > 0.0 ? all / all_n : 0.0;
     const double eps = std::max(1e-30, (0.02 * mean) * (0.02 * mean));
+    struct Pair {
+        int bin, k;
+        double v;
+    };
+    std::vector<Pair> pairs;
+    std::array<std::vector<double>, ETK_SHARE_BINS> by_bin;
     for (int y = 0; y < height_; ++y)
         for (int x = 0; x < width_; ++x) {
             const size_t px = static_cast<size_t>(y) * width_ + x;
-            const size_t t = static_cast<size_t>(y / kTile) * tw + x / kTile;
-            const double m = n[t] > 0.0 ? sum[t] / n[t] : 0.0;
-            const double w = 1.0 / (m * m + eps);
             const int k = etk::etk_learning_candidate(seed_, static_cast<int>(px));
-            for (size_t p = 0; p + 1 < values_.size(); p += 2) {
+            double all_values = 0.0;
+            for (const auto& v : values_)
+                all_values += v[px];
+            // Pairs of blocks of B consecutive passes: passes [2jB, 2jB+B) against
+            // [2jB+B, 2jB+2B). Each block is a B-sample QMC estimate (the sampler's first 2^m
+            // samples form nets), so the difference measures the error the image will have,
+            // stratification included -- which per-sample variance does not see.
+            const size_t B = static_cast<size_t>(std::max(1, opt_.block));
+            for (size_t p = 0; p + 2 * B <= values_.size(); p += 2 * B) {
                 const int bin = bins_[p][px];
-                if (bin < 0 || bin >= ETK_SHARE_BINS || bins_[p + 1][px] != bin)
-                    continue; // no non-delta first hit, or not the same material twice
-                const double d = double(values_[p][px]) - double(values_[p + 1][px]);
-                cells[bin][k].sum += w * 0.5 * d * d;
-                ++cells[bin][k].pixels;
+                bool same = bin >= 0 && bin < ETK_SHARE_BINS;
+                double a = 0.0, c = 0.0;
+                for (size_t q = 0; q < B && same; ++q) {
+                    same = bins_[p + q][px] == bin && bins_[p + B + q][px] == bin;
+                    a += values_[p + q][px];
+                    c += values_[p + B + q][px];
+                }
+                if (!same)
+                    continue; // no non-delta first hit, or not the same material throughout
+                const double d = (a - c) / double(B);
+                // The pixel's mean from the other passes: independent of this pair's values,
+                // so a pair's own outlier does not lower its weight.
+                const double m = values_.size() > 2 * B ? (all_values - a - c) /
+                                                              double(values_.size() - 2 * B)
+                                                        : (a + c) / double(2 * B);
+                const double w = 1.0 / (m * m + eps);
+                pairs.push_back({bin, k, w * 0.5 * d * d});
+                by_bin[bin].push_back(pairs.back().v);
             }
         }
+    // Heavy tails: a few fireflies among a few pairs decide a plain mean by chance. Each value
+    // is capped at kCap x the median of its bin (all candidates together), so that the choice
+    // follows the bulk of the distribution; the cap only steers the choice -- every candidate
+    // is an unbiased estimator.
+    constexpr double kCap = 50.0;
+    std::array<double, ETK_SHARE_BINS> cap;
+    for (int b = 0; b < ETK_SHARE_BINS; ++b) {
+        auto& v = by_bin[b];
+        cap[b] = std::numeric_limits<double>::infinity();
+        if (v.empty())
+            continue;
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        if (v[v.size() / 2] > 0.0)
+            cap[b] = kCap * v[v.size() / 2];
+    }
+    for (const Pair& q : pairs) {
+        cells[q.bin][q.k].sum += std::min(q.v, cap[q.bin]);
+        ++cells[q.bin][q.k].pixels;
+    }
     return cells;
 }
 

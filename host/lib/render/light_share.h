@@ -8,9 +8,10 @@
 // unbiased estimate of that estimator's variance -- with every term in it: the correlation of
 // the two samples of a vertex, the MIS weights, visibility, later bounces. Per material bin (of
 // the pixel's first hit, the same in both passes) and candidate, the mean of these estimates,
-// each weighted by 1 / (tile mean^2 + eps) (an 8x8 tile's mean luminance over the learning
-// passes) so that the objective is the relative variance that the eye and the efficiency
-// harness see, picks the candidate: a share, a light distribution (full or compensated) and a
+// each weighted by 1 / (m^2 + eps) (m: the pixel's mean luminance over the other learning
+// passes, independent of the pair) so that the objective is the relative variance that the eye
+// and the efficiency harness see, each capped at 50x the bin's median (heavy tails), picks the
+// candidate: a share, a light distribution (full or compensated) and a
 // GGX sampling (kernels/params.h, etk_learning_share and etk_learning_flags). Every candidate is
 // a reasonable estimator (candidate 0 is the paper's), so the learning passes, which are part of
 // the image, cost little even where a candidate loses.
@@ -31,7 +32,8 @@ namespace et {
 using etk::float4;
 
 struct LightShareOptions {
-    int learning_passes = 6; // samples 0 .. 5, compared in pairs (0,1), (2,3), (4,5)
+    int learning_passes = 16; // samples 0 .. 15
+    int block = 4;            // compared in pairs of 4-pass blocks: (0-3, 4-7), (8-11, 12-15)
     int min_pixels = 16;     // pixel pairs every candidate of a bin needs to be compared
     bool last_bounce = true; // first hits are the last bounce (max_depth 1)
 };

@@ -48,13 +48,16 @@ void Renderer::run(uint32_t sample_index, bool learn) {
     p.sample_index = sample_index;
     std::copy(shares_.begin(), shares_.end(), p.light_share);
     std::copy(flags_.begin(), flags_.end(), p.bin_flags);
+    // Samples 0 .. L-1 are learning samples whether or not they are learnt from (a resume
+    // renders them again on a scratch film to learn): the image depends on the sample index
+    // alone.
+    p.learn = learning_ && sample_index < static_cast<uint32_t>(options_.learning_passes);
     LightShareLearner* learner = nullptr;
     if (learn) {
         if (!learner_)
             learner_ = std::make_unique<LightShareLearner>(options_, film_.width(), film_.height(),
                                                            scene_.params.seed);
         learner_->begin_pass(film().film_sum);
-        p.learn = 1;
         learner = learner_.get();
     }
     const RayCounts c = run_pass(*device_, p, learner);
