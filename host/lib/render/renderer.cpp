@@ -11,13 +11,22 @@
 namespace et {
 
 Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
-    : scene_(scene), film_(scene.width(), scene.height()), device_(make_device(film_)) {}
+    : scene_(scene), film_(scene.width(), scene.height()), sums_(scene.width(), scene.height()),
+      device_(make_device(film_)) {}
 
 void Renderer::render_sample(uint32_t sample_index) {
     Timer timer;
     etk::EtkParams p = scene_.params;
     p.sample_index = sample_index;
+    // The pass renders into a zeroed film (element-wise: the native back end holds pointers
+    // into film_), whose one sample per pixel is then added exactly to the sums.
+#define ET_ZERO(type, name) std::fill(film_.name.begin(), film_.name.end(), type{});
+    ETK_FILM_FIELDS(ET_ZERO)
+#undef ET_ZERO
+    device_->upload_film(film_);
     const RayCounts c = run_pass(*device_, p);
+    device_->download_film(film_);
+    sums_.add_pass(film_);
     stats_.camera_rays += c.camera;
     stats_.continuation_rays += c.continuation;
     stats_.shadow_rays += c.shadow;
@@ -27,21 +36,12 @@ void Renderer::render_sample(uint32_t sample_index) {
     stats_.seconds += timer.seconds();
 }
 
-const Film& Renderer::film() {
-    device_->download_film(film_);
-    return film_;
-}
-
-void Renderer::resume(const Film& film) {
-    if (film.width() != film_.width() || film.height() != film_.height())
-        throw Error("cannot resume a " + std::to_string(film_.width()) + "x" +
-                    std::to_string(film_.height()) + " render from a " +
-                    std::to_string(film.width()) + "x" + std::to_string(film.height()) + " film");
-        // Element-wise: the native back end holds pointers into film_.
-#define ET_COPY(type, name) std::copy(film.name.begin(), film.name.end(), film_.name.begin());
-    ETK_FILM_FIELDS(ET_COPY)
-#undef ET_COPY
-    device_->upload_film(film_);
+void Renderer::resume(const FilmSums& sums) {
+    if (sums.width() != sums_.width() || sums.height() != sums_.height())
+        throw Error("cannot resume a " + std::to_string(sums_.width()) + "x" +
+                    std::to_string(sums_.height()) + " render from a " +
+                    std::to_string(sums.width()) + "x" + std::to_string(sums.height()) + " film");
+    sums_ = sums;
 }
 
 const RenderStats& Renderer::stats() {

@@ -1,11 +1,14 @@
 // The renderer: a prepared scene, a back end (OpenCL or native) and the film. Each pass adds
-// one sample to every pixel by running the one bounce schedule (schedule.h) on the back end.
+// one sample to every pixel by running the one bounce schedule (schedule.h) on the back end,
+// into a zeroed device film that is then added, exactly, to the film's sums (film_sums.h): the
+// image does not depend on which process rendered which sample index, or in which order.
 // Path tracing, SIS and directional light sets are all this renderer; the strategy in the
 // scene's settings picks the stages.
 #pragma once
 #include "opencl/opencl_runtime.h"
 #include "prepare/device_scene.h"
 #include "render/film.h"
+#include "render/film_sums.h"
 #include "render/schedule.h"
 
 #include <cstdint>
@@ -36,19 +39,20 @@ class Renderer {
     Renderer(const DeviceScene& scene, const DeviceFactory& make_device);
     // Adds one sample to every pixel (index `sample_index` of each pixel's sequence).
     void render_sample(uint32_t sample_index);
-    // The film so far (read back from the device).
-    const Film& film();
-    // Continues from a film of the same size (sums of an earlier, interrupted render).
-    void resume(const Film& film);
+    // The sums of every sample rendered (and resumed from) so far.
+    const FilmSums& sums() const { return sums_; }
+    // Continues from sums of the same size (an earlier, interrupted render, or another rank's).
+    void resume(const FilmSums& sums);
     // Mean radiance per pixel (RGB, row-major, row 0 at the top).
-    std::vector<float> image() { return film().mean(); }
+    std::vector<float> image() const { return sums_.mean(); }
     const RenderStats& stats();
     int paths() const { return device_->lanes() * device_->wave_size(); }
     std::string name() const { return device_->name(); }
 
   private:
     const DeviceScene& scene_;
-    Film film_; // declared before device_: the native back end writes into it
+    Film film_; // one pass; declared before device_: the native back end writes into it
+    FilmSums sums_;
     std::unique_ptr<WavefrontDevice> device_;
     RenderStats stats_;
 };
