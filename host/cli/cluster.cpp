@@ -1,7 +1,9 @@
 #include "cluster.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
+#include <thread>
 #include <unistd.h>
 #include <vector>
 
@@ -21,6 +23,27 @@ int launcher_world_size() {
 }
 
 #ifdef ENVTRACE_HAVE_MPI
+// Waits for a request without spinning: a rank that finished its pass early would otherwise
+// poll (and, oversubscribed, sched_yield) at full speed, taking a core from the ranks still
+// rendering. Small messages only: MPI progresses between the tests.
+void wait_idle(MPI_Request& request) {
+    for (int tests = 0;; ++tests) {
+        int done = 0;
+        MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+        if (done)
+            return;
+        if (tests > 50)
+            std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+}
+
+// Every rank has arrived (idle wait): what follows runs without ranks waiting long in it.
+void arrive_all() {
+    MPI_Request r;
+    MPI_Ibarrier(MPI_COMM_WORLD, &r);
+    wait_idle(r);
+}
+
 void add_pixels_op(void* in, void* inout, int* len, MPI_Datatype*) {
     FilmSums::add_pixels(static_cast<FilmSums::Pixel*>(inout),
                          static_cast<const FilmSums::Pixel*>(in), static_cast<size_t>(*len));
@@ -70,7 +93,9 @@ void Cluster::check(const std::string& error) const {
 #ifdef ENVTRACE_HAVE_MPI
     const std::string mine = error.empty() ? "" : describe(rank_) + " (" + host_ + "): " + error;
     int failed = mine.empty() ? 0 : 1, any = 0;
-    MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Request r;
+    MPI_Iallreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD, &r);
+    wait_idle(r);
     if (!any)
         return;
     const int len = static_cast<int>(mine.size());
@@ -103,16 +128,22 @@ void Cluster::check(const std::string& error) const {
 
 int64_t Cluster::broadcast(int64_t value) const {
 #ifdef ENVTRACE_HAVE_MPI
-    if (mpi_)
-        MPI_Bcast(&value, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+    if (mpi_) {
+        MPI_Request r;
+        MPI_Ibcast(&value, 1, MPI_INT64_T, 0, MPI_COMM_WORLD, &r);
+        wait_idle(r);
+    }
 #endif
     return value;
 }
 
 void Cluster::max_all(int64_t* values, int n) const {
 #ifdef ENVTRACE_HAVE_MPI
-    if (mpi_)
-        MPI_Allreduce(MPI_IN_PLACE, values, n, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD);
+    if (mpi_) {
+        MPI_Request r;
+        MPI_Iallreduce(MPI_IN_PLACE, values, n, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD, &r);
+        wait_idle(r);
+    }
 #else
     (void)values;
     (void)n;
@@ -140,6 +171,7 @@ FilmSums Cluster::reduce(const FilmSums& mine) const {
     MPI_Op op;
     MPI_Op_create(&add_pixels_op, 1, &op); // commutative: integer sums and flag unions
     FilmSums out = rank_ == 0 ? FilmSums(mine.width(), mine.height()) : FilmSums();
+    arrive_all();
     constexpr size_t kSlice = size_t(1) << 16; // pixels per message: 7 MiB
     for (size_t first = 0; first < mine.pixels(); first += kSlice) {
         const int n = static_cast<int>(std::min(kSlice, mine.pixels() - first));
