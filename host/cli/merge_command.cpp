@@ -122,10 +122,10 @@ void run(const MergeArgs& a) {
     if (!a.state.empty())
         write_render_state(outputs, a.state, merged);
     outputs.commit();
-    std::printf("merged %zu parts (%s%s) into %s and %s%s%s: %d spp\n", parts.size(),
-                samples_text(0, covered).c_str(), gaps.empty() ? "" : ", with gaps",
-                exr_name.c_str(), png_name.c_str(), a.state.empty() ? "" : " and ", a.state.c_str(),
-                merged.spp);
+    std::printf("merged %zu part%s (%s%s) into %s and %s%s%s: %d spp\n", parts.size(),
+                parts.size() == 1 ? "" : "s", samples_text(0, covered).c_str(),
+                gaps.empty() ? "" : ", with gaps", exr_name.c_str(), png_name.c_str(),
+                a.state.empty() ? "" : " and ", a.state.c_str(), merged.spp);
 }
 
 } // namespace

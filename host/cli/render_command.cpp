@@ -410,7 +410,7 @@ void run(const RenderArgs& a, Globals& g) {
             progress.update(static_cast<int>(done), render.seconds());
     }
     progress.finish();
-    if (sig)
+    if (sig && cl.root())
         std::fprintf(stderr,
                      "envtrace: %s: stopped at %d spp; writing the %s (a second "
                      "signal stops at once)\n",

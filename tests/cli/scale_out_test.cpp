@@ -273,6 +273,36 @@ TEST(MpiRender, KilledRankEndsTheJobNamingIt) {
     EXPECT_TRUE(written_in(dir).empty()) << written_in(dir)[0];
 }
 
+// SIGINT to one rank: every rank stops at the end of the round, rank 0 writes the samples so
+// far (an even spp: whole rounds of two ranks), and the job's status says the signal.
+TEST(MpiRender, SignalToOneRankStopsEveryRankAndKeepsTheSamples) {
+    REQUIRE_MPI();
+    const std::string dir = ett::scratch_dir("mpi_signal");
+    const std::string scene = write_scene(dir);
+    const std::string tag = "ENVTRACE_TEST_TAG=signal" + std::to_string(getpid());
+    const std::string state = dir + "/out.envtrace-state";
+    const std::string cmd = mpirun_command(
+        dir,
+        {app(2, render_args(scene, dir + "/out.exr", {"--spp", "16000000", "--checkpoint", "0"}),
+             tag)});
+    int status = -1;
+    std::thread job([&] { status = std::system(cmd.c_str()); });
+    // The first checkpoint says both ranks are rendering (their handlers are installed).
+    for (int i = 0; i < 6000 && !fs::exists(state); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    const std::vector<pid_t> rank1 = ranks_tagged(tag, 1);
+    ASSERT_EQ(rank1.size(), 1u);
+    kill(rank1[0], SIGINT);
+    job.join();
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 130) << read_file(dir + "/stderr.txt");
+    EXPECT_EQ(metadata(dir + "/out.exr", "interrupted"), "SIGINT");
+    const int spp = std::stoi("0" + metadata(dir + "/out.exr", "spp"));
+    EXPECT_GE(spp, 2);
+    EXPECT_EQ(spp % 2, 0);
+    EXPECT_EQ(et::read_render_state(state).spp, spp);
+}
+
 // ---- Farm mode ----
 
 TEST(Merge, FullCoverEqualsSingleRender) {
