@@ -1,4 +1,5 @@
 // envtrace: Monte Carlo rendering with natural illumination.
+#include "cluster.h"
 #include "commands.h"
 #include "util/error.h"
 #include "opencl/opencl_runtime.h"
@@ -6,11 +7,14 @@
 #include <iostream>
 
 int main(int argc, char** argv) {
+    // Under mpirun: MPI starts here and ends when main returns (the ranks of `render`).
+    et::cli::Cluster cluster(&argc, &argv);
     CLI::App app{"envtrace " ENVTRACE_VERSION
                  ": renders scenes lit by HDR environment maps, importance-sampled as in\n"
                  "'Monte Carlo Rendering with Natural Illumination', on OpenCL devices."};
     app.require_subcommand(1);
     et::cli::Globals globals;
+    globals.cluster = &cluster;
     app.add_option("--device", globals.device, "OpenCL device index (see 'envtrace devices')")
         ->check(CLI::NonNegativeNumber);
     app.set_version_flag("--version", ENVTRACE_VERSION);
@@ -20,10 +24,16 @@ int main(int argc, char** argv) {
     et::cli::add_bench_command(app, globals);
     et::cli::add_compare_command(app, globals);
     et::cli::add_lights_command(app, globals);
+    et::cli::add_merge_command(app, globals);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         return app.exit(e);
+    } catch (const et::cli::ClusterError& e) {
+        // A failure of one or more ranks: rank 0 names them, the others stay silent.
+        if (*e.what())
+            std::cerr << "envtrace: error: " << e.what() << "\n";
+        return 1;
     } catch (const et::Error& e) {
         std::cerr << "envtrace: error: " << e.what() << "\n";
         return 1;

@@ -1,3 +1,4 @@
+#include "cluster.h"
 #include "commands.h"
 #include "util/json_file.h"
 #include "util/error.h"
@@ -19,26 +20,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <tuple>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
 
 namespace et::cli {
-namespace {
-
-struct RenderArgs {
-    std::string scene, output, stats_file, strategy, heuristic, sampler, backend = "opencl";
-    std::string bsdf_sampling;
-    std::string light_share; // --light-share: "auto" or a number
-    std::string lights;      // --lights: render with this directional light set
-    int sis_samples = 64;
-    int spp = 0, max_depth = 0, paths = -1, threads = 0;
-    long long seed = -1;
-    double time_limit = -1.0;
-    double checkpoint = -1.0; // --checkpoint: seconds between saved states (< 0: none)
-    bool resume = false;
-    std::string state; // --state: the state file (default: beside the image)
-};
 
 // out.exr -> (out.exr, out.png); out.png -> (out.exr, out.png).
 std::pair<std::string, std::string> output_names(const std::string& out) {
@@ -52,6 +40,23 @@ std::pair<std::string, std::string> output_names(const std::string& out) {
         return {out, fs::path(p).replace_extension(".png").string()};
     throw Error(out + ": unsupported output format '" + ext + "' (use .exr, .hdr, .pfm or .png)");
 }
+
+namespace {
+
+struct RenderArgs {
+    std::string scene, output, stats_file, strategy, heuristic, sampler, backend = "opencl";
+    std::string bsdf_sampling;
+    std::string light_share; // --light-share: "auto" or a number
+    std::string lights;      // --lights: render with this directional light set
+    int sis_samples = 64;
+    int spp = 0, max_depth = 0, paths = -1, threads = 0;
+    long long seed = -1;
+    double time_limit = -1.0;
+    double checkpoint = -1.0; // --checkpoint: seconds between saved states (< 0: none)
+    bool resume = false;
+    std::string state;        // --state: the state file (default: beside the image)
+    std::string sample_range; // --sample-range A:B: a farm task, samples A .. B-1
+};
 
 class Progress {
   public:
@@ -133,17 +138,19 @@ std::string default_state_path(const std::string& exr_name) {
 }
 
 nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const DeviceScene& ds,
-                          Renderer& renderer, const ProgramBuildInfo& build,
-                          const LightSet& light_set, const SisResult& sis, int done,
-                          int resumed_from, int sig, double render_s) {
-    const RenderStats& s = renderer.stats();
+                          const std::string& backend, const RenderStats& s,
+                          const ProgramBuildInfo& build, const LightSet& light_set,
+                          const SisResult& sis, int done, int resumed_from, int sig,
+                          double render_s, int ranks, int first, const Renderer& renderer) {
     const int rendered = done - resumed_from;
     nlohmann::json j;
     j["scene"] = a.scene;
-    j["backend"] = renderer.name();
+    j["backend"] = backend;
+    j["ranks"] = ranks;
     j["width"] = ds.width();
     j["height"] = ds.height();
     j["spp"] = done;
+    j["first_sample"] = first;
     j["resumed_from_spp"] = resumed_from;
     j["interrupted"] = sig ? signal_name(sig) : "no";
     j["max_depth"] = st.max_depth;
@@ -193,170 +200,318 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
     return j;
 }
 
-void run(const RenderArgs& a, Globals& g) {
-    Timer total;
-    Scene scene = load_scene(a.scene);
-    const RenderSettings st = settings_for(a, g, scene.settings);
-    std::string out = !a.output.empty()       ? a.output
-                      : !scene.output.empty() ? scene.output
-                                              : fs::path(a.scene).stem().string() + ".exr";
-    auto [exr_name, png_name] = output_names(out);
-    // Fail on an unwritable destination before spending the render time.
-    check_writable_format(exr_name);
-    check_writable_format(png_name);
-    const bool keep_state = a.checkpoint >= 0 || a.resume;
-    const std::string state_path = !a.state.empty() ? a.state : default_state_path(exr_name);
+// "A:B" -> [A, B): the sample indices of one farm task.
+std::pair<int, int> parse_sample_range(const std::string& text) {
+    const std::string bad = "--sample-range '" + text.substr(0, 40) + "': ";
+    const size_t colon = text.find(':');
+    if (colon == std::string::npos)
+        throw Error(bad + "expected FIRST:END (sample indices FIRST .. END-1, e.g. 0:64)");
+    auto number = [&](const std::string& t) {
+        if (t.empty() || t.size() > 9 || t.find_first_not_of("0123456789") != std::string::npos)
+            throw Error(bad + "expected two integers in [0, 16777216], FIRST:END");
+        return std::stoi(t);
+    };
+    const int first = number(text.substr(0, colon)), end = number(text.substr(colon + 1));
+    if (end <= first || end > (1 << 24))
+        throw Error(bad + "END must be above FIRST and at most 16777216");
+    return {first, end};
+}
 
-    // Directional lights and SIS strata: the light directions the shade stages sum or draw.
+// The message of the exception in flight, as main would print it.
+std::string error_text() {
+    try {
+        throw;
+    } catch (const cl::Error& e) {
+        return std::string("OpenCL call ") + e.what() + " failed: " + cl_error_name(e.err());
+    } catch (const std::bad_alloc&) {
+        return "out of memory";
+    } catch (const std::exception& e) {
+        return e.what();
+    } catch (...) {
+        return "unexpected exception (not a std::exception)";
+    }
+}
+
+// Runs f, returning its error message ("" when it succeeded), for Cluster::check.
+template <class F> std::string attempt(F&& f) {
+    try {
+        f();
+        return "";
+    } catch (...) {
+        return error_text();
+    }
+}
+
+void run(const RenderArgs& a, Globals& g) {
+    const Cluster& cl = *g.cluster;
+    if (cl.launched_without_mpi())
+        throw Error("started by mpirun as one of several ranks, but this envtrace was built "
+                    "without MPI (configure with libopenmpi-dev installed, ENVTRACE_MPI=AUTO or "
+                    "ON): each rank would render the whole image alone");
+    // Rank 0 speaks for the render; the other ranks' errors reach it through Cluster::check.
+    if (!cl.root() && !std::freopen("/dev/null", "w", stdout))
+        throw Error("cannot redirect the standard output of " + cl.describe(cl.rank()));
+    Timer total;
+    const bool partial = !a.sample_range.empty();
+    std::pair<int, int> range{0, 0};
+    std::optional<Scene> scene;
+    RenderSettings st;
+    std::string exr_name, png_name, state_path;
+    bool keep_state = false;
     LightSet light_set;
     SisResult sis;
-    if (st.strategy == Strategy::lights) {
-        light_set = read_lights(st.lights);
-        std::printf("light set %s: %zu directional lights (%s)\n", st.lights.c_str(),
-                    light_set.lights.size(), light_set.method.c_str());
-    }
     RenderState state;
-    if (a.resume)
-        state = read_render_state(state_path);
-
-    // Every output, reserved now that every input has been read: none may be an input (the
-    // state continues itself), none may be two, and all are written together at the end.
-    std::vector<std::string> targets = {exr_name, png_name};
-    if (!a.stats_file.empty())
-        targets.push_back(a.stats_file);
-    if (keep_state)
-        targets.push_back(state_path);
-    OutputBatch outputs(targets, a.resume ? std::vector<std::string>{state_path}
-                                          : std::vector<std::string>{});
-
-    if (st.strategy == Strategy::sis) {
-        SisOptions so;
-        so.samples = st.sis_samples;
-        sis = build_sis(scene.env, so);
-        std::printf("SIS: %d strata (per level:", st.sis_samples);
-        for (int n : sis.level_samples)
-            std::printf(" %d", n);
-        std::printf(") precomputed in %.3f s\n", sis.seconds);
-    }
-    const DeviceScene ds =
-        prepare_device_scene(std::move(scene), st, &light_set.lights, &sis.strata);
-    std::printf("scene %s: %zu triangles, BVH %d nodes (depth %d, SAH cost %.1f) in %.1f ms; "
-                "environment %dx%d, distribution in %.2f ms\n",
-                a.scene.c_str(), ds.triangle_count, ds.bvh.nodes, ds.bvh.depth, ds.bvh.sah_cost,
-                ds.bvh.build_seconds * 1e3, ds.map_width, ds.map_height,
-                ds.map_build_seconds * 1e3);
-    if (a.resume) {
-        check_render_state(state, ds, state_path);
-        if (st.time_limit <= 0 && state.spp > st.spp)
-            throw Error(state_path + ": the render state has " + std::to_string(state.spp) +
-                        " spp, more than the --spp " + std::to_string(st.spp) +
-                        " asked for; samples cannot be taken away");
-    }
-    if (keep_state)
-        state.key = render_key(ds);
-
+    std::unique_ptr<OutputBatch> outputs;
+    std::optional<DeviceScene> ds_store;
     ProgramBuildInfo build;
-    std::unique_ptr<Renderer> renderer_ptr = make_renderer(ds, &build);
+    std::unique_ptr<Renderer> renderer_ptr;
+
+    // Every rank reads and prepares everything; rank 0 alone reads the state and reserves the
+    // outputs. A failure on any rank ends every rank here, named.
+    cl.check(attempt([&] {
+        if (partial) {
+            range = parse_sample_range(a.sample_range);
+            if (a.time_limit >= 0)
+                throw Error("--sample-range renders a fixed range of sample indices: it excludes "
+                            "--time-limit");
+        }
+        scene.emplace(load_scene(a.scene));
+        st = settings_for(a, g, scene->settings);
+        const std::string out = !a.output.empty() ? a.output
+                                : !scene->output.empty()
+                                    ? scene->output
+                                    : fs::path(a.scene).stem().string() + ".exr";
+        std::tie(exr_name, png_name) = output_names(out);
+        // Fail on an unwritable destination before spending the render time.
+        check_writable_format(exr_name);
+        check_writable_format(png_name);
+        keep_state = a.checkpoint >= 0 || a.resume || partial;
+        state_path = !a.state.empty() ? a.state
+                     : partial ? fs::path(exr_name).replace_extension("").string() + ".samples-" +
+                                     std::to_string(range.first) + "-" +
+                                     std::to_string(range.second) + ".envtrace-state"
+                               : default_state_path(exr_name);
+
+        // Directional lights and SIS strata: the light directions the shade stages sum or draw.
+        if (st.strategy == Strategy::lights) {
+            light_set = read_lights(st.lights);
+            std::printf("light set %s: %zu directional lights (%s)\n", st.lights.c_str(),
+                        light_set.lights.size(), light_set.method.c_str());
+        }
+        if (a.resume && cl.root())
+            state = read_render_state(state_path);
+
+        // Every output, reserved now that every input has been read: none may be an input (the
+        // state continues itself), none may be two, and all are written together at the end. A
+        // part of a render (--sample-range) writes its film's sums only, for `envtrace merge`.
+        if (cl.root()) {
+            std::vector<std::string> targets;
+            if (!partial)
+                targets = {exr_name, png_name};
+            if (!a.stats_file.empty())
+                targets.push_back(a.stats_file);
+            if (keep_state)
+                targets.push_back(state_path);
+            outputs = std::make_unique<OutputBatch>(targets,
+                                                    a.resume ? std::vector<std::string>{state_path}
+                                                             : std::vector<std::string>{});
+        }
+
+        if (st.strategy == Strategy::sis) {
+            SisOptions so;
+            so.samples = st.sis_samples;
+            sis = build_sis(scene->env, so);
+            std::printf("SIS: %d strata (per level:", st.sis_samples);
+            for (int n : sis.level_samples)
+                std::printf(" %d", n);
+            std::printf(") precomputed in %.3f s\n", sis.seconds);
+        }
+        ds_store.emplace(
+            prepare_device_scene(std::move(*scene), st, &light_set.lights, &sis.strata));
+        const DeviceScene& ds = *ds_store;
+        std::printf("scene %s: %zu triangles, BVH %d nodes (depth %d, SAH cost %.1f) in %.1f ms; "
+                    "environment %dx%d, distribution in %.2f ms\n",
+                    a.scene.c_str(), ds.triangle_count, ds.bvh.nodes, ds.bvh.depth, ds.bvh.sah_cost,
+                    ds.bvh.build_seconds * 1e3, ds.map_width, ds.map_height,
+                    ds.map_build_seconds * 1e3);
+        if (a.resume && cl.root()) {
+            check_render_state(state, ds, state_path);
+            if (state.first != range.first)
+                throw Error(state_path + ": the render state holds samples from index " +
+                            std::to_string(state.first) + ", this render starts at " +
+                            std::to_string(range.first));
+            const int asked = partial ? range.second - range.first : st.spp;
+            if (st.time_limit <= 0 && state.spp > asked)
+                throw Error(state_path + ": the render state has " + std::to_string(state.spp) +
+                            " spp, more than the " + std::to_string(asked) +
+                            (partial ? " of --sample-range" : " of --spp") +
+                            " asked for; samples cannot be taken away");
+        }
+        state.key = render_key(ds);
+        renderer_ptr = make_renderer(ds, &build);
+    }));
+    const DeviceScene& ds = *ds_store;
     Renderer& renderer = *renderer_ptr;
+    // The ranks must render one film: the same scene, inputs and settings everywhere.
+    const uint64_t root_key = static_cast<uint64_t>(cl.broadcast(static_cast<int64_t>(state.key)));
+    cl.check(root_key == state.key
+                 ? ""
+                 : a.scene +
+                       ": the scene, its inputs, the settings or envtrace differ from rank "
+                       "0's (render key " +
+                       std::to_string(state.key) + ", rank 0 has " + std::to_string(root_key) +
+                       "): the ranks would not render one film");
+
     if (st.backend == Backend::opencl)
         std::printf("OpenCL program build %.3f s (%s)\n", build.seconds,
                     build.from_cache ? "cached binary" : "compiled");
-    int done = 0;
-    if (a.resume) {
-        renderer.resume(state.film);
-        done = state.spp;
-        std::printf("resumed from %s at %d spp\n", state_path.c_str(), done);
+    // Sample indices first .. end-1; `done` of them are in the film (on rank 0: a resumed state's
+    // count too). In each round, rank r renders index first + done + r: the ranks take disjoint
+    // indices, and a round ends with the film holding a prefix of the range, which an interrupted
+    // or time-limited render writes and a resumed one continues, with any number of ranks.
+    const int64_t first = range.first;
+    const int64_t end = partial ? range.second : st.time_limit > 0 ? int64_t(1) << 24 : st.spp;
+    int64_t done = cl.broadcast(state.spp);
+    if (a.resume && cl.root()) {
+        renderer.resume(state.sums);
+        std::printf("resumed from %s at %d spp\n", state_path.c_str(), state.spp);
     }
-    const int resumed_from = done;
+    const int64_t resumed_from = done;
     std::printf(
-        "backend %s: %dx%d, %s spp, depth %d, strategy %s, sampler %s, %d paths in flight\n",
+        "backend %s: %dx%d, %s spp%s, depth %d, strategy %s, sampler %s, %d paths in "
+        "flight%s\n",
         renderer.name().c_str(), ds.width(), ds.height(),
-        st.time_limit > 0 ? "time-limited" : std::to_string(st.spp).c_str(), st.max_depth,
-        name_of(st.strategy), name_of(st.sampler), renderer.paths());
+        st.time_limit > 0 ? "time-limited" : std::to_string(end - first).c_str(),
+        partial
+            ? (" (samples " + std::to_string(first) + ".." + std::to_string(end - 1) + ")").c_str()
+            : "",
+        st.max_depth, name_of(st.strategy), name_of(st.sampler), renderer.paths(),
+        cl.size() > 1 ? (", " + std::to_string(cl.size()) + " MPI ranks").c_str() : "");
     std::fflush(stdout);
 
-    // From here on a first SIGINT/SIGTERM keeps the samples: the pass in flight ends, the
-    // outputs are written, and the status tells the signal. At least one sample is always
+    // From here on a first SIGINT/SIGTERM keeps the samples: the round in flight ends, the
+    // outputs are written, and the status tells the signal. At least one round is always
     // rendered (a --time-limit shorter than a pass still gives one).
     InterruptHandler interrupts;
-    Progress progress(st.spp, st.time_limit);
+    Progress progress(static_cast<int>(end - first), st.time_limit);
     Timer render, since_checkpoint;
+    std::string render_error;
+    int sig = 0;
     for (;;) {
-        if (InterruptHandler::signal())
-            break;
-        if (done > 0 && (st.time_limit > 0 ? render.seconds() >= st.time_limit : done >= st.spp))
-            break;
-        renderer.render_sample(static_cast<uint32_t>(done));
-        ++done;
-        progress.update(done, render.seconds());
-        if (a.checkpoint >= 0 && since_checkpoint.seconds() >= a.checkpoint &&
-            !InterruptHandler::signal()) {
-            state.spp = done;
-            state.film = renderer.film();
-            write_render_state(state_path, state);
+        // What the ranks agree on before each round: stop (a signal on any rank, the time limit
+        // by rank 0's clock, or the range done), save a checkpoint (rank 0's clock), a failure.
+        int64_t f[4] = {0, 0, render_error.empty() ? 0 : 1, InterruptHandler::signal()};
+        if (f[3] != 0 || (done > 0 && first + done >= end) ||
+            (cl.root() && done > 0 && st.time_limit > 0 && render.seconds() >= st.time_limit))
+            f[0] = 1;
+        if (cl.root() && a.checkpoint >= 0 && done > resumed_from &&
+            since_checkpoint.seconds() >= a.checkpoint)
+            f[1] = 1;
+        cl.max_all(f, 4);
+        if (f[2])
+            cl.check(render_error);
+        sig = static_cast<int>(f[3]);
+        if (f[1] && !f[0]) {
+            const FilmSums all = cl.reduce(renderer.sums());
+            cl.check(attempt([&] {
+                if (cl.root())
+                    write_render_state(state_path, RenderState{state.key, static_cast<int>(done),
+                                                               static_cast<int>(first), all});
+            }));
             since_checkpoint = Timer();
         }
+        if (f[0])
+            break;
+        const int64_t index = first + done + cl.rank();
+        if (index < end)
+            render_error = attempt([&] { renderer.render_sample(static_cast<uint32_t>(index)); });
+        done += std::min<int64_t>(cl.size(), end - (first + done));
+        if (cl.root())
+            progress.update(static_cast<int>(done), render.seconds());
     }
     progress.finish();
-    const int sig = InterruptHandler::signal();
-    if (sig)
+    if (sig && cl.root())
         std::fprintf(stderr,
-                     "envtrace: %s: stopped at %d spp; writing the image (a second "
+                     "envtrace: %s: stopped at %d spp; writing the %s (a second "
                      "signal stops at once)\n",
-                     signal_name(sig), done);
+                     signal_name(sig), static_cast<int>(done), partial ? "partial film" : "image");
     const double render_s = render.seconds();
-    std::vector<float> img = renderer.image();
-    const RenderStats& s = renderer.stats();
+    // The film of every rank, summed on rank 0 (exactly: in any order), and the rays they traced.
+    const FilmSums sums = cl.reduce(renderer.sums());
+    RenderStats s = renderer.stats();
+    uint64_t counts[5] = {s.camera_rays, s.continuation_rays, s.shadow_rays, s.nonfinite_samples,
+                          s.shaded_hits};
+    cl.sum_to_root(counts, 5);
+    s.camera_rays = counts[0];
+    s.continuation_rays = counts[1];
+    s.shadow_rays = counts[2];
+    s.nonfinite_samples = counts[3];
+    s.shaded_hits = counts[4];
+    const int spp = static_cast<int>(done);
 
-    std::vector<std::pair<std::string, std::string>> meta = {
-        {"envtrace:spp", std::to_string(done)},
-        {"envtrace:interrupted", sig ? signal_name(sig) : "no"},
-        {"envtrace:resumed_from_spp", std::to_string(resumed_from)},
-        {"envtrace:strategy", name_of(st.strategy)},
-        {"envtrace:mis_heuristic", name_of(st.heuristic)},
-        {"envtrace:sampler", name_of(st.sampler)},
-        {"envtrace:bsdf_sampling", name_of(resolved_bsdf_sampling(st))},
-        {"envtrace:seed", std::to_string(st.seed)},
-        {"envtrace:max_depth", std::to_string(st.max_depth)},
-        {"envtrace:render_seconds", std::to_string(render_s)},
-        {"envtrace:backend", renderer.name()},
-        {"envtrace:lights", st.lights},
-        {"envtrace:sis_seconds", std::to_string(sis.seconds)},
-        {"Software", "envtrace " ENVTRACE_VERSION},
-    };
-    write_image(outputs, exr_name, ds.width(), ds.height(), 3, img, meta);
-    RgbImage film{ds.width(), ds.height(), img};
-    write_image(outputs, png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
-    if (!a.stats_file.empty())
-        write_json_file(outputs, a.stats_file,
-                        stats_json(a, st, ds, renderer, build, light_set, sis, done, resumed_from,
-                                   sig, render_s),
-                        2);
-    if (keep_state) {
-        state.spp = done;
-        state.film = renderer.film();
-        write_render_state(outputs, state_path, state);
-    }
-    outputs.commit();
+    cl.check(attempt([&] {
+        if (!cl.root())
+            return;
+        if (!partial) {
+            const std::vector<float> img = sums.mean();
+            std::vector<std::pair<std::string, std::string>> meta = {
+                {"envtrace:spp", std::to_string(spp)},
+                {"envtrace:interrupted", sig ? signal_name(sig) : "no"},
+                {"envtrace:resumed_from_spp", std::to_string(resumed_from)},
+                {"envtrace:strategy", name_of(st.strategy)},
+                {"envtrace:mis_heuristic", name_of(st.heuristic)},
+                {"envtrace:sampler", name_of(st.sampler)},
+                {"envtrace:bsdf_sampling", name_of(resolved_bsdf_sampling(st))},
+                {"envtrace:seed", std::to_string(st.seed)},
+                {"envtrace:max_depth", std::to_string(st.max_depth)},
+                {"envtrace:render_seconds", std::to_string(render_s)},
+                {"envtrace:backend", renderer.name()},
+                {"envtrace:lights", st.lights},
+                {"envtrace:sis_seconds", std::to_string(sis.seconds)},
+                {"envtrace:ranks", std::to_string(cl.size())},
+                {"Software", "envtrace " ENVTRACE_VERSION},
+            };
+            write_image(*outputs, exr_name, ds.width(), ds.height(), 3, img, meta);
+            RgbImage film{ds.width(), ds.height(), img};
+            write_image(*outputs, png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
+        }
+        if (!a.stats_file.empty())
+            write_json_file(*outputs, a.stats_file,
+                            stats_json(a, st, ds, renderer.name(), s, build, light_set, sis, spp,
+                                       static_cast<int>(resumed_from), sig, render_s, cl.size(),
+                                       static_cast<int>(first), renderer),
+                            2);
+        if (keep_state)
+            write_render_state(*outputs, state_path,
+                               RenderState{state.key, spp, static_cast<int>(first), sums});
+        outputs->commit();
+    }));
 
-    const int rendered = done - resumed_from;
+    const int64_t rendered = done - resumed_from;
     const double mrays = s.rays() / render_s * 1e-6;
     std::printf(
         "rendered %d spp in %.2f s: %.2f Mrays/s (%llu camera, %llu continuation, %llu shadow), "
         "%.3g samples/s, %.4f s/spp\n",
-        rendered, render_s, mrays, (unsigned long long)s.camera_rays,
+        static_cast<int>(rendered), render_s, mrays, (unsigned long long)s.camera_rays,
         (unsigned long long)s.continuation_rays, (unsigned long long)s.shadow_rays,
-        double(rendered) * ds.width() * ds.height() / render_s, render_s / std::max(1, rendered));
-    if (s.nonfinite_samples > 0)
+        double(rendered) * ds.width() * ds.height() / render_s,
+        render_s / std::max<int64_t>(1, rendered));
+    if (s.nonfinite_samples > 0 && cl.root())
         warn(a.scene + ": " + std::to_string(s.nonfinite_samples) +
              " samples were not finite and counted as zero (a renderer bug: please "
              "report the scene)");
-    std::printf("%s time per stage:", st.backend == Backend::cpu ? "thread" : "device");
+    std::printf("%s time per stage%s:", st.backend == Backend::cpu ? "thread" : "device",
+                cl.size() > 1 ? " (rank 0)" : "");
     for (const auto& [name, t] : s.stage_seconds)
         std::printf(" %s %.3fs", name.c_str(), t);
-    std::printf("\nwrote %s and %s%s%s at %d spp (total %.2f s)\n", exr_name.c_str(),
-                png_name.c_str(), keep_state ? " and the state " : "",
-                keep_state ? state_path.c_str() : "", done, total.seconds());
+    if (partial)
+        std::printf("\nwrote the partial film %s (samples %d..%d)%s%s (total %.2f s)\n",
+                    state_path.c_str(), static_cast<int>(first), static_cast<int>(first + done - 1),
+                    a.stats_file.empty() ? "" : " and ", a.stats_file.c_str(), total.seconds());
+    else
+        std::printf("\nwrote %s and %s%s%s at %d spp (total %.2f s)\n", exr_name.c_str(),
+                    png_name.c_str(), keep_state ? " and the state " : "",
+                    keep_state ? state_path.c_str() : "", spp, total.seconds());
     if (sig)
         g.exit_code = 128 + sig;
 }
@@ -409,6 +564,10 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--state", a->state,
                     "The state file of --checkpoint and --resume (default: OUTPUT.envtrace-state "
                     "beside the image)");
+    cmd->add_option("--sample-range", a->sample_range,
+                    "FIRST:END: render sample indices FIRST .. END-1 only and write the partial "
+                    "film (to --state, default OUTPUT.samples-FIRST-END.envtrace-state) for "
+                    "'envtrace merge' (farm tasks)");
     cmd->add_option("--backend", a->backend,
                     "opencl (default) or cpu (native C++, same kernels/ sources)")
         ->check(CLI::IsMember(backend_names()));

@@ -147,7 +147,7 @@ TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
     const et::SisResult sis = et::build_sis(s.env, so);
     for (et::Strategy strategy : {et::Strategy::lights, et::Strategy::sis}) {
         SCOPED_TRACE(et::name_of(strategy));
-        et::Film films[2];
+        et::FilmSums films[2];
         uint64_t shadow_rays[2] = {};
         for (et::Backend b : {et::Backend::opencl, et::Backend::cpu}) {
             et::RenderSettings st = s.settings;
@@ -159,7 +159,7 @@ TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
             auto r = et::make_renderer(ds);
             for (uint32_t k = 0; k < 8; ++k)
                 r->render_sample(k);
-            films[static_cast<int>(b)] = r->film();
+            films[static_cast<int>(b)] = r->sums();
             shadow_rays[static_cast<int>(b)] = r->stats().shadow_rays;
             EXPECT_EQ(r->stats().nonfinite_samples, 0u);
         }

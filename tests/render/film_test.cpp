@@ -1,14 +1,21 @@
 // The film (host/lib/render/film.h, kernels/film.h): the mean, the per-pixel variance from the
 // sums of squares, adding films, and resuming a render from its film: a render split into two
 // runs, the second resuming from the first's film, equals the uninterrupted one bit for bit on
-// both back ends.
+// both back ends. The exact sums (host/lib/render/film_sums.h): sample sets add in any order
+// and partition to the same bits, so a render split by sample index (MPI ranks, farm tasks)
+// equals the render in one process.
 #include "render/film.h"
+#include "render/film_sums.h"
 #include "render_util.h"
 #include "util/error.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
+#include <random>
 
 namespace {
 
@@ -71,9 +78,9 @@ TEST(Film, VarianceEstimateMatchesSpreadAcrossSeeds) {
         auto r = et::make_renderer(ds);
         for (int i = 0; i < spp; ++i)
             r->render_sample(i);
-        means.push_back(r->film().mean());
+        means.push_back(r->sums().mean());
         if (k == 0)
-            var_est = r->film().variance_of_mean();
+            var_est = r->sums().variance_of_mean();
     }
     // Average over the pixels of (spread across seeds) / (film estimate).
     double ratio = 0.0;
@@ -113,19 +120,133 @@ TEST(Film, ResumedRenderEqualsUninterrupted) {
         auto first = et::make_renderer(ds);
         for (uint32_t k = 0; k < 3; ++k)
             first->render_sample(k);
-        const et::Film saved = first->film();
+        const et::FilmSums saved = first->sums();
         auto second = et::make_renderer(ds);
         second->resume(saved);
         for (uint32_t k = 3; k < 6; ++k)
             second->render_sample(k);
-        const et::Film& a = whole->film();
-        const et::Film& c = second->film();
-        EXPECT_EQ(
-            0, std::memcmp(a.film_sum.data(), c.film_sum.data(), a.pixels() * sizeof(etk::float4)));
-        EXPECT_EQ(
-            0, std::memcmp(a.film_sq.data(), c.film_sq.data(), a.pixels() * sizeof(etk::float4)));
-        EXPECT_GT(a.film_sum[a.pixels() / 2].w, 5.0f);
-        EXPECT_THROW(second->resume(et::Film(3, 3)), et::Error);
+        const et::FilmSums& a = whole->sums();
+        const et::FilmSums& c = second->sums();
+        EXPECT_TRUE(a == c);
+        EXPECT_EQ(a.data()[a.pixels() / 2].count, 6u);
+        EXPECT_THROW(second->resume(et::FilmSums(3, 3)), et::Error);
+    }
+}
+
+// One pixel's pass film holding sample `v` (w = 1).
+et::Film one_sample(float v) {
+    et::Film f(1, 1);
+    f.film_sum[0] = etk::make_float4(v, -v, 0.5f * v, 1.0f);
+    f.film_sq[0] = etk::make_float4(v * v, v * v, 0.25f * v * v, 0.0f);
+    return f;
+}
+
+TEST(FilmSums, FixedPointIsExactOnTheGrid) {
+    EXPECT_TRUE(et::film_fixed_point(1.0f) == (et::int128(1) << 70));
+    EXPECT_TRUE(et::film_fixed_point(-3.5f) == -(et::int128(7) << 69));
+    EXPECT_TRUE(et::film_fixed_point(0.0f) == 0);
+    EXPECT_TRUE(et::film_fixed_point(1e-30f) == 0); // below half a unit of 2^-70
+    const float big = 1.5e16f;
+    EXPECT_EQ(et::film_fixed_to_double(et::film_fixed_point(big)), double(big));
+    // Every float above 2^-46 is held exactly: back to the same float.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> exponent(-45.0f, 50.0f);
+    for (int i = 0; i < 10000; ++i) {
+        const float v = std::ldexp(1.0f + float(rng() % 1000) / 1000.0f, int(exponent(rng)));
+        ASSERT_EQ(float(et::film_fixed_to_double(et::film_fixed_point(v))), v) << v;
+    }
+}
+
+// Samples of a wide dynamic range (fireflies next to faint paths): a float sum depends on the
+// order, the exact sums on nothing: any order, any split into parts added in any order.
+TEST(FilmSums, AnyOrderAndPartitionGiveTheSameBits) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> exponent(-30.0f, 27.0f); // squares below 2^56
+    std::vector<float> samples(257);
+    for (float& v : samples)
+        v = std::exp2(exponent(rng)) * (rng() % 7 == 0 ? -1.0f : 1.0f);
+    et::FilmSums whole(1, 1);
+    float naive = 0.0f;
+    for (float v : samples) {
+        whole.add_pass(one_sample(v));
+        naive += v;
+    }
+    std::vector<float> shuffled = samples;
+    std::shuffle(shuffled.begin(), shuffled.end(), rng);
+    float naive_shuffled = 0.0f;
+    for (float v : shuffled)
+        naive_shuffled += v;
+    EXPECT_NE(naive, naive_shuffled) << "float sums of this set should depend on the order";
+    for (int parts : {2, 3, 4, 16}) {
+        std::vector<et::FilmSums> p(parts, et::FilmSums(1, 1));
+        for (size_t i = 0; i < shuffled.size(); ++i)
+            p[i % parts].add_pass(one_sample(shuffled[i]));
+        et::FilmSums total(1, 1);
+        for (int k = parts - 1; k >= 0; --k) // reverse rank order, on purpose
+            total.add(p[k]);
+        EXPECT_TRUE(total == whole) << parts << " parts";
+        EXPECT_EQ(total.mean(), whole.mean());
+    }
+    EXPECT_EQ(whole.data()[0].count, samples.size());
+    EXPECT_THROW(whole.add(et::FilmSums(2, 1)), et::Error);
+}
+
+TEST(FilmSums, MeanVarianceAndSpecialValues) {
+    et::FilmSums f(1, 1);
+    for (float v : {1.0f, 2.0f, 6.0f})
+        f.add_pass(one_sample(v));
+    const std::vector<float> m = f.mean(), var = f.variance_of_mean();
+    EXPECT_EQ(m[0], 3.0f);
+    EXPECT_EQ(m[1], -3.0f);
+    EXPECT_EQ(m[2], 1.5f);
+    EXPECT_NEAR(var[0], 7.0 / 3.0, 1e-6); // s^2 = 7, over n = 3
+    // A pass without a sample (w = 0) changes nothing.
+    et::FilmSums g = f;
+    g.add_pass(et::Film(1, 1));
+    EXPECT_TRUE(g == f);
+    // Not finite, or beyond 2^56: the channel becomes what a float sum would be.
+    et::FilmSums h = f;
+    h.add_pass(one_sample(std::numeric_limits<float>::infinity()));
+    EXPECT_EQ(h.mean()[0], std::numeric_limits<float>::infinity());
+    EXPECT_EQ(h.mean()[1], -std::numeric_limits<float>::infinity());
+    h.add_pass(one_sample(std::nanf("")));
+    EXPECT_TRUE(std::isnan(h.mean()[0]));
+    et::FilmSums k = f;
+    k.add_pass(one_sample(1e20f));
+    EXPECT_EQ(k.mean()[0], std::numeric_limits<float>::infinity());
+    // Flags travel through add like the sums.
+    et::FilmSums sum = f;
+    sum.add(k);
+    EXPECT_EQ(sum.mean()[0], std::numeric_limits<float>::infinity());
+    EXPECT_EQ(et::FilmSums(1, 1).mean()[0], 0.0f); // no sample: 0
+}
+
+// Renderers given disjoint sample indices (interleaved, as MPI ranks take them, and ranges, as
+// farm tasks do) add up to the film of one renderer, bit for bit, on both back ends.
+TEST(FilmSums, SplitRenderEqualsOneRenderer) {
+    const et::Scene s = small_scene();
+    for (et::Backend b : {et::Backend::cpu, et::Backend::opencl}) {
+        SCOPED_TRACE(et::name_of(b));
+        et::RenderSettings st = s.settings;
+        st.backend = b;
+        st.threads = 2;
+        const et::DeviceScene ds = et::prepare_device_scene(s, st);
+        auto whole = et::make_renderer(ds);
+        for (uint32_t k = 0; k < 7; ++k)
+            whole->render_sample(k);
+        auto even = et::make_renderer(ds), odd = et::make_renderer(ds);
+        for (uint32_t k = 0; k < 7; ++k)
+            (k % 2 ? odd : even)->render_sample(k);
+        et::FilmSums split = odd->sums();
+        split.add(even->sums());
+        EXPECT_TRUE(split == whole->sums());
+        auto head = et::make_renderer(ds), tail = et::make_renderer(ds);
+        for (uint32_t k = 0; k < 7; ++k)
+            (k < 3 ? head : tail)->render_sample(k);
+        et::FilmSums ranges = tail->sums();
+        ranges.add(head->sums());
+        EXPECT_TRUE(ranges == whole->sums());
+        EXPECT_EQ(ranges.mean(), whole->image());
     }
 }
 

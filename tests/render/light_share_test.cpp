@@ -20,17 +20,14 @@ et::LightShareLearner learn(const std::array<double, ETK_SHARE_CANDIDATES>& sd, 
     et::LightShareLearner L(o, w, h, seed);
     std::mt19937 rng(seed);
     std::normal_distribution<double> z(0.0, 1.0);
-    std::vector<float4> film(static_cast<size_t>(w) * h, float4{0, 0, 0, 0});
     for (int pass = 0; pass < o.learning_passes; ++pass) {
-        L.begin_pass(film);
+        std::vector<float4> film(static_cast<size_t>(w) * h); // the pass: one sample per pixel
+        L.begin_pass();
         int* bins = L.bins_of_pass();
         for (int px = 0; px < w * h; ++px) {
             const int k = etk::etk_learning_candidate(seed, px);
             const float x = static_cast<float>(1.0 + sd[k] * z(rng));
-            film[px].x += x;
-            film[px].y += x;
-            film[px].z += x;
-            film[px].w += 1.0f;
+            film[px] = float4{x, x, x, 1.0f};
             bins[px] = px < 20 ? 5 : 3;
         }
         L.end_pass(film);
@@ -72,14 +69,11 @@ TEST(LightShare, PicksTheCandidateOfLeastVariance) {
 TEST(LightShare, PairsWhoseFirstHitsDifferAreSkipped) {
     et::LightShareOptions o;
     et::LightShareLearner L(o, 8, 8, 1);
-    std::vector<float4> film(64, float4{0, 0, 0, 0});
     for (int pass = 0; pass < o.learning_passes; ++pass) {
-        L.begin_pass(film);
-        for (int px = 0; px < 64; ++px) {
-            film[px].x += float(pass);
-            film[px].w += 1.0f;
-            L.bins_of_pass()[px] = pass % 2; // never the same bin twice in a pair
-        }
+        std::vector<float4> film(64, float4{float(pass), 0, 0, 1.0f});
+        L.begin_pass();
+        for (int px = 0; px < 64; ++px)
+            L.bins_of_pass()[px] = pass % 2; // never the same bin throughout a block
         L.end_pass(film);
     }
     for (const auto& bin : L.measure())
@@ -108,7 +102,7 @@ et::Scene glossy_scene(uint32_t seed) {
 }
 
 std::vector<float> render(const et::Scene& s, int threads, int from, int to,
-                          const et::Film* resume = nullptr,
+                          const et::FilmSums* resume = nullptr,
                           std::array<int, ETK_SHARE_BINS>* choices = nullptr) {
     et::RenderSettings st = s.settings;
     st.threads = threads;
@@ -120,10 +114,9 @@ std::vector<float> render(const et::Scene& s, int threads, int from, int to,
         r->render_sample(static_cast<uint32_t>(k));
     if (choices)
         *choices = r->choices();
-    const et::Film& f = r->film();
-    std::vector<float> out;
-    for (const auto& v : f.film_sum)
-        out.insert(out.end(), {v.x, v.y, v.z, v.w});
+    std::vector<float> out = r->sums().mean();
+    const std::vector<float> var = r->sums().variance_of_mean();
+    out.insert(out.end(), var.begin(), var.end());
     return out;
 }
 
@@ -150,7 +143,7 @@ TEST(LightShare, ResumedRenderLearnsTheSameShares) {
     auto r = et::make_renderer(ds);
     for (int k = 0; k < 6; ++k)
         r->render_sample(static_cast<uint32_t>(k));
-    const et::Film part = r->film();
+    const et::FilmSums part = r->sums();
     const auto second = render(s, 2, 6, 20, &part, &resumed);
     EXPECT_EQ(full, second);
     EXPECT_EQ(whole, resumed);

@@ -17,35 +17,29 @@ LightShareLearner::LightShareLearner(const LightShareOptions& options, int width
                                      uint32_t seed)
     : opt_(options), width_(width), height_(height), seed_(seed) {}
 
-void LightShareLearner::begin_pass(const std::vector<float4>& film_sum) {
-    before_ = film_sum;
+void LightShareLearner::begin_pass() {
     bins_.emplace_back(static_cast<size_t>(width_) * height_, -1);
 }
 
-void LightShareLearner::end_pass(const std::vector<float4>& film_sum) {
-    std::vector<float> v(film_sum.size());
+void LightShareLearner::end_pass(const std::vector<float4>& pass) {
+    std::vector<float> v(pass.size());
     for (size_t i = 0; i < v.size(); ++i) {
-        // One sample was added: the difference of sums, rounded as the film rounded it.
-        const double x = luma(film_sum[i]) - luma(before_[i]);
+        const double x = luma(pass[i]);
         v[i] = std::isfinite(x) ? static_cast<float>(x) : 0.0f;
+        image_sum_ += v[i];
+        image_count_ += pass[i].w;
     }
     values_.push_back(std::move(v));
-    last_ = film_sum;
 }
 
 std::array<std::array<LightShareLearner::Cell, ETK_SHARE_CANDIDATES>, ETK_SHARE_BINS>
 LightShareLearner::measure() const {
     std::array<std::array<Cell, ETK_SHARE_CANDIDATES>, ETK_SHARE_BINS> cells{};
-    if (last_.empty())
+    if (values_.size() < 2)
         return cells;
     // Relative weights 1 / (m^2 + eps): m the pixel's mean luminance over the other learning
     // passes, eps = (2% of the image's mean)^2 so that black pixels do not dominate.
-    double all = 0.0, all_n = 0.0;
-    for (const float4& v : last_) {
-        all += std::isfinite(luma(v)) ? luma(v) : 0.0;
-        all_n += v.w;
-    }
-    const double mean = all_n > 0.0 ? all / all_n : 0.0;
+    const double mean = image_count_ > 0.0 ? image_sum_ / image_count_ : 0.0;
     const double eps = std::max(1e-30, (0.02 * mean) * (0.02 * mean));
     struct Pair {
         int bin, k;
@@ -79,9 +73,9 @@ LightShareLearner::measure() const {
                 const double d = (a - c) / double(B);
                 // The pixel's mean from the other passes: independent of this pair's values,
                 // so a pair's own outlier does not lower its weight.
-                const double m = values_.size() > 2 * B ? (all_values - a - c) /
-                                                              double(values_.size() - 2 * B)
-                                                        : (a + c) / double(2 * B);
+                const double m = values_.size() > 2 * B
+                                     ? (all_values - a - c) / double(values_.size() - 2 * B)
+                                     : (a + c) / double(2 * B);
                 const double w = 1.0 / (m * m + eps);
                 pairs.push_back({bin, k, w * 0.5 * d * d});
                 by_bin[bin].push_back(pairs.back().v);

@@ -34,8 +34,8 @@ using etk::float4;
 struct LightShareOptions {
     int learning_passes = 16; // samples 0 .. 15
     int block = 4;            // compared in pairs of 4-pass blocks: (0-3, 4-7), (8-11, 12-15)
-    int min_pixels = 16;     // pixel pairs every candidate of a bin needs to be compared
-    bool last_bounce = true; // first hits are the last bounce (max_depth 1)
+    int min_pixels = 16;      // pixel pairs every candidate of a bin needs to be compared
+    bool last_bounce = true;  // first hits are the last bounce (max_depth 1)
 };
 
 class LightShareLearner {
@@ -44,10 +44,10 @@ class LightShareLearner {
 
     // The first-hit bins of the pass in progress, by pixel (run_wave writes them).
     int* bins_of_pass() { return bins_.back().data(); }
-    // Before learning pass k: the film's RGB sums so far (kernels/film.h).
-    void begin_pass(const std::vector<float4>& film_sum);
-    // After it: the film's sums now; the pass's sample of each pixel is the difference.
-    void end_pass(const std::vector<float4>& film_sum);
+    // Before a learning pass.
+    void begin_pass();
+    // After it: the pass's film (one sample per pixel: RGB, w the count; kernels/film.h).
+    void end_pass(const std::vector<float4>& pass);
     // After the last learning pass: the winning candidate per bin (kDefaultCandidate where a
     // bin has too few pixels to compare).
     static constexpr int kDefaultCandidate = 2; // the compensated strategy
@@ -64,9 +64,9 @@ class LightShareLearner {
     LightShareOptions opt_;
     int width_, height_;
     uint32_t seed_;
-    std::vector<std::vector<int>> bins_;     // per pass, per pixel
-    std::vector<std::vector<float>> values_; // per pass, per pixel: the sample's luminance
-    std::vector<float4> before_, last_;      // film sums before the pass; after the last one
+    std::vector<std::vector<int>> bins_;         // per pass, per pixel
+    std::vector<std::vector<float>> values_;     // per pass, per pixel: the sample's luminance
+    double image_sum_ = 0.0, image_count_ = 0.0; // luminance of every learning sample
 };
 
 } // namespace et

@@ -17,23 +17,19 @@ namespace {
 // the film's arrays (ETK_FILM_FIELDS order), then an XXH3 checksum of everything before it.
 constexpr char kMagic[16] = {'e', 'n', 'v', 't', 'r', 'a', 'c',  'e',
                              '-', 's', 't', 'a', 't', 'e', '\n', 0};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2; // 2: exact sums (film_sums.h) and the first sample index
 constexpr uint32_t kByteOrder = 0x01020304;
 
 struct Header {
     char magic[16];
     uint32_t version, byte_order;
     uint64_t key;
-    int32_t width, height, spp, pad;
+    int32_t width, height, spp, first;
     uint64_t film_bytes;
 };
 
 uint64_t film_bytes(int width, int height) {
-    uint64_t per_pixel = 0;
-#define ET_FIELD_BYTES(type, name) per_pixel += sizeof(type);
-    ETK_FILM_FIELDS(ET_FIELD_BYTES)
-#undef ET_FIELD_BYTES
-    return per_pixel * static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
+    return sizeof(FilmSums::Pixel) * static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
 }
 
 class Hash {
@@ -83,7 +79,7 @@ uint64_t render_key(const DeviceScene& scene) {
 }
 
 void write_render_state(OutputBatch& batch, const std::string& path, const RenderState& state) {
-    const Film& f = state.film;
+    const FilmSums& f = state.sums;
     Header hd{};
     std::memcpy(hd.magic, kMagic, sizeof kMagic);
     hd.version = kVersion;
@@ -92,6 +88,7 @@ void write_render_state(OutputBatch& batch, const std::string& path, const Rende
     hd.width = f.width();
     hd.height = f.height();
     hd.spp = state.spp;
+    hd.first = state.first;
     hd.film_bytes = film_bytes(f.width(), f.height());
     batch.write(path, [&](const std::string& file) {
         std::ofstream out(file, std::ios::binary);
@@ -101,9 +98,7 @@ void write_render_state(OutputBatch& batch, const std::string& path, const Rende
             h.add(data, bytes);
         };
         put(&hd, sizeof hd);
-#define ET_PUT_FIELD(type, name) put(f.name.data(), f.name.size() * sizeof(type));
-        ETK_FILM_FIELDS(ET_PUT_FIELD)
-#undef ET_PUT_FIELD
+        put(f.data(), f.pixels() * sizeof(FilmSums::Pixel));
         const uint64_t sum = h.digest();
         out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
         out.flush();
@@ -136,22 +131,19 @@ RenderState read_render_state(const std::string& path) {
         throw Error(bad + "format version " + std::to_string(hd.version) +
                     ", this envtrace reads " + std::to_string(kVersion));
     if (hd.width <= 0 || hd.height <= 0 || hd.width > 65536 || hd.height > 65536 || hd.spp < 0 ||
-        hd.film_bytes != film_bytes(hd.width, hd.height) ||
+        hd.first < 0 || hd.film_bytes != film_bytes(hd.width, hd.height) ||
         size != sizeof hd + hd.film_bytes + sizeof(uint64_t))
         throw Error(bad + "its header does not match its size (" + byte_text(size) +
                     "): truncated or corrupt");
     RenderState st;
     st.key = hd.key;
     st.spp = hd.spp;
-    st.film = Film(hd.width, hd.height);
+    st.first = hd.first;
+    st.sums = FilmSums(hd.width, hd.height);
     Hash h;
     h.add(&hd, sizeof hd);
-#define ET_GET_FIELD(type, name)                                                                   \
-    in.read(reinterpret_cast<char*>(st.film.name.data()),                                          \
-            static_cast<std::streamsize>(st.film.name.size() * sizeof(type)));                     \
-    h.add(st.film.name.data(), st.film.name.size() * sizeof(type));
-    ETK_FILM_FIELDS(ET_GET_FIELD)
-#undef ET_GET_FIELD
+    in.read(reinterpret_cast<char*>(st.sums.data()), static_cast<std::streamsize>(hd.film_bytes));
+    h.add(st.sums.data(), hd.film_bytes);
     uint64_t sum = 0;
     in.read(reinterpret_cast<char*>(&sum), sizeof sum);
     if (!in)
@@ -163,9 +155,9 @@ RenderState read_render_state(const std::string& path) {
 
 void check_render_state(const RenderState& state, const DeviceScene& scene,
                         const std::string& path) {
-    if (state.film.width() != scene.width() || state.film.height() != scene.height())
-        throw Error(path + ": the render state is of a " + std::to_string(state.film.width()) +
-                    "x" + std::to_string(state.film.height()) + " film, this render is " +
+    if (state.sums.width() != scene.width() || state.sums.height() != scene.height())
+        throw Error(path + ": the render state is of a " + std::to_string(state.sums.width()) +
+                    "x" + std::to_string(state.sums.height()) + " film, this render is " +
                     std::to_string(scene.width()) + "x" + std::to_string(scene.height()));
     if (state.key != render_key(scene))
         throw Error(path + ": the render state is of another render: the scene, its inputs, the "

@@ -1,10 +1,12 @@
-// A render's resumable state: the film's sums, the samples per pixel reached, and a key of
-// everything the film depends on. The sampler is a function of pixel, sample index and
-// dimension, so a render resumed from a state and run to N samples is bit-identical to one that
-// ran to N without a break (Renderer::resume).
+// A render's resumable state: the film's sums, the range of sample indices they hold, and a key
+// of everything the film depends on. The sampler is a function of pixel, sample index and
+// dimension, and the sums are exact (film_sums.h), so a render resumed from a state and run to
+// N samples is bit-identical to one that ran to N without a break (Renderer::resume), and the
+// states of disjoint sample ranges (farm tasks, `render --sample-range`) add up to the film of
+// their union (`envtrace merge`).
 #pragma once
 #include "prepare/device_scene.h"
-#include "render/film.h"
+#include "render/film_sums.h"
 
 #include <cstdint>
 #include <string>
@@ -21,8 +23,9 @@ uint64_t render_key(const DeviceScene& scene);
 
 struct RenderState {
     uint64_t key = 0;
-    int spp = 0; // samples per pixel in the film
-    Film film;
+    int spp = 0;   // samples per pixel in the film: sample indices first .. first + spp - 1
+    int first = 0; // the first sample index (0 but for a part of a render, --sample-range)
+    FilmSums sums;
 };
 
 // Writes the state as one file of `batch` (binary: header, film sums, checksum).

@@ -11,7 +11,8 @@
 namespace et {
 
 Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
-    : scene_(scene), film_(scene.width(), scene.height()), device_(make_device(film_)) {
+    : scene_(scene), film_(scene.width(), scene.height()), sums_(scene.width(), scene.height()),
+      device_(make_device(film_)) {
     std::copy(scene.params.light_share, scene.params.light_share + ETK_SHARE_BINS, shares_.begin());
     std::copy(scene.params.bin_flags, scene.params.bin_flags + ETK_SHARE_BINS, flags_.begin());
     choices_.fill(-1);
@@ -21,48 +22,46 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
 
 void Renderer::render_sample(uint32_t sample_index) {
     Timer timer;
-    if (learning_ && next_learning_pass_ < options_.learning_passes &&
-        sample_index != static_cast<uint32_t>(next_learning_pass_))
-        learn_on_scratch_film();
-    const bool learn = learning_ && next_learning_pass_ < options_.learning_passes;
-    run(sample_index, learn);
+    // Learning needs samples 0 .. L-1 in order; rendered first, and kept only by the process
+    // whose first sample is 0.
+    while (learning_ && next_learning_pass_ < options_.learning_passes &&
+           sample_index != static_cast<uint32_t>(next_learning_pass_)) {
+        run(static_cast<uint32_t>(next_learning_pass_), true, false);
+        ++stats_.learning_passes;
+    }
+    run(sample_index, learning_ && next_learning_pass_ < options_.learning_passes, true);
     stats_.samples_per_pixel += 1;
     stats_.seconds += timer.seconds();
 }
 
-// Samples 0 .. L-1 rendered to learn, on a zeroed film; the film so far is put back afterwards.
-void Renderer::learn_on_scratch_film() {
-    const Film kept = film();
-    Film scratch(film_.width(), film_.height());
-    resume(scratch);
-    while (next_learning_pass_ < options_.learning_passes) {
-        run(static_cast<uint32_t>(next_learning_pass_), true);
-        ++stats_.learning_passes;
-    }
-    resume(kept);
-}
-
-// One pass of sample `sample_index`; with `learn`, it is learning pass next_learning_pass_.
-void Renderer::run(uint32_t sample_index, bool learn) {
+void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     etk::EtkParams p = scene_.params;
     p.sample_index = sample_index;
     std::copy(shares_.begin(), shares_.end(), p.light_share);
     std::copy(flags_.begin(), flags_.end(), p.bin_flags);
-    // Samples 0 .. L-1 are learning samples whether or not they are learnt from (a resume
-    // renders them again on a scratch film to learn): the image depends on the sample index
-    // alone.
+    // Samples 0 .. L-1 are learning samples whether or not they are learnt from: the image
+    // depends on the sample index alone.
     p.learn = learning_ && sample_index < static_cast<uint32_t>(options_.learning_passes);
     LightShareLearner* learner = nullptr;
     if (learn) {
         if (!learner_)
             learner_ = std::make_unique<LightShareLearner>(options_, film_.width(), film_.height(),
                                                            scene_.params.seed);
-        learner_->begin_pass(film().film_sum);
+        learner_->begin_pass();
         learner = learner_.get();
     }
+    // The pass renders into a zeroed film (element-wise: the native back end holds pointers
+    // into film_), whose one sample per pixel is then added exactly to the sums.
+#define ET_ZERO(type, name) std::fill(film_.name.begin(), film_.name.end(), type{});
+    ETK_FILM_FIELDS(ET_ZERO)
+#undef ET_ZERO
+    device_->upload_film(film_);
     const RayCounts c = run_pass(*device_, p, learner);
+    device_->download_film(film_);
+    if (keep)
+        sums_.add_pass(film_);
     if (learn) {
-        learner->end_pass(film().film_sum);
+        learner->end_pass(film_.film_sum);
         if (++next_learning_pass_ == options_.learning_passes) {
             choices_ = learner_->choices();
             for (int b = 0; b < ETK_SHARE_BINS; ++b) {
@@ -79,21 +78,12 @@ void Renderer::run(uint32_t sample_index, bool learn) {
     stats_.shaded_hits += c.shaded;
 }
 
-const Film& Renderer::film() {
-    device_->download_film(film_);
-    return film_;
-}
-
-void Renderer::resume(const Film& film) {
-    if (film.width() != film_.width() || film.height() != film_.height())
-        throw Error("cannot resume a " + std::to_string(film_.width()) + "x" +
-                    std::to_string(film_.height()) + " render from a " +
-                    std::to_string(film.width()) + "x" + std::to_string(film.height()) + " film");
-        // Element-wise: the native back end holds pointers into film_.
-#define ET_COPY(type, name) std::copy(film.name.begin(), film.name.end(), film_.name.begin());
-    ETK_FILM_FIELDS(ET_COPY)
-#undef ET_COPY
-    device_->upload_film(film_);
+void Renderer::resume(const FilmSums& sums) {
+    if (sums.width() != sums_.width() || sums.height() != sums_.height())
+        throw Error("cannot resume a " + std::to_string(sums_.width()) + "x" +
+                    std::to_string(sums_.height()) + " render from a " +
+                    std::to_string(sums.width()) + "x" + std::to_string(sums.height()) + " film");
+    sums_ = sums;
 }
 
 const RenderStats& Renderer::stats() {

@@ -1,11 +1,14 @@
 // The renderer: a prepared scene, a back end (OpenCL or native) and the film. Each pass adds
-// one sample to every pixel by running the one bounce schedule (schedule.h) on the back end.
+// one sample to every pixel by running the one bounce schedule (schedule.h) on the back end,
+// into a zeroed device film that is then added, exactly, to the film's sums (film_sums.h): the
+// image does not depend on which process rendered which sample index, or in which order.
 // Path tracing, SIS and directional light sets are all this renderer; the strategy in the
 // scene's settings picks the stages.
 #pragma once
 #include "opencl/opencl_runtime.h"
 #include "prepare/device_scene.h"
 #include "render/film.h"
+#include "render/film_sums.h"
 #include "render/light_share.h"
 #include "render/schedule.h"
 
@@ -23,7 +26,7 @@ struct RenderStats {
     uint64_t nonfinite_samples = 0; // dropped by the film; anything but 0 is a bug
     uint64_t shaded_hits = 0;       // surface hits shaded
     int samples_per_pixel = 0;
-    int learning_passes = 0; // adaptive: passes rendered only to learn the shares (resumes)
+    int learning_passes = 0; // adaptive: passes rendered only to learn (resumes, sample ranges)
     double seconds = 0.0;
     // Time per stage (seconds): device time from profiling events for OpenCL, thread time natively.
     std::vector<std::pair<std::string, double>> stage_seconds;
@@ -38,38 +41,35 @@ class Renderer {
     // `scene` must outlive the renderer.
     Renderer(const DeviceScene& scene, const DeviceFactory& make_device);
     // Adds one sample to every pixel (index `sample_index` of each pixel's sequence). The
-    // adaptive strategy learns its light shares from samples 0 .. L-1; a render that starts past
-    // them (a resume, a sample range) first renders them on a scratch film to learn the same.
+    // adaptive strategy learns from samples 0 .. L-1; a render that starts past them (a resume,
+    // a sample range, an MPI rank) first renders them to learn, without adding them to its sums.
     void render_sample(uint32_t sample_index);
-    // Adaptive strategy: light share per material bin (kernels/params.h) for the passes to come.
+    // Adaptive strategy: light share and ETK_BIN_* flags per material bin for the passes to come,
+    // and the learned candidate per bin (-1 before or without learning).
     const std::array<float, ETK_SHARE_BINS>& light_shares() const { return shares_; }
     const std::array<int, ETK_SHARE_BINS>& bin_flags() const { return flags_; }
-    // The learned candidate per bin (etk_learning_share / _flags), -1 before or without learning.
     const std::array<int, ETK_SHARE_BINS>& choices() const { return choices_; }
-    bool shares_learned() const {
-        return learning_ && next_learning_pass_ >= options_.learning_passes;
-    }
-    // The film so far (read back from the device).
-    const Film& film();
-    // Continues from a film of the same size (sums of an earlier, interrupted render).
-    void resume(const Film& film);
+    // The sums of every sample rendered (and resumed from) so far.
+    const FilmSums& sums() const { return sums_; }
+    // Continues from sums of the same size (an earlier, interrupted render, or another rank's).
+    void resume(const FilmSums& sums);
     // Mean radiance per pixel (RGB, row-major, row 0 at the top).
-    std::vector<float> image() { return film().mean(); }
+    std::vector<float> image() const { return sums_.mean(); }
     const RenderStats& stats();
     int paths() const { return device_->lanes() * device_->wave_size(); }
     std::string name() const { return device_->name(); }
 
   private:
-    void run(uint32_t sample_index, bool learn);
-    void learn_on_scratch_film();
-
+    // One pass into the zeroed film; learning pass if `learn`; added to the sums if `keep`.
+    void run(uint32_t sample_index, bool learn, bool keep);
     const DeviceScene& scene_;
-    Film film_; // declared before device_: the native back end writes into it
+    Film film_; // one pass; declared before device_: the native back end writes into it
+    FilmSums sums_;
     std::unique_ptr<WavefrontDevice> device_;
     RenderStats stats_;
     std::array<float, ETK_SHARE_BINS> shares_;
     std::array<int, ETK_SHARE_BINS> flags_, choices_;
-    bool learning_ = false;      // adaptive strategy with shares learned (not fixed)
+    bool learning_ = false;      // adaptive strategy, configuration learned (not fixed)
     int next_learning_pass_ = 0; // the learning pass that comes next (L: learned)
     LightShareOptions options_;
     std::unique_ptr<LightShareLearner> learner_;

@@ -1,0 +1,142 @@
+#include "render/film_sums.h"
+
+#include "util/error.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+
+namespace et {
+namespace {
+
+constexpr float kLimit = 72057594037927936.0f; // 2^56
+
+// Adds one float sample to a channel: exact fixed point, or a flag when it cannot be held.
+inline void add_sample(int128& acc, uint8_t& special, float v) {
+    if (std::isnan(v)) {
+        special |= FilmSums::kNaN;
+    } else if (!(std::fabs(v) < kLimit)) {
+        special |= v > 0 ? FilmSums::kPositiveOverflow : FilmSums::kNegativeOverflow;
+    } else {
+        acc += film_fixed_point(v);
+    }
+}
+
+// What a channel's value becomes: the finite sum, or inf/NaN as its flags say.
+inline double channel(int128 acc, uint8_t special) {
+    if (special == 0)
+        return film_fixed_to_double(acc);
+    if (special == FilmSums::kPositiveOverflow)
+        return std::numeric_limits<double>::infinity();
+    if (special == FilmSums::kNegativeOverflow)
+        return -std::numeric_limits<double>::infinity();
+    return std::numeric_limits<double>::quiet_NaN();
+}
+
+} // namespace
+
+int128 film_fixed_point(float v) {
+    uint32_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    const bool negative = bits >> 31;
+    const int exponent = static_cast<int>((bits >> 23) & 0xffu);
+    uint32_t mantissa = bits & 0x7fffffu;
+    int e; // v = mantissa * 2^e
+    if (exponent == 0) {
+        e = -149; // subnormal
+    } else {
+        mantissa |= 0x800000u;
+        e = exponent - 150;
+    }
+    const int shift = e + FilmSums::kFractionBits;
+    int128 magnitude;
+    if (shift >= 0)
+        magnitude = static_cast<int128>(mantissa) << shift; // < 2^24 * 2^102 = 2^126 for |v| < 2^56
+    else if (shift > -25)
+        magnitude = (static_cast<uint64_t>(mantissa) + (uint64_t(1) << (-shift - 1))) >> -shift;
+    else
+        magnitude = 0; // below half a unit
+    return negative ? -magnitude : magnitude;
+}
+
+double film_fixed_to_double(int128 x) {
+    return std::ldexp(static_cast<double>(x), -FilmSums::kFractionBits);
+}
+
+FilmSums::FilmSums(int width, int height)
+    : width_(width), height_(height),
+      pixels_(static_cast<size_t>(width) * static_cast<size_t>(height), Pixel{}) {}
+
+void FilmSums::add_pass(const Film& pass) {
+    if (pass.width() != width_ || pass.height() != height_)
+        throw Error("cannot add a " + std::to_string(pass.width()) + "x" +
+                    std::to_string(pass.height()) + " pass to a " + std::to_string(width_) + "x" +
+                    std::to_string(height_) + " film");
+    const size_t n = pixels_.size();
+    for (size_t i = 0; i < n; ++i) {
+        Pixel& p = pixels_[i];
+        const etk::float4 s = pass.film_sum[i], q = pass.film_sq[i];
+        add_sample(p.sum[0], p.special[0], s.x);
+        add_sample(p.sum[1], p.special[1], s.y);
+        add_sample(p.sum[2], p.special[2], s.z);
+        add_sample(p.sq[0], p.special[3], q.x);
+        add_sample(p.sq[1], p.special[4], q.y);
+        add_sample(p.sq[2], p.special[5], q.z);
+        p.count += static_cast<uint32_t>(s.w);
+    }
+}
+
+void FilmSums::add_pixels(Pixel* to, const Pixel* from, size_t n) {
+    for (size_t i = 0; i < n; ++i) {
+        for (int c = 0; c < 3; ++c) {
+            to[i].sum[c] += from[i].sum[c];
+            to[i].sq[c] += from[i].sq[c];
+        }
+        for (int c = 0; c < 6; ++c)
+            to[i].special[c] |= from[i].special[c];
+        to[i].count += from[i].count;
+    }
+}
+
+void FilmSums::add(const FilmSums& o) {
+    if (o.width_ != width_ || o.height_ != height_)
+        throw Error("cannot add a " + std::to_string(o.width_) + "x" + std::to_string(o.height_) +
+                    " film to a " + std::to_string(width_) + "x" + std::to_string(height_) +
+                    " one");
+    add_pixels(pixels_.data(), o.pixels_.data(), pixels_.size());
+}
+
+std::vector<float> FilmSums::mean() const {
+    std::vector<float> rgb(3 * pixels());
+    for (size_t i = 0; i < pixels(); ++i) {
+        const Pixel& p = pixels_[i];
+        for (int c = 0; c < 3; ++c)
+            rgb[3 * i + c] =
+                p.count > 0 ? static_cast<float>(channel(p.sum[c], p.special[c]) / p.count) : 0.0f;
+    }
+    return rgb;
+}
+
+std::vector<float> FilmSums::variance_of_mean() const {
+    std::vector<float> var(3 * pixels(), 0.0f);
+    for (size_t i = 0; i < pixels(); ++i) {
+        const Pixel& p = pixels_[i];
+        const double n = p.count;
+        if (n < 2.0)
+            continue;
+        for (int c = 0; c < 3; ++c) {
+            const double m = channel(p.sum[c], p.special[c]) / n;
+            const double s2 = (channel(p.sq[c], p.special[3 + c]) - n * m * m) / (n - 1.0);
+            var[3 * i + c] = static_cast<float>(s2 > 0.0 ? s2 / n : 0.0);
+        }
+    }
+    return var;
+}
+
+bool FilmSums::operator==(const FilmSums& o) const {
+    return width_ == o.width_ && height_ == o.height_ &&
+           std::memcmp(pixels_.data(), o.pixels_.data(), pixels_.size() * sizeof(Pixel)) == 0;
+}
+
+} // namespace et

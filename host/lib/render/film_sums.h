@@ -1,0 +1,72 @@
+// The film's sums in exact arithmetic, so that they do not depend on the order of the samples:
+// the renderer adds each pass (one float sample per pixel, kernels/film.h) here, converted to
+// fixed point, and two films of disjoint sample sets add exactly. A render split over MPI ranks
+// or farm tasks (--sample-range, `envtrace merge`) therefore gives the bit-identical image of one
+// process: integer addition is associative, float addition is not.
+//
+// Per pixel and channel (RGB of the sum, RGB of the sum of squares): a 128-bit integer counting
+// units of 2^-70 (samples are rounded to that grid, a relative change below 2^-24 for any value
+// above 2^-46 ~ 1.4e-14; smaller ones are below what a float film could hold next to a normal
+// sample anyway). A sample of magnitude 2^56 (7.2e16) or more, or not finite, is not added but
+// flagged, and the channel's mean becomes +inf, -inf or NaN as a float sum would have. 2^72
+// samples of the largest magnitude still fit, so the sums cannot overflow.
+#pragma once
+#include "render/film.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace et {
+
+__extension__ typedef __int128 int128;
+
+class FilmSums {
+  public:
+    static constexpr int kFractionBits = 70;
+    enum : uint8_t { kPositiveOverflow = 1, kNegativeOverflow = 2, kNaN = 4 };
+    struct alignas(16) Pixel {
+        int128 sum[3];      // sum of the samples, RGB
+        int128 sq[3];       // sum of their squares (each squared in float, as the device does)
+        uint32_t count;     // samples added
+        uint8_t special[6]; // kPositiveOverflow | kNegativeOverflow | kNaN per channel above
+        uint8_t pad[6];     // always 0 (files hold the raw bytes)
+    };
+    static_assert(sizeof(Pixel) == 112, "Pixel is written to files and MPI messages as bytes");
+
+    FilmSums() = default;
+    FilmSums(int width, int height);
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    size_t pixels() const { return pixels_.size(); }
+    Pixel* data() { return pixels_.data(); }
+    const Pixel* data() const { return pixels_.data(); }
+
+    // Adds one pass: `pass` holds, per pixel, at most one sample (w = 1) or none (w = 0).
+    // Films of several samples add too, but then their float sums were rounded already.
+    void add_pass(const Film& pass);
+    // Adds the sums of a disjoint sample set, exactly (throws et::Error for another size).
+    void add(const FilmSums& other);
+    // Adds `n` pixels of `from` to `to` (the MPI reduction's operator).
+    static void add_pixels(Pixel* to, const Pixel* from, size_t n);
+
+    // Mean radiance per pixel (RGB, row-major, row 0 at the top); 0 where a pixel has no sample.
+    std::vector<float> mean() const;
+    // Per pixel and channel, the estimated variance of the mean, s^2 / n (0 below 2 samples).
+    std::vector<float> variance_of_mean() const;
+    // Bitwise equality of every sum, count and flag.
+    bool operator==(const FilmSums& o) const;
+
+  private:
+    int width_ = 0, height_ = 0;
+    std::vector<Pixel> pixels_;
+};
+
+// The fixed-point value of a float sample (finite, |v| < 2^56), rounded to the nearest unit of
+// 2^-70 (ties away from zero). Exposed for the tests.
+int128 film_fixed_point(float v);
+// A fixed-point sum as a double (rounded to nearest).
+double film_fixed_to_double(int128 x);
+
+} // namespace et

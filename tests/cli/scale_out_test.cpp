@@ -1,0 +1,391 @@
+// One render across processes (README, "One render on many machines"): `mpirun -np 2` and
+// `-np 4` give the image of one process bit for bit, a time-limited MPI render stops at a spp
+// the ranks agree on and resumes (with another number of ranks) to the uninterrupted image, a
+// failing or killed rank ends the job naming it with nothing written; farm tasks
+// (`render --sample-range`) merge to the single render bit for bit, and `merge` refuses parts
+// of another render, overlapping parts and gaps. mpirun runs on loopback only
+// (--oversubscribe, TCP over lo); the MPI tests skip when envtrace was built without MPI.
+#include "cli_run.h"
+#include "image/image_io.h"
+#include "render/render_state.h"
+#include "test_data.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string read_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// DIR/s.json (seed `seed`): a plastic sphere on a quad under a small sky map, 16x12, depth 4.
+std::string write_scene(const std::string& dir, int seed = 1, const std::string& name = "s") {
+    fs::create_directories(dir + "/maps");
+    std::vector<float> sky(32 * 16 * 3);
+    for (size_t i = 0; i < sky.size(); ++i)
+        sky[i] = 0.2f + 2.0f * float(16 - (i / 3) / 32) / 16.0f + (i % 97 == 0 ? 40.0f : 0.0f);
+    et::write_image(dir + "/maps/sky.exr", 32, 16, 3, sky);
+    std::ofstream(dir + "/" + name + ".json") << R"({
+  "camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
+  "film": {"width": 16, "height": 12},
+  "environment": {"map": ")" + dir + R"(/maps/sky.exr"},
+  "materials": {"m": {"type": "plastic", "albedo": 0.6, "roughness": 0.3}},
+  "shapes": [{"type": "sphere", "radius": 0.6, "center": [0, 0.6, 0], "material": "m"},
+             {"type": "quad", "center": [0, 0, 0], "size": 6, "material": "m"}],
+  "render": {"max_depth": 4, "seed": )" + std::to_string(seed) +
+                                                     R"(}
+}
+)";
+    return dir + "/" + name + ".json";
+}
+
+std::vector<std::string> render_args(const std::string& scene, const std::string& out,
+                                     std::vector<std::string> more) {
+    std::vector<std::string> a = {"render", scene, "--backend", "cpu", "--threads", "1", "-o", out};
+    a.insert(a.end(), more.begin(), more.end());
+    return a;
+}
+
+// The pixels of an image, exactly as stored.
+std::vector<float> pixels(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in)
+        return {};
+    const OIIO::ImageSpec& s = in->spec();
+    std::vector<float> px(size_t(s.width) * s.height * s.nchannels);
+    in->read_image(0, 0, 0, s.nchannels, OIIO::TypeDesc::FLOAT, px.data());
+    return px;
+}
+
+std::string metadata(const std::string& exr, const std::string& key) {
+    auto in = OIIO::ImageInput::open(exr);
+    return in ? in->spec().get_string_attribute("envtrace:" + key) : "";
+}
+
+// Bitwise equality of two images' pixels (float == would call NaN unequal and -0 equal).
+void expect_same_pixels(const std::string& a, const std::string& b) {
+    const std::vector<float> x = pixels(a), y = pixels(b);
+    ASSERT_FALSE(x.empty()) << a;
+    ASSERT_EQ(x.size(), y.size()) << b;
+    EXPECT_EQ(0, std::memcmp(x.data(), y.data(), x.size() * sizeof(float)))
+        << a << " and " << b << " differ";
+}
+
+void expect_exit(const ett::CliRun& r, int code) {
+    ASSERT_FALSE(r.timed_out) << "hung";
+    ASSERT_TRUE(r.exited()) << "killed by signal " << WTERMSIG(r.status) << "; stderr: " << r.err;
+    ASSERT_EQ(r.code(), code) << r.err;
+}
+
+// Every file in dir but the inputs: outputs and temporaries.
+std::vector<std::string> written_in(const std::string& dir) {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string n = e.path().filename().string();
+        if (n != "maps" && n.find(".json") == std::string::npos && n != "stderr.txt" &&
+            n != "mpi.txt")
+            out.push_back(n);
+    }
+    return out;
+}
+
+// ---- MPI ----
+
+struct MpiRun {
+    int code = -1; // exit status of mpirun (-1: did not exit)
+    std::string err;
+};
+
+bool have_mpi() {
+#if defined(ENVTRACE_HAVE_MPI) && ENVTRACE_HAVE_MPI
+    return std::string(ENVTRACE_MPIEXEC).find("NOTFOUND") == std::string::npos &&
+           std::string(ENVTRACE_MPIEXEC) != "";
+#else
+    return false;
+#endif
+}
+
+// mpirun ... on loopback. Each `app` is "-np N ARGS..." of one MPMD section (":"-separated);
+// `background` runs it with '&' and returns at once (the caller waits on the pid file).
+std::string mpirun_command(const std::string& dir, const std::vector<std::string>& apps) {
+#if defined(ENVTRACE_HAVE_MPI) && ENVTRACE_HAVE_MPI
+    std::string cmd = "cd '" + dir +
+                      "' && OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                      "OMPI_MCA_rmaps_base_oversubscribe=1 timeout 120 " ENVTRACE_MPIEXEC
+                      " --oversubscribe --mca btl self,tcp --mca btl_tcp_if_include lo "
+                      "--mca oob_tcp_if_include lo";
+    for (size_t i = 0; i < apps.size(); ++i)
+        cmd += (i ? " : " : " ") + apps[i];
+    return cmd + " > mpi.txt 2> stderr.txt";
+#else
+    (void)dir;
+    (void)apps;
+    return "false";
+#endif
+}
+
+std::string app(int ranks, const std::vector<std::string>& args, const std::string& env = "") {
+    std::string s =
+        "-np " + std::to_string(ranks) + (env.empty() ? "" : " -x " + env) + " " + ENVTRACE_EXE;
+    for (const std::string& a : args)
+        s += " '" + a + "'";
+    return s;
+}
+
+MpiRun mpirun(const std::string& dir, const std::vector<std::string>& apps) {
+    const int status = std::system(mpirun_command(dir, apps).c_str());
+    MpiRun r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.err = read_file(dir + "/stderr.txt");
+    return r;
+}
+
+#define REQUIRE_MPI()                                                                              \
+    if (!have_mpi())                                                                               \
+    GTEST_SKIP() << "envtrace was built without MPI (or no mpirun): install libopenmpi-dev and "   \
+                    "openmpi-bin (tools/setup) and reconfigure"
+
+TEST(MpiRender, TwoAndFourRanksEqualOneProcess) {
+    REQUIRE_MPI();
+    const std::string dir = ett::scratch_dir("mpi_ranks");
+    const std::string scene = write_scene(dir);
+    const ett::CliRun one =
+        ett::run_envtrace(render_args(scene, dir + "/one.exr", {"--spp", "7"}), dir);
+    expect_exit(one, 0);
+    for (int ranks : {2, 4}) {
+        SCOPED_TRACE(std::to_string(ranks) + " ranks");
+        const std::string out = dir + "/np" + std::to_string(ranks) + ".exr";
+        const MpiRun r = mpirun(dir, {app(ranks, render_args(scene, out, {"--spp", "7"}))});
+        ASSERT_EQ(r.code, 0) << r.err;
+        expect_same_pixels(dir + "/one.exr", out);
+        EXPECT_EQ(metadata(out, "spp"), "7");
+        EXPECT_EQ(metadata(out, "ranks"), std::to_string(ranks));
+    }
+}
+
+// A time-limited MPI render ends at a spp that is a whole number of rounds; resumed with
+// another number of ranks (and by one process) it equals the uninterrupted render.
+TEST(MpiRender, TimeLimitCheckpointAndResume) {
+    REQUIRE_MPI();
+    const std::string dir = ett::scratch_dir("mpi_resume");
+    const std::string scene = write_scene(dir);
+    const std::string state = dir + "/a.envtrace-state";
+    MpiRun r = mpirun(dir, {app(2, render_args(scene, dir + "/a.exr",
+                                               {"--time-limit", "0.3", "--checkpoint", "0"}))});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const int reached = et::read_render_state(state).spp;
+    EXPECT_GE(reached, 2);
+    EXPECT_EQ(reached % 2, 0) << "two ranks add two samples a round";
+    EXPECT_EQ(metadata(dir + "/a.exr", "spp"), std::to_string(reached));
+    const std::string total = std::to_string(reached + 5);
+    r = mpirun(dir, {app(3, render_args(scene, dir + "/a.exr", {"--spp", total, "--resume"}))});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(et::read_render_state(state).spp, reached + 5);
+    const ett::CliRun one =
+        ett::run_envtrace(render_args(scene, dir + "/one.exr", {"--spp", total}), dir);
+    expect_exit(one, 0);
+    expect_same_pixels(dir + "/one.exr", dir + "/a.exr");
+    // More samples than --spp in the state: refused by rank 0, every rank ends.
+    r = mpirun(dir, {app(2, render_args(scene, dir + "/a.exr", {"--spp", "1", "--resume"}))});
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("rank 0 of 2"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("samples cannot be taken away"), std::string::npos) << r.err;
+}
+
+// Bad input on one rank, or another scene there: the job ends, the message names the rank and
+// the cause, and no output (nor a temporary) is left.
+TEST(MpiRender, FailingRankIsNamedAndNothingIsWritten) {
+    REQUIRE_MPI();
+    const std::string dir = ett::scratch_dir("mpi_fail");
+    const std::string scene = write_scene(dir);
+    const std::string other = write_scene(dir, 2, "other");
+    const std::string out = dir + "/out.exr";
+    MpiRun r = mpirun(dir, {app(1, render_args(scene, out, {"--spp", "4"})),
+                            app(1, render_args(dir + "/missing.json", out, {"--spp", "4"}))});
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("envtrace: error: rank 1 of 2"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r.err;
+    EXPECT_TRUE(written_in(dir).empty()) << written_in(dir)[0];
+    r = mpirun(dir, {app(2, render_args(scene, out, {"--spp", "4"})),
+                     app(1, render_args(other, out, {"--spp", "4"}))});
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("rank 2 of 3"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("differ from rank 0's"), std::string::npos) << r.err;
+    EXPECT_TRUE(written_in(dir).empty()) << written_in(dir)[0];
+}
+
+// The pids of envtrace processes whose environment holds `tag` and rank `rank`.
+std::vector<pid_t> ranks_tagged(const std::string& tag, int rank) {
+    std::vector<pid_t> out;
+    for (const auto& e : fs::directory_iterator("/proc")) {
+        const std::string name = e.path().filename().string();
+        if (name.find_first_not_of("0123456789") != std::string::npos)
+            continue;
+        const std::string env = read_file(e.path().string() + "/environ");
+        if (env.find(tag) != std::string::npos &&
+            env.find(std::string("OMPI_COMM_WORLD_RANK=") + std::to_string(rank) + '\0') !=
+                std::string::npos)
+            out.push_back(static_cast<pid_t>(std::stol(name)));
+    }
+    return out;
+}
+
+TEST(MpiRender, KilledRankEndsTheJobNamingIt) {
+    REQUIRE_MPI();
+    const std::string dir = ett::scratch_dir("mpi_killed");
+    const std::string scene = write_scene(dir);
+    const std::string tag = "ENVTRACE_TEST_TAG=killed" + std::to_string(getpid());
+    const std::string cmd = mpirun_command(
+        dir, {app(2, render_args(scene, dir + "/out.exr", {"--spp", "16000000"}), tag)});
+    std::thread job([&] {
+        const int status = std::system(cmd.c_str());
+        EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0) << status;
+    });
+    std::vector<pid_t> victim;
+    for (int i = 0; i < 3000 && victim.empty(); ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        victim = ranks_tagged(tag, 1);
+    }
+    ASSERT_EQ(victim.size(), 1u);
+    // Rendering has begun once both ranks run: give setup a moment, then kill rank 1.
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    kill(victim[0], SIGKILL);
+    job.join();
+    const std::string err = read_file(dir + "/stderr.txt");
+    EXPECT_NE(err.find("rank 1"), std::string::npos) << err;
+    EXPECT_NE(err.find("signal 9"), std::string::npos) << err;
+    EXPECT_TRUE(ranks_tagged(tag, 0).empty()) << "rank 0 still runs";
+    EXPECT_TRUE(written_in(dir).empty()) << written_in(dir)[0];
+}
+
+// SIGINT to one rank: every rank stops at the end of the round, rank 0 writes the samples so
+// far (an even spp: whole rounds of two ranks), and the job's status says the signal.
+TEST(MpiRender, SignalToOneRankStopsEveryRankAndKeepsTheSamples) {
+    REQUIRE_MPI();
+    const std::string dir = ett::scratch_dir("mpi_signal");
+    const std::string scene = write_scene(dir);
+    const std::string tag = "ENVTRACE_TEST_TAG=signal" + std::to_string(getpid());
+    const std::string state = dir + "/out.envtrace-state";
+    const std::string cmd = mpirun_command(
+        dir,
+        {app(2, render_args(scene, dir + "/out.exr", {"--spp", "16000000", "--checkpoint", "0"}),
+             tag)});
+    int status = -1;
+    std::thread job([&] { status = std::system(cmd.c_str()); });
+    // The first checkpoint says both ranks are rendering (their handlers are installed).
+    for (int i = 0; i < 6000 && !fs::exists(state); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    const std::vector<pid_t> rank1 = ranks_tagged(tag, 1);
+    ASSERT_EQ(rank1.size(), 1u);
+    kill(rank1[0], SIGINT);
+    job.join();
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 130) << read_file(dir + "/stderr.txt");
+    EXPECT_EQ(metadata(dir + "/out.exr", "interrupted"), "SIGINT");
+    const int spp = std::stoi("0" + metadata(dir + "/out.exr", "spp"));
+    EXPECT_GE(spp, 2);
+    EXPECT_EQ(spp % 2, 0);
+    EXPECT_EQ(et::read_render_state(state).spp, spp);
+}
+
+// ---- Farm mode ----
+
+TEST(Merge, FullCoverEqualsSingleRender) {
+    const std::string dir = ett::scratch_dir("merge_cover");
+    const std::string scene = write_scene(dir);
+    expect_exit(ett::run_envtrace(render_args(scene, dir + "/one.exr", {"--spp", "7"}), dir), 0);
+    std::vector<std::string> parts;
+    for (const char* range : {"2:5", "0:2", "5:7"}) {
+        const std::string part = dir + "/p" + std::string(range).replace(1, 1, "-") + ".state";
+        expect_exit(ett::run_envtrace(render_args(scene, dir + "/farm.exr",
+                                                  {"--sample-range", range, "--state", part}),
+                                      dir),
+                    0);
+        parts.push_back(part);
+    }
+    EXPECT_FALSE(fs::exists(dir + "/farm.exr")) << "a task writes its partial film only";
+    EXPECT_EQ(et::read_render_state(parts[0]).first, 2);
+    EXPECT_EQ(et::read_render_state(parts[0]).spp, 3);
+    std::vector<std::string> merge = {"merge", "-o", dir + "/merged.exr", "--state",
+                                      dir + "/merged.state"};
+    merge.insert(merge.end(), parts.begin(), parts.end());
+    expect_exit(ett::run_envtrace(merge, dir), 0);
+    expect_same_pixels(dir + "/one.exr", dir + "/merged.exr");
+    EXPECT_EQ(metadata(dir + "/merged.exr", "spp"), "7");
+    EXPECT_EQ(metadata(dir + "/merged.exr", "sample_ranges"), "0:2,2:5,5:7");
+    // The merged state continues like any render state: resumed to 9, it is the render to 9.
+    expect_exit(
+        ett::run_envtrace(render_args(scene, dir + "/merged.exr",
+                                      {"--spp", "9", "--resume", "--state", dir + "/merged.state"}),
+                          dir),
+        0);
+    expect_exit(ett::run_envtrace(render_args(scene, dir + "/nine.exr", {"--spp", "9"}), dir), 0);
+    expect_same_pixels(dir + "/nine.exr", dir + "/merged.exr");
+}
+
+TEST(Merge, RefusesForeignOverlappingAndMissingParts) {
+    const std::string dir = ett::scratch_dir("merge_refuse");
+    const std::string scene = write_scene(dir), other = write_scene(dir, 2, "other");
+    auto task = [&](const std::string& sc, const std::string& range, const std::string& part) {
+        expect_exit(
+            ett::run_envtrace(render_args(sc, dir + "/farm.exr",
+                                          {"--sample-range", range, "--state", dir + "/" + part}),
+                              dir),
+            0);
+        return dir + "/" + part;
+    };
+    const std::string a = task(scene, "0:3", "a.state"), b = task(scene, "2:4", "b.state"),
+                      c = task(scene, "5:6", "c.state"), d = task(other, "3:5", "d.state");
+    const std::string out = dir + "/m.exr";
+    auto merge = [&](std::vector<std::string> parts, bool allow_gaps = false) {
+        std::vector<std::string> args = {"merge", "-o", out};
+        if (allow_gaps)
+            args.push_back("--allow-gaps");
+        args.insert(args.end(), parts.begin(), parts.end());
+        return ett::run_envtrace(args, dir);
+    };
+    ett::CliRun r = merge({a, d});
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("d.state: a part of another render than " + a), std::string::npos)
+        << r.err;
+    r = merge({a, b});
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("overlap"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("samples 2..3"), std::string::npos) << r.err;
+    r = merge({c, a});
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("missing samples 3..4"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    // A film of another size, and a file that is no state at all.
+    std::ofstream(dir + "/junk.state") << "not a state";
+    r = merge({a, dir + "/junk.state"});
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("junk.state"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    // Gaps allowed: an image of 4 samples, said so.
+    r = merge({c, a}, true);
+    expect_exit(r, 0);
+    EXPECT_NE(r.err.find("missing samples 3..4"), std::string::npos) << r.err;
+    EXPECT_EQ(metadata(out, "spp"), "4");
+    // A bad range is refused before anything is rendered.
+    r = ett::run_envtrace(render_args(scene, dir + "/x.exr", {"--sample-range", "4:4"}), dir);
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("--sample-range '4:4'"), std::string::npos) << r.err;
+}
+
+} // namespace
