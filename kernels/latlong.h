@@ -1,7 +1,10 @@
 // The lat-long parameterisation of directions (y-up, row 0 looks straight up, the image centre
 // looks along -Z, u grows towards +X):
 //     u = (1 + atan2(x, -z) / pi) / 2,    v = acos(y) / pi
-// This is the convention of ../shared/data/README.md, Mitsuba 3's envmap and the ICT probes.
+// This is envtrace's own convention, that of ../shared/data/README.md and the ICT probes as
+// Probulator reads them. Mitsuba 3's envmap is half a turn about +Y from it and Blender Cycles' a
+// quarter turn; the host folds those into the map-to-world rotation (EtkEnvMap's rot_cos,
+// rot_sin; host/lib/load/environment_map.h, LatLongConvention), so this stays the one formula.
 #ifndef ETK_LATLONG_H
 #define ETK_LATLONG_H
 #include "compat.h"

@@ -25,7 +25,7 @@ namespace {
 constexpr int kPhiBins = 128, kCosBins = 64;
 constexpr int kSamples = 1 << 20;
 // Every chi-square test of this file shares the family-wise alpha of 0.01.
-constexpr int kChi2Tests = 13;
+constexpr int kChi2Tests = 14;
 
 // The world-space azimuth used for binning (the lat-long convention of ../shared/data/README.md).
 double world_phi(double x, double z) {
@@ -228,6 +228,19 @@ TEST(EnvmapChi2, OneLitTexelNoBlur) {
     et::DistributionOptions opt;
     opt.blur_sigma = 0.0f;
     run_chi2("one-lit-texel-seam", et::make_envmap("one-lit-texel-seam", img, opt));
+}
+
+// A map in Blender's lat-long convention (a quarter turn folded into the map-to-world rotation,
+// load/environment_map.h), turned further by "rotation": the texel at u = 0.24 lands across the
+// world's phi = +-pi seam.
+TEST(EnvmapChi2, OneLitTexelBlenderConvention) {
+    et::RgbImage img = ett::constant_image(64, 32, 0.0f);
+    float* t = img.at(15, 12);
+    t[0] = t[1] = t[2] = 50.0f;
+    et::EnvMap env = et::make_envmap("one-lit-texel-blender", img, {});
+    env.convention = et::LatLongConvention::blender;
+    env.rotation_degrees = 3.0f;
+    run_chi2("one-lit-texel-blender", env);
 }
 
 // The compensated distribution (prepare/env_compensation.h) is sampled by the same code from its

@@ -368,6 +368,7 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
         {"camera", R"({"eye": [0, "1", 4]})", "camera.eye[1]"},
         {"camera", R"({"fov": true})", "camera.fov"},
         {"environment", R"({"map": "MAP", "rotation": "east"})", "environment.rotation"},
+        {"environment", R"({"map": "MAP", "convention": "luxcore"})", "environment.convention"},
         {"environment", R"({"map": "MAP", "blur": 1e30})", "environment.blur"},
         {"environment", R"({"map": "MAP", "intensity": 1e38})", "environment.intensity"},
         {"environment", R"({"map": 5})", "environment.map"},

@@ -18,6 +18,40 @@
 
 namespace et {
 
+double convention_rotation_degrees(LatLongConvention c) {
+    switch (c) {
+    case LatLongConvention::mitsuba:
+        return 180.0;
+    case LatLongConvention::blender:
+        return 90.0;
+    case LatLongConvention::envtrace:
+        break;
+    }
+    return 0.0;
+}
+
+const char* name_of(LatLongConvention c) {
+    switch (c) {
+    case LatLongConvention::mitsuba:
+        return "mitsuba";
+    case LatLongConvention::blender:
+        return "blender";
+    case LatLongConvention::envtrace:
+        break;
+    }
+    return "envtrace";
+}
+
+bool parse_convention(const std::string& name, LatLongConvention& out) {
+    for (LatLongConvention c :
+         {LatLongConvention::envtrace, LatLongConvention::mitsuba, LatLongConvention::blender})
+        if (name == name_of(c)) {
+            out = c;
+            return true;
+        }
+    return false;
+}
+
 etk::EtkEnvMap EnvMap::desc() const {
     etk::EtkEnvMap d;
     d.tex_w = image.width;
@@ -25,7 +59,10 @@ etk::EtkEnvMap EnvMap::desc() const {
     d.dist_w = dist.width;
     d.dist_h = dist.height;
     d.scale = scale;
-    const double a = rotation_degrees * M_PI / 180.0;
+    // Reduced to [-180, 180] first, so that the conventions' quarter and half turns stay exact.
+    const double a =
+        std::remainder(double(rotation_degrees) + convention_rotation_degrees(convention), 360.0) *
+        M_PI / 180.0;
     d.rot_cos = static_cast<float>(std::cos(a));
     d.rot_sin = static_cast<float>(std::sin(a));
     d.has_light = dist.has_light() && scale > 0.0f ? 1 : 0;

@@ -14,17 +14,39 @@ namespace et {
 // clamped with a warning (the physical sun is about 1.6e9).
 constexpr float kMaxRadiance = 1e12f;
 
+// The lat-long convention a map was made for: which direction each texel means. envtrace's own is
+// that of kernels/latlong.h (the image centre looks along -Z, u grows towards +X, row 0 looks
+// up). With a y-up world, Mitsuba 3's envmap (u = atan2(x, -z) / 2 pi mod 1, v = acos(y) / pi)
+// is the same map turned half a turn about +Y, and Blender Cycles' (direction_to_equirectangular
+// in Blender's z-up world, brought to y-up by (x, y, z)_blender -> (x, z, -y)) a quarter turn:
+//     u_mitsuba = u - 1/2,   u_blender = u - 1/4 (mod 1),   v the same in all three.
+// Neither is mirrored, so a convention is a fixed rotation about +Y, folded into the map-to-world
+// rotation of desc(): the kernels keep one formula and radiance, sampling and pdf turn together.
+enum class LatLongConvention : int { envtrace, mitsuba, blender };
+
+// The rotation, in the sense of EnvMap::rotation_degrees, that turns envtrace's convention into
+// `c`: 0, 180 and 90 degrees.
+double convention_rotation_degrees(LatLongConvention c);
+const char* name_of(LatLongConvention c);
+// "envtrace", "mitsuba" or "blender"; false for anything else.
+bool parse_convention(const std::string& name, LatLongConvention& out);
+
 struct EnvMap {
     std::string name;
     RgbImage image;
     EnvDistribution dist;
     float scale = 1.0f;
-    float rotation_degrees = 0.0f; // about the up (+Y) axis
-    float max_texel = 0.0f;        // the largest channel value of `image`
+    // About the up (+Y) axis. Positive turns the map clockwise seen from above (from +Y): what
+    // the map shows towards -Z moves towards +X, i.e. a right-handed rotation by -rotation_degrees
+    // about +Y. The texel at u lands where the unturned map has u + rotation_degrees / 360.
+    float rotation_degrees = 0.0f;
+    LatLongConvention convention = LatLongConvention::envtrace; // applied before the rotation
+    float max_texel = 0.0f; // the largest channel value of `image`
     // load_envmap: seconds until the texels were decoded and sanitised, and the distribution's
     // thread time over the threads that built it (it overlaps the decoding).
     double load_seconds = 0.0, build_seconds = 0.0;
 
+    // The kernels' descriptor: map-to-world rotation by rotation_degrees plus the convention's.
     etk::EtkEnvMap desc() const;
 };
 

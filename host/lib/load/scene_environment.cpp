@@ -14,8 +14,8 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     const JsonReader r = JsonReader(where).at("environment");
     if (!env.is_object())
         r.fail("expected an object with \"map\" or \"sky\", got " + json_excerpt(env));
-    r.warn_unknown_keys(env, {"map", "sky", "intensity", "rotation", "distribution_resolution",
-                              "blur", "distribution_exponent"});
+    r.warn_unknown_keys(env, {"map", "sky", "intensity", "rotation", "convention",
+                              "distribution_resolution", "blur", "distribution_exponent"});
     if (env.contains("distribution_resolution")) {
         const auto& res = env["distribution_resolution"];
         const JsonReader rd = r.at("distribution_resolution");
@@ -37,6 +37,13 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
         r.number(env, "distribution_exponent", options.exponent, kMinDistributionExponent, 1.0));
     const float scale = static_cast<float>(r.number(env, "intensity", 1.0, 0.0, 1e30));
     const float rotation = static_cast<float>(r.number(env, "rotation", 0.0, -1e6, 1e6));
+    LatLongConvention convention = LatLongConvention::envtrace;
+    if (env.contains("convention")) {
+        const JsonReader rc = r.at("convention");
+        if (!parse_convention(rc.string(env["convention"]), convention))
+            rc.fail("expected \"envtrace\", \"mitsuba\" or \"blender\", got " +
+                    json_excerpt(env["convention"]));
+    }
     EnvMap map;
     if (env.contains("map") && env.contains("sky"))
         r.fail("has both \"map\" and \"sky\": give one");
@@ -73,6 +80,7 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     }
     map.scale = scale;
     map.rotation_degrees = rotation;
+    map.convention = convention;
     bound_intensity(map, r.at("intensity").where());
     return map;
 }

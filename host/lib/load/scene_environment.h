@@ -1,5 +1,5 @@
 // The "environment" block of a scene file: a map file or the procedural sky, its intensity and
-// its rotation about the up axis.
+// its rotation about the up axis and the lat-long convention the map was made for.
 #pragma once
 #include "load/environment_map.h"
 
