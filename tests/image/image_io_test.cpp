@@ -73,6 +73,89 @@ template <class F> void expect_error_naming(const std::string& path, F call) {
     }
 }
 
+
+// A deflate stream (zlib) of stored blocks: valid for any inflater, no compression library needed.
+std::string zlib_stored(const std::string& data) {
+    std::string z = "\x78\x01";
+    size_t at = 0;
+    do {
+        const size_t n = std::min<size_t>(65535, data.size() - at);
+        const bool last = at + n == data.size();
+        z += {char(last ? 1 : 0), char(n & 0xff), char(n >> 8), char(~n & 0xff),
+              char((~n >> 8) & 0xff)};
+        z += data.substr(at, n);
+        at += n;
+    } while (at < data.size());
+    uint32_t a = 1, b = 0;
+    for (unsigned char c : data) {
+        a = (a + c) % 65521;
+        b = (b + a) % 65521;
+    }
+    const uint32_t adler = b << 16 | a;
+    z += {char(adler >> 24), char(adler >> 16), char(adler >> 8), char(adler)};
+    return z;
+}
+
+// A little-endian TIFF of w x h pixels of `spp` 8-bit channels (contiguous; the first grey, the
+// others extra samples), PhotometricInterpretation MinIsWhite (0), in zip (Adobe deflate) strips
+// of `rps` rows. By hand: OpenImageIO's writer does not write MinIsWhite.
+std::string miniswhite_tiff(int w, int h, int spp, int rps, const std::string& px) {
+    auto le16 = [](uint32_t v) { return std::string{char(v), char(v >> 8)}; };
+    auto le32 = [](uint32_t v) { return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)}; };
+    std::string file = "II*" + std::string(1, '\0') + le32(0); // IFD offset patched below
+    const size_t strip_bytes = static_cast<size_t>(w) * spp * rps;
+    std::vector<uint32_t> offsets, counts;
+    for (size_t at = 0; at < px.size(); at += strip_bytes) {
+        const std::string z = zlib_stored(px.substr(at, strip_bytes));
+        offsets.push_back(static_cast<uint32_t>(file.size()));
+        counts.push_back(static_cast<uint32_t>(z.size()));
+        file += z;
+    }
+    // Out-of-line arrays: returns the offset of what it appends.
+    auto append = [&](const std::string& bytes) {
+        if (file.size() % 2)
+            file += '\0';
+        const uint32_t at = static_cast<uint32_t>(file.size());
+        file += bytes;
+        return at;
+    };
+    std::string bps, extra, offs, cnts;
+    for (int c = 0; c < spp; ++c)
+        bps += le16(8);
+    for (int c = 1; c < spp; ++c)
+        extra += le16(0); // unspecified
+    for (size_t i = 0; i < offsets.size(); ++i)
+        offs += le32(offsets[i]), cnts += le32(counts[i]);
+    struct Entry {
+        uint16_t tag, type;
+        uint32_t count;
+        std::string value; // inline when at most 4 bytes
+    };
+    const uint16_t SHORT = 3, LONG = 4;
+    std::vector<Entry> entries = {
+        {256, LONG, 1, le32(w)},
+        {257, LONG, 1, le32(h)},
+        {258, SHORT, uint32_t(spp), bps},
+        {259, SHORT, 1, le16(8)},
+        {262, SHORT, 1, le16(0)},
+        {273, LONG, uint32_t(offsets.size()), offs},
+        {277, SHORT, 1, le16(spp)},
+        {278, LONG, 1, le32(rps)},
+        {279, LONG, uint32_t(counts.size()), cnts},
+        {284, SHORT, 1, le16(1)},
+        {338, SHORT, uint32_t(spp - 1), extra},
+    };
+    for (Entry& e : entries)
+        e.value = e.value.size() <= 4 ? e.value + std::string(4 - e.value.size(), '\0')
+                                      : le32(append(e.value));
+    const uint32_t ifd = append(le16(static_cast<uint32_t>(entries.size())));
+    for (const Entry& e : entries)
+        file += le16(e.tag) + le16(e.type) + le32(e.count) + e.value;
+    file += le32(0); // no next IFD
+    file.replace(4, 4, le32(ifd));
+    return file;
+}
+
 } // namespace
 
 TEST(SrgbCurve, KnownValues) {
@@ -618,4 +701,32 @@ TEST(ImageIo, RadianceDecodedBitForBitAsOpenImageIo) {
             EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
         }
     }
+}
+
+// Fuzz finding F8: OpenImageIO 2.4 decodes a range of whole zip strips of a TIFF itself and, for
+// MinIsWhite, inverts nchannels times too many values per strip, far past its buffer (a 191-byte
+// TIFF crashed the CLI). Such files are read a scanline at a time, which libtiff inverts right:
+// a 64-channel MinIsWhite TIFF in 4 zip strips reads as its inverted R, G, B (sRGB decoded).
+TEST(ImageIo, MinIsWhiteTiffOfManyChannelsReadsInvertedWithoutOverrun) {
+    const std::string path = ett::scratch_dir("image-io-miniswhite") + "/mw.tif";
+    const int w = 128, h = 64, spp = 64, rps = 16;
+    std::string px(static_cast<size_t>(w) * h * spp, '\x55');
+    auto stored = [](int x, int y, int c) { return static_cast<unsigned char>(x * 3 + y * 5 + c * 7); };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                px[(static_cast<size_t>(y) * w + x) * spp + c] = static_cast<char>(stored(x, y, c));
+    {
+        std::ofstream f(path, std::ios::binary);
+        f << miniswhite_tiff(w, h, spp, rps, px);
+    }
+    const et::RgbImage img = et::read_rgb_image(path);
+    ASSERT_EQ(img.width, w);
+    ASSERT_EQ(img.height, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(img.at(x, y)[c], et::srgb_to_linear((255 - stored(x, y, c)) / 255.0f),
+                            1e-6f)
+                    << x << "," << y << "," << c;
 }

@@ -456,6 +456,7 @@ struct OiioSource {
     int lo = 0, hi = 0;     // the range of channels decoded
     bool direct = false;    // float R, G, B adjacent: decoded straight into the texels
     bool decode_srgb = false;
+    bool row_by_row = false;            // scanlines one at a time (TIFF MinIsWhite, F8)
     std::vector<unsigned char> scratch; // one band of the decoded channels otherwise
     std::unique_ptr<RgbeDecoder> rgbe;  // Radiance pixels, decoded here
 
@@ -519,6 +520,13 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes) {
     decode_srgb = integer && cs != "Linear" && cs != "linear";
     direct = spec.tile_width == 0 && spec.format == TypeDesc::FLOAT &&
              spec.channelformats.empty() && idx[0] == lo && idx[1] == lo + 1 && idx[2] == lo + 2;
+    // OpenImageIO 2.4's TIFF reader decodes a range of whole strips itself (zip, 8 or 16 bits,
+    // contiguous channels) and then, for PhotometricInterpretation MinIsWhite (0), inverts
+    // nchannels times too many values per strip, past the end of the buffer: a 191-byte file
+    // crashed the CLI (fuzz finding F8). Single scanlines go through libtiff's scanline path,
+    // which inverts the right count, so such files are read a row at a time.
+    row_by_row = spec.tile_width == 0 && nch > 1 && std::string(in->format_name()) == "tiff" &&
+                 spec.get_int_attribute("tiff:PhotometricInterpretation", -1) == 0;
 }
 
 int OiioSource::band_rows() const {
@@ -537,6 +545,11 @@ int OiioSource::band_rows() const {
 }
 
 void OiioSource::read_rows(const std::string& path, int y0, int y1, float* dst) {
+    if (row_by_row && y1 - y0 > 1) {
+        for (int y = y0; y < y1; ++y)
+            read_rows(path, y, y + 1, dst + static_cast<size_t>(y - y0) * spec.width * 3);
+        return;
+    }
     const int w = spec.width, rows = y1 - y0;
     const int ybegin = spec.y + y0, yend = spec.y + y1;
     const stride_t xstride = 3 * sizeof(float), ystride = xstride * w;
