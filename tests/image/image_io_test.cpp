@@ -730,3 +730,44 @@ TEST(ImageIo, MinIsWhiteTiffOfManyChannelsReadsInvertedWithoutOverrun) {
                             1e-6f)
                     << x << "," << y << "," << c;
 }
+
+// Fuzz finding F9: a PFM whose header was refused left its file open (the constructor threw past
+// the destructor that closed it); 20000 descriptors ran out after 89162 fuzz executions. Every
+// refused file, whatever its format and wherever it is refused, leaves no descriptor open.
+TEST(ImageIo, RefusedFilesLeaveNoFileOpen) {
+    const std::string dir = ett::scratch_dir("image-io-fd");
+    auto open_fds = [] {
+        int n = 0;
+        for (const auto& e : fs::directory_iterator("/proc/self/fd")) {
+            (void)e;
+            ++n;
+        }
+        return n;
+    };
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"header.pfm", "PF\nfour 2\n-1.0\n" + std::string(96, '\0')},
+        {"magic.pfm", "P6\n4 2\n255\n" + std::string(24, '\0')},
+        {"scale.pfm", "PF\n4 2\n0\n" + std::string(96, '\0')},
+        {"short.pfm", "PF\n4 2\n-1.0\n" + std::string(10, '\0')},
+        {"huge.pfm", "PF\n30000 15000\n-1.0\n" + std::string(64, '\0')},
+        {"cut.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n\2\2\0\20"},
+        {"garbage.exr", "v/1\1" + std::string(60, 'x')},
+        {"cut.png", "\x89PNG\r\n\x1a\n" + std::string(40, '\0')},
+    };
+    for (const auto& [name, bytes] : files) {
+        std::ofstream(dir + "/" + name, std::ios::binary) << bytes;
+        expect_error_naming(dir + "/" + name, [&] { et::read_rgb_image(dir + "/" + name); });
+    }
+    const int before = open_fds();
+    for (int round = 0; round < 10; ++round)
+        for (const auto& [name, bytes] : files) {
+            try {
+                et::RgbImageReader reader(dir + "/" + name);
+                std::vector<float> rows(static_cast<size_t>(reader.width()) * 3 *
+                                        reader.band_rows());
+                reader.read_rows(reader.band_rows(), rows.data());
+            } catch (const et::Error&) {
+            }
+        }
+    EXPECT_EQ(open_fds(), before);
+}

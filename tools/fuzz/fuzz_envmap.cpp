@@ -46,6 +46,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    const etfuzz::FdCheck fds;
     if (size < 1)
         return 0;
     const std::string name = std::string("map") + extensions[data[0] % n_extensions];
