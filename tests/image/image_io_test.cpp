@@ -771,3 +771,35 @@ TEST(ImageIo, RefusedFilesLeaveNoFileOpen) {
         }
     EXPECT_EQ(open_fds(), before);
 }
+
+// Fuzz finding F10: OpenEXR allocates what a header attribute's size field claims before reading
+// it (456 bytes claiming a 1.7 GB string took 1.8 GB). The header is checked here first: sizes
+// beyond the file and previews larger than their attribute are refused by name, whatever the
+// file is called; valid headers (every other EXR test) still load.
+TEST(ImageIo, ExrAttributeSizesBeyondTheFileAreRefusedBeforeOpenExrAllocates) {
+    const std::string dir = ett::scratch_dir("image-io-exr-header");
+    auto le32 = [](uint32_t v) {
+        return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+    };
+    const std::string magic = std::string("\x76\x2f\x31\x01", 4) + std::string("\x02\0\0\0", 4);
+    const std::string huge_string =
+        magic + std::string("comments\0string\0", 16) + le32(1700000000) + "abc";
+    const std::string big_preview = magic + std::string("preview\0preview\0", 16) + le32(16) +
+                                    le32(4000) + le32(4000) + std::string(8, '\0');
+    const std::string negative = magic + std::string("owner\0string\0", 13) + le32(0xfffffff0u);
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"huge-string.exr", huge_string}, {"huge-string.png", huge_string},
+        {"big-preview.exr", big_preview}, {"negative.exr", negative}};
+    for (const auto& [name, bytes] : files) {
+        const std::string path = dir + "/" + name;
+        std::ofstream(path, std::ios::binary) << bytes;
+        try {
+            et::read_rgb_image(path);
+            ADD_FAILURE() << path << ": read";
+        } catch (const et::Error& e) {
+            const std::string m = e.what();
+            EXPECT_EQ(m.rfind(path, 0), 0u) << m;
+            EXPECT_NE(m.find("corrupt EXR header"), std::string::npos) << m;
+        }
+    }
+}
