@@ -731,6 +731,52 @@ TEST(ImageIo, MinIsWhiteTiffOfManyChannelsReadsInvertedWithoutOverrun) {
                     << x << "," << y << "," << c;
 }
 
+// F8 again (F8b): the heap corruption of a later long run in a build without F8's workaround was
+// the same overrun, and it is not only a matter of 64-channel oddities: a 4-channel (grey + 3
+// extra samples) MinIsWhite zip TIFF already writes past the strip buffer (ASan: bad-free in
+// OpenImageIO 2.4), a 2-channel one too, and strips that fail to decode are inverted all the
+// same. Every such file reads inverted, a scanline at a time; one whose strips are not valid
+// deflate is one et::Error naming the file, not a crash.
+TEST(ImageIo, MinIsWhiteTiffsOfFewChannelsAndBrokenStripsReadWithoutOverrun) {
+    const std::string dir = ett::scratch_dir("image-io-miniswhite-few");
+    auto stored = [](int x, int y, int c) { return static_cast<unsigned char>(x * 5 + y * 3 + c * 11); };
+    for (int spp : {2, 3, 4}) {
+        const int w = 64, h = 48, rps = 8;
+        std::string px(static_cast<size_t>(w) * h * spp, '\0');
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < spp; ++c)
+                    px[(static_cast<size_t>(y) * w + x) * spp + c] = static_cast<char>(stored(x, y, c));
+        const std::string path = dir + "/mw" + std::to_string(spp) + ".tif";
+        std::ofstream(path, std::ios::binary) << miniswhite_tiff(w, h, spp, rps, px);
+        const et::RgbImage img = et::read_rgb_image(path);
+        ASSERT_EQ(img.width, w) << spp;
+        ASSERT_EQ(img.height, h) << spp;
+        // Three or more channels: the first three; two (grey + one extra): grey replicated.
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    const int from = spp >= 3 ? c : 0;
+                    ASSERT_NEAR(img.at(x, y)[c],
+                                et::srgb_to_linear((255 - stored(x, y, from)) / 255.0f), 1e-6f)
+                        << spp << " channels: " << x << "," << y << "," << c;
+                }
+
+        // The same file with each strip's zlib header spoilt (the strips lie one after the
+        // other from offset 8, all of one size): every strip fails to decode.
+        std::string broken = miniswhite_tiff(w, h, spp, rps, px);
+        const size_t strip_z = zlib_stored(px.substr(0, static_cast<size_t>(w) * spp * rps)).size();
+        for (int s = 0; s < h / rps; ++s) {
+            const size_t at = 8 + s * strip_z;
+            ASSERT_EQ(broken.substr(at, 2), "\x78\x01");
+            broken[at] = '\xff', broken[at + 1] = '\xff';
+        }
+        const std::string bad = dir + "/broken" + std::to_string(spp) + ".tif";
+        std::ofstream(bad, std::ios::binary) << broken;
+        expect_error_naming(bad, [&] { et::read_rgb_image(bad); });
+    }
+}
+
 // Fuzz finding F9: a PFM whose header was refused left its file open (the constructor threw past
 // the destructor that closed it); 20000 descriptors ran out after 89162 fuzz executions. Every
 // refused file, whatever its format and wherever it is refused, leaves no descriptor open.
