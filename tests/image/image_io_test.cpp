@@ -73,6 +73,89 @@ template <class F> void expect_error_naming(const std::string& path, F call) {
     }
 }
 
+
+// A deflate stream (zlib) of stored blocks: valid for any inflater, no compression library needed.
+std::string zlib_stored(const std::string& data) {
+    std::string z = "\x78\x01";
+    size_t at = 0;
+    do {
+        const size_t n = std::min<size_t>(65535, data.size() - at);
+        const bool last = at + n == data.size();
+        z += {char(last ? 1 : 0), char(n & 0xff), char(n >> 8), char(~n & 0xff),
+              char((~n >> 8) & 0xff)};
+        z += data.substr(at, n);
+        at += n;
+    } while (at < data.size());
+    uint32_t a = 1, b = 0;
+    for (unsigned char c : data) {
+        a = (a + c) % 65521;
+        b = (b + a) % 65521;
+    }
+    const uint32_t adler = b << 16 | a;
+    z += {char(adler >> 24), char(adler >> 16), char(adler >> 8), char(adler)};
+    return z;
+}
+
+// A little-endian TIFF of w x h pixels of `spp` 8-bit channels (contiguous; the first grey, the
+// others extra samples), PhotometricInterpretation MinIsWhite (0), in zip (Adobe deflate) strips
+// of `rps` rows. By hand: OpenImageIO's writer does not write MinIsWhite.
+std::string miniswhite_tiff(int w, int h, int spp, int rps, const std::string& px) {
+    auto le16 = [](uint32_t v) { return std::string{char(v), char(v >> 8)}; };
+    auto le32 = [](uint32_t v) { return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)}; };
+    std::string file = "II*" + std::string(1, '\0') + le32(0); // IFD offset patched below
+    const size_t strip_bytes = static_cast<size_t>(w) * spp * rps;
+    std::vector<uint32_t> offsets, counts;
+    for (size_t at = 0; at < px.size(); at += strip_bytes) {
+        const std::string z = zlib_stored(px.substr(at, strip_bytes));
+        offsets.push_back(static_cast<uint32_t>(file.size()));
+        counts.push_back(static_cast<uint32_t>(z.size()));
+        file += z;
+    }
+    // Out-of-line arrays: returns the offset of what it appends.
+    auto append = [&](const std::string& bytes) {
+        if (file.size() % 2)
+            file += '\0';
+        const uint32_t at = static_cast<uint32_t>(file.size());
+        file += bytes;
+        return at;
+    };
+    std::string bps, extra, offs, cnts;
+    for (int c = 0; c < spp; ++c)
+        bps += le16(8);
+    for (int c = 1; c < spp; ++c)
+        extra += le16(0); // unspecified
+    for (size_t i = 0; i < offsets.size(); ++i)
+        offs += le32(offsets[i]), cnts += le32(counts[i]);
+    struct Entry {
+        uint16_t tag, type;
+        uint32_t count;
+        std::string value; // inline when at most 4 bytes
+    };
+    const uint16_t SHORT = 3, LONG = 4;
+    std::vector<Entry> entries = {
+        {256, LONG, 1, le32(w)},
+        {257, LONG, 1, le32(h)},
+        {258, SHORT, uint32_t(spp), bps},
+        {259, SHORT, 1, le16(8)},
+        {262, SHORT, 1, le16(0)},
+        {273, LONG, uint32_t(offsets.size()), offs},
+        {277, SHORT, 1, le16(spp)},
+        {278, LONG, 1, le32(rps)},
+        {279, LONG, uint32_t(counts.size()), cnts},
+        {284, SHORT, 1, le16(1)},
+        {338, SHORT, uint32_t(spp - 1), extra},
+    };
+    for (Entry& e : entries)
+        e.value = e.value.size() <= 4 ? e.value + std::string(4 - e.value.size(), '\0')
+                                      : le32(append(e.value));
+    const uint32_t ifd = append(le16(static_cast<uint32_t>(entries.size())));
+    for (const Entry& e : entries)
+        file += le16(e.tag) + le16(e.type) + le32(e.count) + e.value;
+    file += le32(0); // no next IFD
+    file.replace(4, 4, le32(ifd));
+    return file;
+}
+
 } // namespace
 
 TEST(SrgbCurve, KnownValues) {
@@ -616,6 +699,153 @@ TEST(ImageIo, RadianceDecodedBitForBitAsOpenImageIo) {
         } catch (const et::Error& e) {
             EXPECT_FALSE(oiio_ok) << name << ": OpenImageIO reads it, envtrace says " << e.what();
             EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+        }
+    }
+}
+
+// Fuzz finding F8: OpenImageIO 2.4 decodes a range of whole zip strips of a TIFF itself and, for
+// MinIsWhite, inverts nchannels times too many values per strip, far past its buffer (a 191-byte
+// TIFF crashed the CLI). Such files are read a scanline at a time, which libtiff inverts right:
+// a 64-channel MinIsWhite TIFF in 4 zip strips reads as its inverted R, G, B (sRGB decoded).
+TEST(ImageIo, MinIsWhiteTiffOfManyChannelsReadsInvertedWithoutOverrun) {
+    const std::string path = ett::scratch_dir("image-io-miniswhite") + "/mw.tif";
+    const int w = 128, h = 64, spp = 64, rps = 16;
+    std::string px(static_cast<size_t>(w) * h * spp, '\x55');
+    auto stored = [](int x, int y, int c) { return static_cast<unsigned char>(x * 3 + y * 5 + c * 7); };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                px[(static_cast<size_t>(y) * w + x) * spp + c] = static_cast<char>(stored(x, y, c));
+    {
+        std::ofstream f(path, std::ios::binary);
+        f << miniswhite_tiff(w, h, spp, rps, px);
+    }
+    const et::RgbImage img = et::read_rgb_image(path);
+    ASSERT_EQ(img.width, w);
+    ASSERT_EQ(img.height, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(img.at(x, y)[c], et::srgb_to_linear((255 - stored(x, y, c)) / 255.0f),
+                            1e-6f)
+                    << x << "," << y << "," << c;
+}
+
+// F8 again (F8b): the heap corruption of a later long run in a build without F8's workaround was
+// the same overrun, and it is not only a matter of 64-channel oddities: a 4-channel (grey + 3
+// extra samples) MinIsWhite zip TIFF already writes past the strip buffer (ASan: bad-free in
+// OpenImageIO 2.4), a 2-channel one too, and strips that fail to decode are inverted all the
+// same. Every such file reads inverted, a scanline at a time; one whose strips are not valid
+// deflate is one et::Error naming the file, not a crash.
+TEST(ImageIo, MinIsWhiteTiffsOfFewChannelsAndBrokenStripsReadWithoutOverrun) {
+    const std::string dir = ett::scratch_dir("image-io-miniswhite-few");
+    auto stored = [](int x, int y, int c) { return static_cast<unsigned char>(x * 5 + y * 3 + c * 11); };
+    for (int spp : {2, 3, 4}) {
+        const int w = 64, h = 48, rps = 8;
+        std::string px(static_cast<size_t>(w) * h * spp, '\0');
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < spp; ++c)
+                    px[(static_cast<size_t>(y) * w + x) * spp + c] = static_cast<char>(stored(x, y, c));
+        const std::string path = dir + "/mw" + std::to_string(spp) + ".tif";
+        std::ofstream(path, std::ios::binary) << miniswhite_tiff(w, h, spp, rps, px);
+        const et::RgbImage img = et::read_rgb_image(path);
+        ASSERT_EQ(img.width, w) << spp;
+        ASSERT_EQ(img.height, h) << spp;
+        // Three or more channels: the first three; two (grey + one extra): grey replicated.
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    const int from = spp >= 3 ? c : 0;
+                    ASSERT_NEAR(img.at(x, y)[c],
+                                et::srgb_to_linear((255 - stored(x, y, from)) / 255.0f), 1e-6f)
+                        << spp << " channels: " << x << "," << y << "," << c;
+                }
+
+        // The same file with each strip's zlib header spoilt (the strips lie one after the
+        // other from offset 8, all of one size): every strip fails to decode.
+        std::string broken = miniswhite_tiff(w, h, spp, rps, px);
+        const size_t strip_z = zlib_stored(px.substr(0, static_cast<size_t>(w) * spp * rps)).size();
+        for (int s = 0; s < h / rps; ++s) {
+            const size_t at = 8 + s * strip_z;
+            ASSERT_EQ(broken.substr(at, 2), "\x78\x01");
+            broken[at] = '\xff', broken[at + 1] = '\xff';
+        }
+        const std::string bad = dir + "/broken" + std::to_string(spp) + ".tif";
+        std::ofstream(bad, std::ios::binary) << broken;
+        expect_error_naming(bad, [&] { et::read_rgb_image(bad); });
+    }
+}
+
+// Fuzz finding F9: a PFM whose header was refused left its file open (the constructor threw past
+// the destructor that closed it); 20000 descriptors ran out after 89162 fuzz executions. Every
+// refused file, whatever its format and wherever it is refused, leaves no descriptor open.
+TEST(ImageIo, RefusedFilesLeaveNoFileOpen) {
+    const std::string dir = ett::scratch_dir("image-io-fd");
+    auto open_fds = [] {
+        int n = 0;
+        for (const auto& e : fs::directory_iterator("/proc/self/fd")) {
+            (void)e;
+            ++n;
+        }
+        return n;
+    };
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"header.pfm", "PF\nfour 2\n-1.0\n" + std::string(96, '\0')},
+        {"magic.pfm", "P6\n4 2\n255\n" + std::string(24, '\0')},
+        {"scale.pfm", "PF\n4 2\n0\n" + std::string(96, '\0')},
+        {"short.pfm", "PF\n4 2\n-1.0\n" + std::string(10, '\0')},
+        {"huge.pfm", "PF\n30000 15000\n-1.0\n" + std::string(64, '\0')},
+        {"cut.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n\2\2\0\20"},
+        {"garbage.exr", "v/1\1" + std::string(60, 'x')},
+        {"cut.png", "\x89PNG\r\n\x1a\n" + std::string(40, '\0')},
+    };
+    for (const auto& [name, bytes] : files) {
+        std::ofstream(dir + "/" + name, std::ios::binary) << bytes;
+        expect_error_naming(dir + "/" + name, [&] { et::read_rgb_image(dir + "/" + name); });
+    }
+    const int before = open_fds();
+    for (int round = 0; round < 10; ++round)
+        for (const auto& [name, bytes] : files) {
+            try {
+                et::RgbImageReader reader(dir + "/" + name);
+                std::vector<float> rows(static_cast<size_t>(reader.width()) * 3 *
+                                        reader.band_rows());
+                reader.read_rows(reader.band_rows(), rows.data());
+            } catch (const et::Error&) {
+            }
+        }
+    EXPECT_EQ(open_fds(), before);
+}
+
+// Fuzz finding F10: OpenEXR allocates what a header attribute's size field claims before reading
+// it (456 bytes claiming a 1.7 GB string took 1.8 GB). The header is checked here first: sizes
+// beyond the file and previews larger than their attribute are refused by name, whatever the
+// file is called; valid headers (every other EXR test) still load.
+TEST(ImageIo, ExrAttributeSizesBeyondTheFileAreRefusedBeforeOpenExrAllocates) {
+    const std::string dir = ett::scratch_dir("image-io-exr-header");
+    auto le32 = [](uint32_t v) {
+        return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+    };
+    const std::string magic = std::string("\x76\x2f\x31\x01", 4) + std::string("\x02\0\0\0", 4);
+    const std::string huge_string =
+        magic + std::string("comments\0string\0", 16) + le32(1700000000) + "abc";
+    const std::string big_preview = magic + std::string("preview\0preview\0", 16) + le32(16) +
+                                    le32(4000) + le32(4000) + std::string(8, '\0');
+    const std::string negative = magic + std::string("owner\0string\0", 13) + le32(0xfffffff0u);
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"huge-string.exr", huge_string}, {"huge-string.png", huge_string},
+        {"big-preview.exr", big_preview}, {"negative.exr", negative}};
+    for (const auto& [name, bytes] : files) {
+        const std::string path = dir + "/" + name;
+        std::ofstream(path, std::ios::binary) << bytes;
+        try {
+            et::read_rgb_image(path);
+            ADD_FAILURE() << path << ": read";
+        } catch (const et::Error& e) {
+            const std::string m = e.what();
+            EXPECT_EQ(m.rfind(path, 0), 0u) << m;
+            EXPECT_NE(m.find("corrupt EXR header"), std::string::npos) << m;
         }
     }
 }

@@ -9,13 +9,16 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <dirent.h>
 #include <filesystem>
 #include <string>
 #include <unistd.h>
 
 namespace etfuzz {
 
-// The folder (created on first use, removed at normal exit).
+// The folder (created on first use, removed at normal exit). Its path goes to stderr: when the
+// process dies without writing a crash artifact (a heap corrupted by uninstrumented code can
+// deadlock libFuzzer's crash handler in malloc: F8), the input that did it is still there.
 inline const std::string& work_dir() {
     struct Dir {
         std::string path;
@@ -36,6 +39,8 @@ inline const std::string& work_dir() {
             std::perror("envtrace fuzz: mkdtemp");
             std::abort();
         }
+        std::fprintf(stderr, "envtrace fuzz: inputs are written to %s (left there if the process "
+                             "dies)\n", tmpl.c_str());
         return tmpl;
     }()};
     return dir.path;
@@ -56,6 +61,33 @@ inline std::string write_file(const std::string& name, const uint8_t* data, size
 inline void silence_warnings() {
     et::set_warning_sink([](const std::string&) {});
 }
+
+// Descriptors open in this process (-1 where /proc/self/fd cannot be read).
+inline int open_fds() {
+    DIR* d = opendir("/proc/self/fd");
+    if (!d)
+        return -1;
+    int n = 0;
+    while (readdir(d))
+        ++n;
+    closedir(d);
+    return n;
+}
+
+// Declared first in LLVMFuzzerTestOneInput: the input must leave no more descriptors open than
+// there were before it. A loader that leaks one per refused file (F9) is then a finding at the
+// input that does it, not when the process runs out of descriptors tens of thousands later.
+struct FdCheck {
+    const int before = open_fds();
+    ~FdCheck() {
+        const int after = open_fds();
+        if (before >= 0 && after > before) {
+            std::fprintf(stderr, "envtrace fuzz: the input left %d file descriptor(s) open\n",
+                         after - before);
+            std::abort();
+        }
+    }
+};
 
 // Known findings, reported and left to the files' owners (tools/fuzz/README.md): inputs that hit
 // them are skipped, so that a long run goes on looking for other things, unless

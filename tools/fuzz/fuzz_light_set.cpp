@@ -8,6 +8,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    const etfuzz::FdCheck fds;
     const std::string path = etfuzz::write_file("lights.json", data, size);
     try {
         et::LightSet set = et::read_lights(path);

@@ -15,6 +15,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    const etfuzz::FdCheck fds;
     static constexpr std::string_view sep = "#---mtl---\n";
     const std::string_view text(reinterpret_cast<const char*>(data), size);
     const size_t at = text.find(sep);

@@ -89,6 +89,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    const etfuzz::FdCheck fds;
     std::string text(reinterpret_cast<const char*>(data), size);
     json parsed = json::parse(text, nullptr, false);
     if (!parsed.is_discarded() && scale_down(parsed))
