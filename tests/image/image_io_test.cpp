@@ -801,8 +801,10 @@ TEST(ImageIo, RefusedFilesLeaveNoFileOpen) {
         {"cut.png", "\x89PNG\r\n\x1a\n" + std::string(40, '\0')},
     };
     for (const auto& [name, bytes] : files) {
-        std::ofstream(dir + "/" + name, std::ios::binary) << bytes;
-        expect_error_naming(dir + "/" + name, [&] { et::read_rgb_image(dir + "/" + name); });
+        // A copy: clang before C++20 does not let a lambda capture a structured binding.
+        const std::string path = dir + "/" + name;
+        std::ofstream(path, std::ios::binary) << bytes;
+        expect_error_naming(path, [&] { et::read_rgb_image(path); });
     }
     const int before = open_fds();
     for (int round = 0; round < 10; ++round)
