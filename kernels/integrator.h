@@ -9,6 +9,7 @@
 //   ETK_PAIR_SHARE + d (etk_shade). Pairs are hashed, so these need not be contiguous.
 #ifndef ETK_INTEGRATOR_H
 #define ETK_INTEGRATOR_H
+#include "aov.h"
 #include "bsdf.h"
 #include "bvh.h"
 #include "compat.h"
@@ -165,11 +166,12 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
 // Stage 4: at a surface: one light sample (pushed as a shadow ray) and one BSDF sample (pushed as
 // the continuation ray); for the adaptive strategy, samples A and B chosen by the vertex's share.
 ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
-    (void)F;
     int slot = Q.shade[i];
     int depth = (int)P.ray_o[slot].w;
     int pixel = P.pixel[slot];
     EtkSurface s = etk_path_surface(S, P, p, slot);
+    if (depth == 0) // the camera ray's hit: the AOVs
+        etk_aov_first_hit(F, p, pixel, s, etk_xyz(P.ray_d[slot]), P.hit[slot].x);
     float3 t = s.t, b = s.b, ns = s.ns, ng = s.ng, wo = s.wo, origin = s.origin;
     EtkMaterial m = s.m;
     float3 beta = etk_xyz(P.beta[slot]);
@@ -337,9 +339,10 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
 // Stage 4': the shade stage of a directional light set (ETK_STRATEGY_LIGHTS, direct lighting
 // only): every light of the set at every hit, one any-hit shadow ray each, summed in light order.
 ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
-    (void)F;
     int slot = Q.shade[i];
     EtkSurface s = etk_path_surface(S, P, p, slot);
+    if ((int)P.ray_o[slot].w == 0) // the camera ray's hit: the AOVs
+        etk_aov_first_hit(F, p, P.pixel[slot], s, etk_xyz(P.ray_d[slot]), P.hit[slot].x);
     float3 beta = etk_xyz(P.beta[slot]);
     float3 L = make_float3(0.0f, 0.0f, 0.0f);
     uint traced = 0u;

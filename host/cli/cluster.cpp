@@ -48,6 +48,29 @@ void add_pixels_op(void* in, void* inout, int* len, MPI_Datatype*) {
     FilmSums::add_pixels(static_cast<FilmSums::Pixel*>(inout),
                          static_cast<const FilmSums::Pixel*>(in), static_cast<size_t>(*len));
 }
+
+void add_aov_pixels_op(void* in, void* inout, int* len, MPI_Datatype*) {
+    add_aov_pixels(static_cast<AovPixel*>(inout), static_cast<const AovPixel*>(in),
+                   static_cast<size_t>(*len));
+}
+
+// Sums `n` elements of `T` (bytes) from every rank into rank 0's `out`, in slices of 64k, with
+// the commutative operator `fn` (integer sums and flag unions).
+template <class T>
+void reduce_pixels(const T* mine, T* out, size_t n, MPI_User_function* fn, int rank) {
+    MPI_Datatype type;
+    MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &type);
+    MPI_Type_commit(&type);
+    MPI_Op op;
+    MPI_Op_create(fn, 1, &op);
+    constexpr size_t kSlice = size_t(1) << 16; // pixels per message: 7-8 MiB
+    for (size_t first = 0; first < n; first += kSlice) {
+        const int k = static_cast<int>(std::min(kSlice, n - first));
+        MPI_Reduce(mine + first, rank == 0 ? out + first : nullptr, k, type, op, 0, MPI_COMM_WORLD);
+    }
+    MPI_Op_free(&op);
+    MPI_Type_free(&type);
+}
 #endif
 
 } // namespace
@@ -165,21 +188,14 @@ FilmSums Cluster::reduce(const FilmSums& mine) const {
     if (!mpi_)
         return mine;
 #ifdef ENVTRACE_HAVE_MPI
-    MPI_Datatype pixel;
-    MPI_Type_contiguous(static_cast<int>(sizeof(FilmSums::Pixel)), MPI_BYTE, &pixel);
-    MPI_Type_commit(&pixel);
-    MPI_Op op;
-    MPI_Op_create(&add_pixels_op, 1, &op); // commutative: integer sums and flag unions
-    FilmSums out = rank_ == 0 ? FilmSums(mine.width(), mine.height()) : FilmSums();
+    FilmSums out =
+        rank_ == 0 ? FilmSums(mine.width(), mine.height(), mine.has_aovs()) : FilmSums();
     arrive_all();
-    constexpr size_t kSlice = size_t(1) << 16; // pixels per message: 7 MiB
-    for (size_t first = 0; first < mine.pixels(); first += kSlice) {
-        const int n = static_cast<int>(std::min(kSlice, mine.pixels() - first));
-        MPI_Reduce(mine.data() + first, rank_ == 0 ? out.data() + first : nullptr, n, pixel, op, 0,
-                   MPI_COMM_WORLD);
-    }
-    MPI_Op_free(&op);
-    MPI_Type_free(&pixel);
+    reduce_pixels(mine.data(), rank_ == 0 ? out.data() : nullptr, mine.pixels(), &add_pixels_op,
+                  rank_);
+    if (mine.has_aovs()) // every rank has them or none: the render key covers --aovs
+        reduce_pixels(mine.aov_data(), rank_ == 0 ? out.aov_data() : nullptr, mine.pixels(),
+                      &add_aov_pixels_op, rank_);
     return out;
 #else
     return mine;

@@ -8,6 +8,8 @@
 #include "prepare/device_scene.h"
 #include "prepare/light_set.h"
 #include "util/timer.h"
+#include "render/film_layers.h"
+#include "render/noise_estimate.h"
 #include "render/renderer.h"
 #include "prepare/sis.h"
 #include "render/render_state.h"
@@ -20,6 +22,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <tuple>
 #include <unistd.h>
@@ -53,6 +56,8 @@ struct RenderArgs {
     long long seed = -1;
     double time_limit = -1.0;
     double checkpoint = -1.0; // --checkpoint: seconds between saved states (< 0: none)
+    double noise_target = 0.0; // --noise-target: stop at this relative error (0: none)
+    bool aovs = false;         // --aovs: albedo, normal, depth and variance layers in the EXR
     bool resume = false;
     std::string state;        // --state: the state file (default: beside the image)
     std::string sample_range; // --sample-range A:B: a farm task, samples A .. B-1
@@ -115,6 +120,7 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     st.threads = a.threads;
     st.sis_samples = a.sis_samples;
     st.lights = a.lights;
+    st.aovs = a.aovs;
     if (!st.lights.empty()) {
         if (st.strategy == Strategy::sis)
             throw Error("--lights and --strategy sis exclude each other");
@@ -271,9 +277,9 @@ void run(const RenderArgs& a, Globals& g) {
     cl.check(attempt([&] {
         if (partial) {
             range = parse_sample_range(a.sample_range);
-            if (a.time_limit >= 0)
+            if (a.time_limit >= 0 || a.noise_target > 0)
                 throw Error("--sample-range renders a fixed range of sample indices: it excludes "
-                            "--time-limit");
+                            "--time-limit and --noise-target");
         }
         scene.emplace(load_scene(a.scene));
         st = settings_for(a, g, scene->settings);
@@ -282,6 +288,9 @@ void run(const RenderArgs& a, Globals& g) {
                                     ? scene->output
                                     : fs::path(a.scene).stem().string() + ".exr";
         std::tie(exr_name, png_name) = output_names(out);
+        if (st.aovs && !partial && fs::path(exr_name).extension() != ".exr")
+            throw Error(exr_name + ": --aovs writes its layers into an OpenEXR image: name an "
+                                   ".exr output (-o)");
         // Fail on an unwritable destination before spending the render time.
         check_writable_format(exr_name);
         check_writable_format(png_name);
@@ -370,7 +379,12 @@ void run(const RenderArgs& a, Globals& g) {
     // indices, and a round ends with the film holding a prefix of the range, which an interrupted
     // or time-limited render writes and a resumed one continues, with any number of ranks.
     const int64_t first = range.first;
-    const int64_t end = partial ? range.second : st.time_limit > 0 ? int64_t(1) << 24 : st.spp;
+    // --noise-target: --spp, when given on the command line, caps the render; else only the
+    // target (or --time-limit) ends it.
+    const bool noise = a.noise_target > 0;
+    const int64_t end = partial                                   ? range.second
+                        : st.time_limit > 0 || (noise && a.spp <= 0) ? int64_t(1) << 24
+                                                                    : st.spp;
     int64_t done = cl.broadcast(state.spp);
     if (a.resume && cl.root()) {
         renderer.resume(state.sums);
@@ -397,11 +411,28 @@ void run(const RenderArgs& a, Globals& g) {
     Timer render, since_checkpoint;
     std::string render_error;
     int sig = 0;
+    // The noise target is checked on the summed film (every rank's, reduced to rank 0) at spp
+    // counts every rank knows (kNoiseFirstCheck, then where the error is predicted to meet the
+    // target, at most doubling), so that the few reductions cost little.
+    double noise_error = std::numeric_limits<double>::infinity();
+    bool noise_reached = false;
+    int64_t next_check = std::max<int64_t>(kNoiseFirstCheck, done);
     for (;;) {
+        if (noise && !noise_reached && done >= next_check && first + done < end) {
+            const FilmSums all = cl.reduce(renderer.sums());
+            int64_t next = next_check, reached = 0;
+            if (cl.root()) {
+                noise_error = relative_error(all);
+                reached = noise_error <= a.noise_target;
+                next = next_noise_check(done, noise_error, a.noise_target);
+            }
+            noise_reached = cl.broadcast(reached) != 0;
+            next_check = cl.broadcast(next);
+        }
         // What the ranks agree on before each round: stop (a signal on any rank, the time limit
         // by rank 0's clock, or the range done), save a checkpoint (rank 0's clock), a failure.
         int64_t f[4] = {0, 0, render_error.empty() ? 0 : 1, InterruptHandler::signal()};
-        if (f[3] != 0 || (done > 0 && first + done >= end) ||
+        if (f[3] != 0 || (done > 0 && first + done >= end) || noise_reached ||
             (cl.root() && done > 0 && st.time_limit > 0 && render.seconds() >= st.time_limit))
             f[0] = 1;
         if (cl.root() && a.checkpoint >= 0 && done > resumed_from &&
@@ -448,13 +479,20 @@ void run(const RenderArgs& a, Globals& g) {
     s.nonfinite_samples = counts[3];
     s.shaded_hits = counts[4];
     const int spp = static_cast<int>(done);
-
+    if (cl.root() && !partial && (noise || st.aovs))
+        noise_error = relative_error(sums); // of the image written
     cl.check(attempt([&] {
         if (!cl.root())
             return;
         if (!partial) {
             const std::vector<float> img = sums.mean();
+            char error_text[32];
+            std::snprintf(error_text, sizeof error_text, "%.6g", noise_error);
             std::vector<std::pair<std::string, std::string>> meta = {
+                {"envtrace:noise_error", error_text},
+                {"envtrace:noise_target",
+                 noise ? std::to_string(a.noise_target) : std::string("none")},
+                {"envtrace:noise_target_reached", noise_reached ? "yes" : "no"},
                 {"envtrace:spp", std::to_string(spp)},
                 {"envtrace:interrupted", sig ? signal_name(sig) : "no"},
                 {"envtrace:resumed_from_spp", std::to_string(resumed_from)},
@@ -471,16 +509,27 @@ void run(const RenderArgs& a, Globals& g) {
                 {"envtrace:ranks", std::to_string(cl.size())},
                 {"Software", "envtrace " ENVTRACE_VERSION},
             };
-            write_image(*outputs, exr_name, ds.width(), ds.height(), 3, img, meta);
+            if (sums.has_aovs()) {
+                const FilmLayers layers = film_layers(sums);
+                write_image_channels(*outputs, exr_name, ds.width(), ds.height(), layers.names,
+                                     layers.pixels, meta);
+            } else {
+                write_image(*outputs, exr_name, ds.width(), ds.height(), 3, img, meta);
+            }
             RgbImage film{ds.width(), ds.height(), img};
             write_image(*outputs, png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
         }
-        if (!a.stats_file.empty())
-            write_json_file(*outputs, a.stats_file,
-                            stats_json(a, st, ds, renderer.name(), s, build, light_set, sis, spp,
-                                       static_cast<int>(resumed_from), sig, render_s, cl.size(),
-                                       static_cast<int>(first), renderer),
-                            2);
+        if (!a.stats_file.empty()) {
+            nlohmann::json j = stats_json(a, st, ds, renderer.name(), s, build, light_set, sis,
+                                          spp, static_cast<int>(resumed_from), sig, render_s,
+                                          cl.size(), static_cast<int>(first), renderer);
+            j["aovs"] = st.aovs;
+            if (noise)
+                j["noise_target"] = {{"target", a.noise_target},
+                                     {"reached", noise_reached},
+                                     {"estimated_relative_error", noise_error}};
+            write_json_file(*outputs, a.stats_file, j, 2);
+        }
         if (keep_state)
             write_render_state(*outputs, state_path,
                                RenderState{state.key, spp, static_cast<int>(first), sums});
@@ -512,6 +561,9 @@ void run(const RenderArgs& a, Globals& g) {
         std::printf("\nwrote %s and %s%s%s at %d spp (total %.2f s)\n", exr_name.c_str(),
                     png_name.c_str(), keep_state ? " and the state " : "",
                     keep_state ? state_path.c_str() : "", spp, total.seconds());
+    if (noise && cl.root())
+        std::printf("noise target %g %s at %d spp: estimated relative error %.4g\n",
+                    a.noise_target, noise_reached ? "reached" : "NOT reached", spp, noise_error);
     if (sig)
         g.exit_code = 128 + sig;
 }
@@ -527,6 +579,12 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--spp", a->spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
     cmd->add_option("--time-limit", a->time_limit, "Render for this many seconds instead of --spp")
         ->check(CLI::Range(0.0, 1e7));
+    cmd->add_option("--noise-target", a->noise_target,
+                    "Stop once the image's estimated relative RMS error is at most this (e.g. "
+                    "0.02); --spp, if given, caps the samples, --time-limit the time")
+        ->check(CLI::Range(1e-6, 10.0));
+    cmd->add_flag("--aovs", a->aovs,
+                  "Write albedo, normal (N), depth (Z) and variance layers into the EXR");
     cmd->add_option("--max-depth", a->max_depth,
                     "Bounces (1: direct lighting only, the paper's setting)")
         ->check(CLI::Range(1, 1000));

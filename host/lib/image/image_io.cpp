@@ -767,7 +767,8 @@ namespace {
 // Writes the whole image to `file`; messages name `path`, the output it becomes.
 void write_image_file(const std::string& path, const std::string& file, int width, int height,
                       int channels, const std::vector<float>& pixels,
-                      const std::vector<std::pair<std::string, std::string>>& attributes) {
+                      const std::vector<std::pair<std::string, std::string>>& attributes,
+                      const std::vector<std::string>* names = nullptr) {
     const std::string ext = lower_extension(path);
     const bool floating = is_float_image_extension(path);
     if (width <= 0 || height <= 0 || channels <= 0 ||
@@ -802,6 +803,14 @@ void write_image_file(const std::string& path, const std::string& file, int widt
     ImageSpec spec(width, height, channels, floating ? TypeDesc::FLOAT : TypeDesc::UINT8);
     if (ext == ".exr")
         spec.attribute("compression", "zip");
+    if (names) {
+        spec.channelnames = *names;
+        spec.alpha_channel = -1; // no channel is alpha: the layers are alpha-free
+        spec.z_channel = -1;
+        for (int c = 0; c < channels; ++c)
+            if ((*names)[static_cast<size_t>(c)] == "Z")
+                spec.z_channel = c;
+    }
     for (const auto& [k, v] : attributes)
         spec.attribute(k, v);
     const bool ok = out->open(file, spec) &&
@@ -818,6 +827,18 @@ void write_image(OutputBatch& batch, const std::string& path, int width, int hei
     check_writable_format(path);
     batch.write(path, [&](const std::string& file) {
         write_image_file(path, file, width, height, channels, pixels, attributes);
+    });
+}
+
+void write_image_channels(OutputBatch& batch, const std::string& path, int width, int height,
+                          const std::vector<std::string>& names, const std::vector<float>& pixels,
+                          const std::vector<std::pair<std::string, std::string>>& attributes) {
+    check_writable_format(path);
+    if (lower_extension(path) != ".exr")
+        throw Error(path + ": named channels (AOV layers) need an OpenEXR output (.exr)");
+    batch.write(path, [&](const std::string& file) {
+        write_image_file(path, file, width, height, static_cast<int>(names.size()), pixels,
+                         attributes, &names);
     });
 }
 

@@ -59,6 +59,12 @@ void write_image(OutputBatch& batch, const std::string& path, int width, int hei
                  int channels, const std::vector<float>& pixels,
                  const std::vector<std::pair<std::string, std::string>>& attributes = {});
 
+// An OpenEXR image of named channels (a multi-layer file: "R", "albedo.R", "N.X", "Z", ...),
+// one float per channel and pixel, interleaved in the order of `names`; else as write_image.
+void write_image_channels(OutputBatch& batch, const std::string& path, int width, int height,
+                          const std::vector<std::string>& names, const std::vector<float>& pixels,
+                          const std::vector<std::pair<std::string, std::string>>& attributes = {});
+
 // Throws et::Error "PATH: problem" unless an image can be written at `path`: a supported
 // extension with a writer (.pfm is written here, the rest by OpenImageIO), an existing folder,
 // and not a folder itself. write_image checks this first; a command can call it before it

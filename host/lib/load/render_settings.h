@@ -78,6 +78,7 @@ struct RenderSettings {
     int threads = 0;      // native threads; 0: all cores
     int sis_samples = 64; // SIS strata (Strategy::sis)
     std::string lights;   // directional light set file (Strategy::lights)
+    bool aovs = false;    // keep the first hits' AOVs (render/film_aovs.h), written to the EXR
 };
 
 } // namespace et

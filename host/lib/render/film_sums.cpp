@@ -12,8 +12,13 @@ namespace {
 
 constexpr float kLimit = 72057594037927936.0f; // 2^56
 
+inline void add_sample(int128& acc, uint8_t& special, float v) { film_accumulate(acc, special, v); }
+inline double channel(int128 acc, uint8_t special) { return film_channel_value(acc, special); }
+
+} // namespace
+
 // Adds one float sample to a channel: exact fixed point, or a flag when it cannot be held.
-inline void add_sample(int128& acc, uint8_t& special, float v) {
+void film_accumulate(int128& acc, uint8_t& special, float v) {
     if (std::isnan(v)) {
         special |= FilmSums::kNaN;
     } else if (!(std::fabs(v) < kLimit)) {
@@ -24,7 +29,7 @@ inline void add_sample(int128& acc, uint8_t& special, float v) {
 }
 
 // What a channel's value becomes: the finite sum, or inf/NaN as its flags say.
-inline double channel(int128 acc, uint8_t special) {
+double film_channel_value(int128 acc, uint8_t special) {
     if (special == 0)
         return film_fixed_to_double(acc);
     if (special == FilmSums::kPositiveOverflow)
@@ -33,8 +38,6 @@ inline double channel(int128 acc, uint8_t special) {
         return -std::numeric_limits<double>::infinity();
     return std::numeric_limits<double>::quiet_NaN();
 }
-
-} // namespace
 
 int128 film_fixed_point(float v) {
     uint32_t bits;
@@ -64,9 +67,12 @@ double film_fixed_to_double(int128 x) {
     return std::ldexp(static_cast<double>(x), -FilmSums::kFractionBits);
 }
 
-FilmSums::FilmSums(int width, int height)
+FilmSums::FilmSums(int width, int height, bool aovs)
     : width_(width), height_(height),
-      pixels_(static_cast<size_t>(width) * static_cast<size_t>(height), Pixel{}) {}
+      pixels_(static_cast<size_t>(width) * static_cast<size_t>(height), Pixel{}) {
+    if (aovs)
+        aovs_.assign(pixels_.size(), AovPixel{});
+}
 
 void FilmSums::add_pass(const Film& pass) {
     if (pass.width() != width_ || pass.height() != height_)
@@ -85,6 +91,8 @@ void FilmSums::add_pass(const Film& pass) {
         add_sample(p.sq[2], p.special[5], q.z);
         p.count += static_cast<uint32_t>(s.w);
     }
+    if (has_aovs())
+        add_aov_pass(aovs_.data(), pass.film_albedo.data(), pass.film_normal.data(), n);
 }
 
 void FilmSums::add_pixels(Pixel* to, const Pixel* from, size_t n) {
@@ -104,7 +112,38 @@ void FilmSums::add(const FilmSums& o) {
         throw Error("cannot add a " + std::to_string(o.width_) + "x" + std::to_string(o.height_) +
                     " film to a " + std::to_string(width_) + "x" + std::to_string(height_) +
                     " one");
+    if (o.has_aovs() != has_aovs())
+        throw Error(std::string("cannot add a film ") + (o.has_aovs() ? "with" : "without") +
+                    " AOVs to one " + (has_aovs() ? "with" : "without"));
     add_pixels(pixels_.data(), o.pixels_.data(), pixels_.size());
+    add_aov_pixels(aovs_.data(), o.aovs_.data(), aovs_.size());
+}
+
+AovImages FilmSums::aov_images() const {
+    AovImages im;
+    if (!has_aovs())
+        return im;
+    const size_t n = pixels();
+    im.albedo.assign(3 * n, 0.0f);
+    im.normal.assign(3 * n, 0.0f);
+    im.depth.assign(n, kNoHitDepth);
+    for (size_t i = 0; i < n; ++i) {
+        const AovPixel& a = aovs_[i];
+        const double count = pixels_[i].count;
+        if (count > 0)
+            for (int c = 0; c < 3; ++c) {
+                im.albedo[3 * i + c] = static_cast<float>(
+                    channel(a.sum[AovPixel::kAlbedo + c], a.special[AovPixel::kAlbedo + c]) /
+                    count);
+                im.normal[3 * i + c] = static_cast<float>(
+                    channel(a.sum[AovPixel::kNormal + c], a.special[AovPixel::kNormal + c]) /
+                    count);
+            }
+        if (a.hits > 0)
+            im.depth[i] = static_cast<float>(
+                channel(a.sum[AovPixel::kDepth], a.special[AovPixel::kDepth]) / a.hits);
+    }
+    return im;
 }
 
 std::vector<float> FilmSums::mean() const {
@@ -135,8 +174,9 @@ std::vector<float> FilmSums::variance_of_mean() const {
 }
 
 bool FilmSums::operator==(const FilmSums& o) const {
-    return width_ == o.width_ && height_ == o.height_ &&
-           std::memcmp(pixels_.data(), o.pixels_.data(), pixels_.size() * sizeof(Pixel)) == 0;
+    return width_ == o.width_ && height_ == o.height_ && aovs_.size() == o.aovs_.size() &&
+           std::memcmp(pixels_.data(), o.pixels_.data(), pixels_.size() * sizeof(Pixel)) == 0 &&
+           std::memcmp(aovs_.data(), o.aovs_.data(), aovs_.size() * sizeof(AovPixel)) == 0;
 }
 
 } // namespace et

@@ -12,14 +12,13 @@
 // samples of the largest magnitude still fit, so the sums cannot overflow.
 #pragma once
 #include "render/film.h"
+#include "render/film_aovs.h"
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
 namespace et {
-
-__extension__ typedef __int128 int128;
 
 class FilmSums {
   public:
@@ -35,18 +34,23 @@ class FilmSums {
     static_assert(sizeof(Pixel) == 112, "Pixel is written to files and MPI messages as bytes");
 
     FilmSums() = default;
-    FilmSums(int width, int height);
+    // `aovs`: also keep the sums of the first hits' AOVs (film_aovs.h).
+    FilmSums(int width, int height, bool aovs = false);
 
     int width() const { return width_; }
     int height() const { return height_; }
     size_t pixels() const { return pixels_.size(); }
     Pixel* data() { return pixels_.data(); }
     const Pixel* data() const { return pixels_.data(); }
+    bool has_aovs() const { return !aovs_.empty(); }
+    AovPixel* aov_data() { return aovs_.data(); }
+    const AovPixel* aov_data() const { return aovs_.data(); }
 
     // Adds one pass: `pass` holds, per pixel, at most one sample (w = 1) or none (w = 0).
     // Films of several samples add too, but then their float sums were rounded already.
     void add_pass(const Film& pass);
-    // Adds the sums of a disjoint sample set, exactly (throws et::Error for another size).
+    // Adds the sums of a disjoint sample set, exactly (throws et::Error for another size, or
+    // when one holds AOVs and the other not).
     void add(const FilmSums& other);
     // Adds `n` pixels of `from` to `to` (the MPI reduction's operator).
     static void add_pixels(Pixel* to, const Pixel* from, size_t n);
@@ -55,12 +59,15 @@ class FilmSums {
     std::vector<float> mean() const;
     // Per pixel and channel, the estimated variance of the mean, s^2 / n (0 below 2 samples).
     std::vector<float> variance_of_mean() const;
+    // The AOV images (empty without AOVs).
+    AovImages aov_images() const;
     // Bitwise equality of every sum, count and flag.
     bool operator==(const FilmSums& o) const;
 
   private:
     int width_ = 0, height_ = 0;
     std::vector<Pixel> pixels_;
+    std::vector<AovPixel> aovs_; // empty: no AOVs
 };
 
 // The fixed-point value of a float sample (finite, |v| < 2^56), rounded to the nearest unit of

@@ -14,10 +14,12 @@ namespace et {
 namespace {
 
 // File layout (little-endian, as written by this host): magic, then the header fields below, then
-// the film's arrays (ETK_FILM_FIELDS order), then an XXH3 checksum of everything before it.
+// the film's sums (FilmSums::Pixel per pixel, then AovPixel per pixel when the render keeps
+// AOVs), then an XXH3 checksum of everything before it.
 constexpr char kMagic[16] = {'e', 'n', 'v', 't', 'r', 'a', 'c',  'e',
                              '-', 's', 't', 'a', 't', 'e', '\n', 0};
-constexpr uint32_t kVersion = 2; // 2: exact sums (film_sums.h) and the first sample index
+// 2: exact sums (film_sums.h) and the first sample index; 3: the AOV flag and sums (film_aovs.h)
+constexpr uint32_t kVersion = 3;
 constexpr uint32_t kByteOrder = 0x01020304;
 
 struct Header {
@@ -25,11 +27,13 @@ struct Header {
     uint32_t version, byte_order;
     uint64_t key;
     int32_t width, height, spp, first;
+    int32_t aovs, reserved; // aovs: 1 if AovPixel sums follow the film's; reserved: 0
     uint64_t film_bytes;
 };
 
-uint64_t film_bytes(int width, int height) {
-    return sizeof(FilmSums::Pixel) * static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
+uint64_t film_bytes(int width, int height, bool aovs) {
+    return (sizeof(FilmSums::Pixel) + (aovs ? sizeof(AovPixel) : 0)) *
+           static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
 }
 
 class Hash {
@@ -57,6 +61,7 @@ class Hash {
 uint64_t render_key(const DeviceScene& scene) {
     Hash h;
     h.add(std::string("envtrace render key 1 " ENVTRACE_VERSION));
+    h.add_value(static_cast<int32_t>(scene.settings.aovs)); // another film layout
     h.add(std::string(name_of(scene.settings.backend)));
     h.add_value(static_cast<int64_t>(scene.settings.device));
     for (const auto& [name, text] : embedded_kernel_sources()) { // a std::map: sorted
@@ -89,7 +94,8 @@ void write_render_state(OutputBatch& batch, const std::string& path, const Rende
     hd.height = f.height();
     hd.spp = state.spp;
     hd.first = state.first;
-    hd.film_bytes = film_bytes(f.width(), f.height());
+    hd.aovs = f.has_aovs() ? 1 : 0;
+    hd.film_bytes = film_bytes(f.width(), f.height(), f.has_aovs());
     batch.write(path, [&](const std::string& file) {
         std::ofstream out(file, std::ios::binary);
         Hash h;
@@ -99,6 +105,8 @@ void write_render_state(OutputBatch& batch, const std::string& path, const Rende
         };
         put(&hd, sizeof hd);
         put(f.data(), f.pixels() * sizeof(FilmSums::Pixel));
+        if (f.has_aovs())
+            put(f.aov_data(), f.pixels() * sizeof(AovPixel));
         const uint64_t sum = h.digest();
         out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
         out.flush();
@@ -129,9 +137,11 @@ RenderState read_render_state(const std::string& path) {
         throw Error(bad + "written on a machine of the other byte order");
     if (hd.version != kVersion)
         throw Error(bad + "format version " + std::to_string(hd.version) +
-                    ", this envtrace reads " + std::to_string(kVersion));
+                    ", this envtrace reads " + std::to_string(kVersion) +
+                    " (written by another envtrace: render it again)");
     if (hd.width <= 0 || hd.height <= 0 || hd.width > 65536 || hd.height > 65536 || hd.spp < 0 ||
-        hd.first < 0 || hd.film_bytes != film_bytes(hd.width, hd.height) ||
+        hd.first < 0 || (hd.aovs != 0 && hd.aovs != 1) || hd.reserved != 0 ||
+        hd.film_bytes != film_bytes(hd.width, hd.height, hd.aovs == 1) ||
         size != sizeof hd + hd.film_bytes + sizeof(uint64_t))
         throw Error(bad + "its header does not match its size (" + byte_text(size) +
                     "): truncated or corrupt");
@@ -139,11 +149,18 @@ RenderState read_render_state(const std::string& path) {
     st.key = hd.key;
     st.spp = hd.spp;
     st.first = hd.first;
-    st.sums = FilmSums(hd.width, hd.height);
+    st.sums = FilmSums(hd.width, hd.height, hd.aovs == 1);
     Hash h;
     h.add(&hd, sizeof hd);
-    in.read(reinterpret_cast<char*>(st.sums.data()), static_cast<std::streamsize>(hd.film_bytes));
-    h.add(st.sums.data(), hd.film_bytes);
+    const uint64_t sum_bytes = st.sums.pixels() * sizeof(FilmSums::Pixel);
+    in.read(reinterpret_cast<char*>(st.sums.data()), static_cast<std::streamsize>(sum_bytes));
+    h.add(st.sums.data(), sum_bytes);
+    if (st.sums.has_aovs()) {
+        const uint64_t aov_bytes = st.sums.pixels() * sizeof(AovPixel);
+        in.read(reinterpret_cast<char*>(st.sums.aov_data()),
+                static_cast<std::streamsize>(aov_bytes));
+        h.add(st.sums.aov_data(), aov_bytes);
+    }
     uint64_t sum = 0;
     in.read(reinterpret_cast<char*>(&sum), sizeof sum);
     if (!in)
@@ -159,6 +176,10 @@ void check_render_state(const RenderState& state, const DeviceScene& scene,
         throw Error(path + ": the render state is of a " + std::to_string(state.sums.width()) +
                     "x" + std::to_string(state.sums.height()) + " film, this render is " +
                     std::to_string(scene.width()) + "x" + std::to_string(scene.height()));
+    if (state.sums.has_aovs() != scene.settings.aovs)
+        throw Error(path + ": the render state was saved " +
+                    (state.sums.has_aovs() ? "with" : "without") + " AOVs, this render is " +
+                    (scene.settings.aovs ? "with" : "without") + " (--aovs)");
     if (state.key != render_key(scene))
         throw Error(path + ": the render state is of another render: the scene, its inputs, the "
                            "settings (depth, strategy, heuristic, sampler, seed), the back end or "

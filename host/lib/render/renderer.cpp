@@ -11,7 +11,7 @@
 namespace et {
 
 Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
-    : scene_(scene), film_(scene.width(), scene.height()), sums_(scene.width(), scene.height()),
+    : scene_(scene), film_(scene.width(), scene.height()), sums_(scene.width(), scene.height(), scene.settings.aovs),
       device_(make_device(film_)) {
     std::copy(scene.params.light_share, scene.params.light_share + ETK_SHARE_BINS, shares_.begin());
     std::copy(scene.params.bin_flags, scene.params.bin_flags + ETK_SHARE_BINS, flags_.begin());
@@ -83,6 +83,10 @@ void Renderer::resume(const FilmSums& sums) {
         throw Error("cannot resume a " + std::to_string(sums_.width()) + "x" +
                     std::to_string(sums_.height()) + " render from a " +
                     std::to_string(sums.width()) + "x" + std::to_string(sums.height()) + " film");
+    if (sums.has_aovs() != sums_.has_aovs())
+        throw Error(std::string("cannot resume a render ") +
+                    (sums_.has_aovs() ? "with" : "without") + " AOVs from a film " +
+                    (sums.has_aovs() ? "with" : "without") + " them");
     sums_ = sums;
 }
 
