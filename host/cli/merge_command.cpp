@@ -7,6 +7,8 @@
 #include "commands.h"
 #include "image/image_io.h"
 #include "image/preview.h"
+#include "render/film_layers.h"
+#include "render/noise_estimate.h"
 #include "render/render_state.h"
 #include "util/error.h"
 #include "util/output_batch.h"
@@ -116,7 +118,15 @@ void run(const MergeArgs& a) {
         {"envtrace:merged_parts", std::to_string(parts.size())},
         {"Software", "envtrace " ENVTRACE_VERSION},
     };
-    write_image(outputs, exr_name, w, h, 3, img, meta);
+    if (merged.sums.has_aovs()) { // the layers of `render --aovs` (render/film_layers.h)
+        char error_text[32];
+        std::snprintf(error_text, sizeof error_text, "%.6g", relative_error(merged.sums));
+        meta.emplace_back("envtrace:noise_error", error_text);
+        const FilmLayers layers = film_layers(merged.sums);
+        write_image_channels(outputs, exr_name, w, h, layers.names, layers.pixels, meta);
+    } else {
+        write_image(outputs, exr_name, w, h, 3, img, meta);
+    }
     RgbImage film{w, h, img};
     write_image(outputs, png_name, w, h, 3, tone_map(film, 1.0f));
     if (!a.state.empty())

@@ -13,6 +13,7 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
@@ -389,3 +390,123 @@ TEST(Merge, RefusesForeignOverlappingAndMissingParts) {
 }
 
 } // namespace
+
+// ---- AOVs (--aovs) and the noise target (--noise-target) ----
+
+namespace {
+
+std::vector<std::string> channel_names(const std::string& exr) {
+    auto in = OIIO::ImageInput::open(exr);
+    return in ? in->spec().channelnames : std::vector<std::string>{};
+}
+
+} // namespace
+
+// The multi-layer EXR, read back with OpenImageIO; farm tasks merged, a checkpointed render
+// resumed, and two MPI ranks all give the single render's layers bit for bit; a part without
+// AOVs does not merge with parts with them.
+TEST(Aovs, LayersMergeResumeAndRanksAreBitIdentical) {
+    const std::string dir = ett::scratch_dir("aov_layers");
+    const std::string scene = write_scene(dir);
+    expect_exit(
+        ett::run_envtrace(render_args(scene, dir + "/one.exr", {"--spp", "7", "--aovs"}), dir), 0);
+    std::vector<std::string> names = channel_names(dir + "/one.exr");
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"B", "G", "N.X", "N.Y", "N.Z", "R", "Z", "albedo.B",
+                                               "albedo.G", "albedo.R", "variance.B", "variance.G",
+                                               "variance.R"}));
+    expect_exit(ett::run_envtrace(render_args(scene, dir + "/plain.exr", {"--spp", "2"}), dir), 0);
+    EXPECT_EQ(channel_names(dir + "/plain.exr").size(), 3u) << "without --aovs: R, G, B";
+
+    std::vector<std::string> merge = {"merge", "-o", dir + "/merged.exr"};
+    for (const char* range : {"3:7", "0:3"}) {
+        const std::string part = dir + "/p" + std::string(range).replace(1, 1, "-") + ".state";
+        expect_exit(ett::run_envtrace(render_args(scene, dir + "/farm.exr",
+                                                  {"--sample-range", range, "--state", part,
+                                                   "--aovs"}),
+                                      dir),
+                    0);
+        merge.push_back(part);
+    }
+    expect_exit(ett::run_envtrace(merge, dir), 0);
+    expect_same_pixels(dir + "/one.exr", dir + "/merged.exr");
+    EXPECT_EQ(channel_names(dir + "/merged.exr").size(), 13u);
+
+    expect_exit(ett::run_envtrace(render_args(scene, dir + "/res.exr",
+                                              {"--spp", "3", "--aovs", "--checkpoint", "0"}),
+                                  dir),
+                0);
+    // A state with AOVs does not continue a render without them.
+    ett::CliRun r = ett::run_envtrace(render_args(scene, dir + "/res.exr", {"--spp", "7", "--resume"}),
+                                      dir);
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("AOVs"), std::string::npos) << r.err;
+    expect_exit(
+        ett::run_envtrace(render_args(scene, dir + "/res.exr", {"--spp", "7", "--aovs", "--resume"}),
+                          dir),
+        0);
+    expect_same_pixels(dir + "/one.exr", dir + "/res.exr");
+
+    // A part without AOVs among parts with them: another render, refused.
+    expect_exit(ett::run_envtrace(render_args(scene, dir + "/farm.exr",
+                                              {"--sample-range", "7:9", "--state",
+                                               dir + "/plain.state"}),
+                                  dir),
+                0);
+    merge.push_back(dir + "/plain.state");
+    r = ett::run_envtrace(merge, dir);
+    expect_exit(r, 1);
+    // --aovs needs an EXR.
+    r = ett::run_envtrace(render_args(scene, dir + "/x.pfm", {"--spp", "1", "--aovs"}), dir);
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find(".exr"), std::string::npos) << r.err;
+
+    if (!have_mpi())
+        return;
+    const MpiRun m =
+        mpirun(dir, {app(2, render_args(scene, dir + "/np2.exr", {"--spp", "7", "--aovs"}))});
+    ASSERT_EQ(m.code, 0) << m.err;
+    expect_same_pixels(dir + "/one.exr", dir + "/np2.exr");
+}
+
+// A looser target stops at fewer samples than a tighter one, and each image's estimated error
+// (the EXR's metadata) is at most its target; --spp caps a target that is not reached.
+TEST(NoiseTarget, LooserTargetStopsEarlierAndErrorIsBelowTarget) {
+    const std::string dir = ett::scratch_dir("noise_target");
+    const std::string scene = write_scene(dir);
+    std::vector<int> spp;
+    for (const char* target : {"0.2", "0.08"}) {
+        SCOPED_TRACE(target);
+        const std::string out = dir + "/t" + target + ".exr";
+        expect_exit(ett::run_envtrace(render_args(scene, out, {"--noise-target", target}), dir),
+                    0);
+        EXPECT_EQ(metadata(out, "noise_target_reached"), "yes");
+        EXPECT_LE(std::stod("0" + metadata(out, "noise_error")), std::stod(target));
+        EXPECT_GT(std::stod("0" + metadata(out, "noise_error")), 0.0);
+        spp.push_back(std::stoi("0" + metadata(out, "spp")));
+        EXPECT_GE(spp.back(), 16) << "the first check is at 16 spp";
+    }
+    EXPECT_LT(spp[0], spp[1]);
+    // Not reachable within --spp: stops at --spp, says so, succeeds.
+    const std::string out = dir + "/capped.exr";
+    expect_exit(ett::run_envtrace(render_args(scene, out, {"--noise-target", "0.0001", "--spp",
+                                                           "20"}),
+                                  dir),
+                0);
+    EXPECT_EQ(metadata(out, "spp"), "20");
+    EXPECT_EQ(metadata(out, "noise_target_reached"), "no");
+    // Farm tasks render fixed ranges: refused.
+    const ett::CliRun r = ett::run_envtrace(
+        render_args(scene, out, {"--noise-target", "0.1", "--sample-range", "0:4"}), dir);
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("--noise-target"), std::string::npos) << r.err;
+    // Two MPI ranks reach the target too, at a whole number of rounds.
+    if (!have_mpi())
+        return;
+    const MpiRun m =
+        mpirun(dir, {app(2, render_args(scene, dir + "/np2.exr", {"--noise-target", "0.2"}))});
+    ASSERT_EQ(m.code, 0) << m.err;
+    EXPECT_EQ(metadata(dir + "/np2.exr", "noise_target_reached"), "yes");
+    EXPECT_LE(std::stod("0" + metadata(dir + "/np2.exr", "noise_error")), 0.2);
+    EXPECT_EQ(std::stoi("0" + metadata(dir + "/np2.exr", "spp")) % 2, 0);
+}
