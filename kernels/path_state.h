@@ -42,9 +42,9 @@
 
 // Film, one element per pixel: X(type, name).
 #define ETK_FILM_FIELDS(X)                                                                         \
-    X(float4, film_sum) /* sum of samples (RGB); w: number of samples */                           \
-    X(float4, film_sq)  /* sum of squared samples (RGB): the per-pixel variance */           \
-    X(float4, film_albedo) /* first hit's albedo (RGB); w: 1 if the camera ray hit (aov.h) */  \
+    X(float4, film_sum)    /* sum of samples (RGB); w: number of samples */                        \
+    X(float4, film_sq)     /* sum of squared samples (RGB): the per-pixel variance */              \
+    X(float4, film_albedo) /* first hit's albedo (RGB); w: 1 if the camera ray hit (aov.h) */      \
     X(float4, film_normal) /* first hit's shading normal (world); w: its depth (aov.h) */
 
 // Queue counters, bumped atomically: X(name).

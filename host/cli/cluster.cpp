@@ -188,8 +188,7 @@ FilmSums Cluster::reduce(const FilmSums& mine) const {
     if (!mpi_)
         return mine;
 #ifdef ENVTRACE_HAVE_MPI
-    FilmSums out =
-        rank_ == 0 ? FilmSums(mine.width(), mine.height(), mine.has_aovs()) : FilmSums();
+    FilmSums out = rank_ == 0 ? FilmSums(mine.width(), mine.height(), mine.has_aovs()) : FilmSums();
     arrive_all();
     reduce_pixels(mine.data(), rank_ == 0 ? out.data() : nullptr, mine.pixels(), &add_pixels_op,
                   rank_);

@@ -97,7 +97,8 @@ void run(const MergeArgs& a) {
     }
 
     const RenderState& ref = parts.front().state;
-    RenderState merged{ref.key, 0, 0, FilmSums(ref.sums.width(), ref.sums.height(), ref.sums.has_aovs())};
+    RenderState merged{ref.key, 0, 0,
+                       FilmSums(ref.sums.width(), ref.sums.height(), ref.sums.has_aovs())};
     std::string ranges;
     for (const Part* p : order) {
         merged.sums.add(p->state.sums);

@@ -55,7 +55,7 @@ struct RenderArgs {
     int spp = 0, max_depth = 0, paths = -1, threads = 0;
     long long seed = -1;
     double time_limit = -1.0;
-    double checkpoint = -1.0; // --checkpoint: seconds between saved states (< 0: none)
+    double checkpoint = -1.0;  // --checkpoint: seconds between saved states (< 0: none)
     double noise_target = 0.0; // --noise-target: stop at this relative error (0: none)
     bool aovs = false;         // --aovs: albedo, normal, depth and variance layers in the EXR
     bool resume = false;
@@ -382,9 +382,9 @@ void run(const RenderArgs& a, Globals& g) {
     // --noise-target: --spp, when given on the command line, caps the render; else only the
     // target (or --time-limit) ends it.
     const bool noise = a.noise_target > 0;
-    const int64_t end = partial                                   ? range.second
+    const int64_t end = partial                                      ? range.second
                         : st.time_limit > 0 || (noise && a.spp <= 0) ? int64_t(1) << 24
-                                                                    : st.spp;
+                                                                     : st.spp;
     int64_t done = cl.broadcast(state.spp);
     if (a.resume && cl.root()) {
         renderer.resume(state.sums);
@@ -520,9 +520,9 @@ void run(const RenderArgs& a, Globals& g) {
             write_image(*outputs, png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
         }
         if (!a.stats_file.empty()) {
-            nlohmann::json j = stats_json(a, st, ds, renderer.name(), s, build, light_set, sis,
-                                          spp, static_cast<int>(resumed_from), sig, render_s,
-                                          cl.size(), static_cast<int>(first), renderer);
+            nlohmann::json j = stats_json(a, st, ds, renderer.name(), s, build, light_set, sis, spp,
+                                          static_cast<int>(resumed_from), sig, render_s, cl.size(),
+                                          static_cast<int>(first), renderer);
             j["aovs"] = st.aovs;
             if (noise)
                 j["noise_target"] = {{"target", a.noise_target},
@@ -562,8 +562,8 @@ void run(const RenderArgs& a, Globals& g) {
                     png_name.c_str(), keep_state ? " and the state " : "",
                     keep_state ? state_path.c_str() : "", spp, total.seconds());
     if (noise && cl.root())
-        std::printf("noise target %g %s at %d spp: estimated relative error %.4g\n",
-                    a.noise_target, noise_reached ? "reached" : "NOT reached", spp, noise_error);
+        std::printf("noise target %g %s at %d spp: estimated relative error %.4g\n", a.noise_target,
+                    noise_reached ? "reached" : "NOT reached", spp, noise_error);
     if (sig)
         g.exit_code = 128 + sig;
 }

@@ -421,11 +421,11 @@ TEST(Aovs, LayersMergeResumeAndRanksAreBitIdentical) {
     std::vector<std::string> merge = {"merge", "-o", dir + "/merged.exr"};
     for (const char* range : {"3:7", "0:3"}) {
         const std::string part = dir + "/p" + std::string(range).replace(1, 1, "-") + ".state";
-        expect_exit(ett::run_envtrace(render_args(scene, dir + "/farm.exr",
-                                                  {"--sample-range", range, "--state", part,
-                                                   "--aovs"}),
-                                      dir),
-                    0);
+        expect_exit(
+            ett::run_envtrace(render_args(scene, dir + "/farm.exr",
+                                          {"--sample-range", range, "--state", part, "--aovs"}),
+                              dir),
+            0);
         merge.push_back(part);
     }
     expect_exit(ett::run_envtrace(merge, dir), 0);
@@ -437,22 +437,22 @@ TEST(Aovs, LayersMergeResumeAndRanksAreBitIdentical) {
                                   dir),
                 0);
     // A state with AOVs does not continue a render without them.
-    ett::CliRun r = ett::run_envtrace(render_args(scene, dir + "/res.exr", {"--spp", "7", "--resume"}),
-                                      dir);
+    ett::CliRun r =
+        ett::run_envtrace(render_args(scene, dir + "/res.exr", {"--spp", "7", "--resume"}), dir);
     expect_exit(r, 1);
     EXPECT_NE(r.err.find("AOVs"), std::string::npos) << r.err;
     expect_exit(
-        ett::run_envtrace(render_args(scene, dir + "/res.exr", {"--spp", "7", "--aovs", "--resume"}),
-                          dir),
+        ett::run_envtrace(
+            render_args(scene, dir + "/res.exr", {"--spp", "7", "--aovs", "--resume"}), dir),
         0);
     expect_same_pixels(dir + "/one.exr", dir + "/res.exr");
 
     // A part without AOVs among parts with them: another render, refused.
-    expect_exit(ett::run_envtrace(render_args(scene, dir + "/farm.exr",
-                                              {"--sample-range", "7:9", "--state",
-                                               dir + "/plain.state"}),
-                                  dir),
-                0);
+    expect_exit(
+        ett::run_envtrace(render_args(scene, dir + "/farm.exr",
+                                      {"--sample-range", "7:9", "--state", dir + "/plain.state"}),
+                          dir),
+        0);
     merge.push_back(dir + "/plain.state");
     r = ett::run_envtrace(merge, dir);
     expect_exit(r, 1);
@@ -478,8 +478,7 @@ TEST(NoiseTarget, LooserTargetStopsEarlierAndErrorIsBelowTarget) {
     for (const char* target : {"0.2", "0.08"}) {
         SCOPED_TRACE(target);
         const std::string out = dir + "/t" + target + ".exr";
-        expect_exit(ett::run_envtrace(render_args(scene, out, {"--noise-target", target}), dir),
-                    0);
+        expect_exit(ett::run_envtrace(render_args(scene, out, {"--noise-target", target}), dir), 0);
         EXPECT_EQ(metadata(out, "noise_target_reached"), "yes");
         EXPECT_LE(std::stod("0" + metadata(out, "noise_error")), std::stod(target));
         EXPECT_GT(std::stod("0" + metadata(out, "noise_error")), 0.0);
@@ -489,9 +488,8 @@ TEST(NoiseTarget, LooserTargetStopsEarlierAndErrorIsBelowTarget) {
     EXPECT_LT(spp[0], spp[1]);
     // Not reachable within --spp: stops at --spp, says so, succeeds.
     const std::string out = dir + "/capped.exr";
-    expect_exit(ett::run_envtrace(render_args(scene, out, {"--noise-target", "0.0001", "--spp",
-                                                           "20"}),
-                                  dir),
+    expect_exit(ett::run_envtrace(
+                    render_args(scene, out, {"--noise-target", "0.0001", "--spp", "20"}), dir),
                 0);
     EXPECT_EQ(metadata(out, "spp"), "20");
     EXPECT_EQ(metadata(out, "noise_target_reached"), "no");

@@ -167,3 +167,24 @@ TEST(RenderState, ForeignStateIsRefused) {
 }
 
 } // namespace
+
+namespace {
+
+// A state of the previous format (2: no AOV flag or sums) is refused with both versions named,
+// not misread.
+TEST(RenderState, OlderFormatIsRefusedWithItsVersion) {
+    const std::string dir = ett::scratch_dir("render_state_v2");
+    et::RenderState st{1234, 1, 0, et::FilmSums(4, 2)};
+    const std::string good = dir + "/good.envtrace-state";
+    et::write_render_state(good, st);
+    std::string bytes = read_bytes(good);
+    ASSERT_GT(bytes.size(), 20u);
+    bytes[16] = 2; // the version, after the 16-byte magic (little-endian)
+    bytes[17] = bytes[18] = bytes[19] = 0;
+    const std::string p = dir + "/v2.envtrace-state";
+    write_bytes(p, bytes);
+    const std::string e = read_error(p);
+    EXPECT_NE(e.find("format version 2, this envtrace reads 3"), std::string::npos) << e;
+}
+
+} // namespace

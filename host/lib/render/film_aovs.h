@@ -17,8 +17,8 @@ __extension__ typedef __int128 int128;
 
 struct alignas(16) AovPixel {
     enum { kAlbedo = 0, kNormal = 3, kDepth = 6, kValues = 7 };
-    int128 sum[kValues]; // albedo RGB, normal XYZ, depth: sums over the samples
-    uint32_t hits;       // samples whose camera ray hit a surface
+    int128 sum[kValues];      // albedo RGB, normal XYZ, depth: sums over the samples
+    uint32_t hits;            // samples whose camera ray hit a surface
     uint8_t special[kValues]; // FilmSums' flags per value (a depth of 2^56 or more, NaN)
     uint8_t pad[5];           // always 0 (files hold the raw bytes)
 };

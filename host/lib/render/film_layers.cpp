@@ -10,8 +10,8 @@ FilmLayers film_layers(const FilmSums& sums) {
         out.pixels = mean;
         return out;
     }
-    out.names.insert(out.names.end(), {"albedo.R", "albedo.G", "albedo.B", "N.X", "N.Y", "N.Z",
-                                       "Z", "variance.R", "variance.G", "variance.B"});
+    out.names.insert(out.names.end(), {"albedo.R", "albedo.G", "albedo.B", "N.X", "N.Y", "N.Z", "Z",
+                                       "variance.R", "variance.G", "variance.B"});
     const AovImages aov = sums.aov_images();
     const std::vector<float> var = sums.variance_of_mean();
     const size_t k = out.names.size(), n = sums.pixels();

@@ -12,8 +12,12 @@ namespace {
 
 constexpr float kLimit = 72057594037927936.0f; // 2^56
 
-inline void add_sample(int128& acc, uint8_t& special, float v) { film_accumulate(acc, special, v); }
-inline double channel(int128 acc, uint8_t special) { return film_channel_value(acc, special); }
+inline void add_sample(int128& acc, uint8_t& special, float v) {
+    film_accumulate(acc, special, v);
+}
+inline double channel(int128 acc, uint8_t special) {
+    return film_channel_value(acc, special);
+}
 
 } // namespace
 
