@@ -1,6 +1,7 @@
 // The film on the device: per pixel, the sum of the samples (w counts them) and the sum of their
 // squares. Enough to form the mean, to estimate each pixel's variance, to save and resume a
-// render, and to add two films. The host side is host/lib/render/film.h.
+// render, and to add two films. The host side is host/lib/render/film.h. The first hit's AOVs
+// (film_albedo, film_normal) are written by aov.h.
 #ifndef ETK_FILM_H
 #define ETK_FILM_H
 #include "compat.h"
