@@ -22,7 +22,9 @@ TEST(Integrator, AccumulateDropsAndCountsNonFiniteSamples) {
     P.pixel = pixel.data();
     etk::EtkQueues Q{};
     Q.counters = counters;
-    etk::EtkFilm F{film.data(), film_sq.data()};
+    etk::EtkFilm F{}; // accumulate writes the radiance sums only
+    F.film_sum = film.data();
+    F.film_sq = film_sq.data();
     for (int i = 0; i < 4; ++i)
         etk::etk_accumulate(etk::EtkScene{}, P, Q, F, etk::EtkParams{}, i);
     EXPECT_EQ(counters[etk::ETK_Q_NONFINITE], 2u);
