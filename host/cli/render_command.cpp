@@ -66,6 +66,8 @@ struct RenderArgs {
 class Progress {
   public:
     Progress(int total, double limit) : total_(total), limit_(limit), tty_(isatty(2)) {}
+    // A noise target without --spp: progress towards the next check.
+    void set_total(int total) { total_ = std::max(1, total); }
     void update(int done, double elapsed) {
         double frac = limit_ > 0 ? std::min(1.0, elapsed / limit_) : double(done) / total_;
         if (tty_) {
@@ -417,6 +419,8 @@ void run(const RenderArgs& a, Globals& g) {
     double noise_error = std::numeric_limits<double>::infinity();
     bool noise_reached = false;
     int64_t next_check = std::max<int64_t>(kNoiseFirstCheck, done);
+    if (noise && a.spp <= 0)
+        progress.set_total(static_cast<int>(std::min(end, next_check)));
     for (;;) {
         if (noise && !noise_reached && done >= next_check && first + done < end) {
             const FilmSums all = cl.reduce(renderer.sums());
@@ -425,9 +429,17 @@ void run(const RenderArgs& a, Globals& g) {
                 noise_error = relative_error(all);
                 reached = noise_error <= a.noise_target;
                 next = next_noise_check(done, noise_error, a.noise_target);
+                std::fprintf(
+                    stderr,
+                    "envtrace: noise check at %lld spp: estimated relative error %.4g "
+                    "(target %g)%s\n",
+                    static_cast<long long>(done), noise_error, a.noise_target,
+                    reached ? "" : (", next check at " + std::to_string(next) + " spp").c_str());
             }
             noise_reached = cl.broadcast(reached) != 0;
             next_check = cl.broadcast(next);
+            if (a.spp <= 0)
+                progress.set_total(static_cast<int>(std::min(end, next_check)));
         }
         // What the ranks agree on before each round: stop (a signal on any rank, the time limit
         // by rank 0's clock, or the range done), save a checkpoint (rank 0's clock), a failure.
