@@ -120,4 +120,32 @@ TEST(TexturedScene, BackendsBitIdentical) {
     EXPECT_GT(hi, 3.0f * lo) << "the bottom row crosses light and dark squares";
 }
 
+// The texture buffer is checked against the device's limits like every scene buffer: a texture
+// bigger than CL_DEVICE_MAX_MEM_ALLOC_SIZE (lowered through ENVTRACE_CL_MAX_ALLOC) is refused
+// before anything is allocated, naming the buffer.
+TEST(TexturedScene, TextureBufferCheckedAgainstDeviceLimits) {
+    et::Scene s = ett::base_scene(4, 4, et::make_envmap("one", ett::constant_image(8, 4, 1.0f), {}));
+    et::Material m = ett::diffuse(0.5f);
+    m.albedo_tex = s.textures.add(et::make_checker(glm::vec3(1.0f), glm::vec3(0.0f), 256), "test");
+    s.materials.push_back(m);
+    ett::add_square(s.triangles, glm::vec3(0, 0, -3), glm::vec3(0, 0, 1), 1.0f, 0);
+    et::RenderSettings st = s.settings;
+    st.backend = et::Backend::opencl;
+    const et::DeviceScene ds = et::prepare_device_scene(s, st);
+    const uint64_t bytes = ds.tex_texels.size() * sizeof(float);
+    ASSERT_EQ(bytes, 512u * 512u * 3u * 4u);
+    ASSERT_EQ(ds.tri_uv.size(), 12u);
+    setenv("ENVTRACE_CL_MAX_ALLOC", std::to_string(bytes - 1).c_str(), 1);
+    std::string msg;
+    try {
+        et::make_renderer(ds);
+    } catch (const et::Error& e) {
+        msg = e.what();
+    }
+    unsetenv("ENVTRACE_CL_MAX_ALLOC");
+    EXPECT_NE(msg.find("buffer tex_texels needs " + std::to_string(bytes) + " bytes"),
+              std::string::npos)
+        << msg;
+}
+
 } // namespace
