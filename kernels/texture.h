@@ -31,7 +31,7 @@ ETK_FN float etk_tex_fract(float x) {
 
 // One texel as RGB (a grey texel replicated).
 ETK_FN float3 etk_tex_texel(ETK_GLOBAL const float* texels, int offset, int width, int channels,
-                        int x, int y) {
+                            int x, int y) {
     ETK_GLOBAL const float* t = texels + offset + (y * width + x) * channels;
     return channels >= 3 ? make_float3(t[0], t[1], t[2]) : make_float3(t[0], t[0], t[0]);
 }

@@ -84,9 +84,9 @@ TEST(Texture, EdgesBlendNeighboursAndWrap) {
     expect_near3(t.at(uc, 0.0f), avg(t.texel(2, t.h - 1), t.texel(2, 0)), 1e-6f,
                  "v = 0: bottom and top row");
     // A corner: the four corner texels.
-    const float3 c = (t.texel(0, 0) + t.texel(t.w - 1, 0) + t.texel(0, t.h - 1) +
-                      t.texel(t.w - 1, t.h - 1)) *
-                     0.25f;
+    const float3 c =
+        (t.texel(0, 0) + t.texel(t.w - 1, 0) + t.texel(0, t.h - 1) + t.texel(t.w - 1, t.h - 1)) *
+        0.25f;
     expect_near3(t.at(0.0f, 0.0f), c, 1e-6f, "corner");
     // A quarter of the way: bilinear weights 3/4 and 1/4.
     expect_near3(t.at(1.25f / t.w, vc), t.texel(0, 1) * 0.25f + t.texel(1, 1) * 0.75f, 1e-6f,
@@ -114,8 +114,8 @@ TEST(Texture, HostileCoordinatesStayInside) {
                 nan = std::numeric_limits<float>::quiet_NaN();
     for (int w : {1, 2, 5}) {
         const Tex t(w, 3, 3, 4);
-        for (float u : {nan, inf, -inf, 1e30f, -1e30f, 16777215.0f, -0.0f, 0.99999994f,
-                        -1e-30f, 1.0f})
+        for (float u :
+             {nan, inf, -inf, 1e30f, -1e30f, 16777215.0f, -0.0f, 0.99999994f, -1e-30f, 1.0f})
             for (float v : {nan, 0.5f, -1e-30f, 0.99999994f, 1e20f}) {
                 const float3 c = t.at(u, v);
                 EXPECT_TRUE(std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z))
@@ -206,8 +206,8 @@ TEST(Texture, OpenClMatchesHostBitForBit) {
         rt.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(float4), got.data());
         for (int i = 0; i < n; ++i) {
             const float3 h = t.at(uv[i].x, uv[i].y);
-            ASSERT_EQ(etk::as_uint(got[i].x), etk::as_uint(h.x)) << "uv " << uv[i].x << ","
-                                                                 << uv[i].y;
+            ASSERT_EQ(etk::as_uint(got[i].x), etk::as_uint(h.x))
+                << "uv " << uv[i].x << "," << uv[i].y;
             ASSERT_EQ(etk::as_uint(got[i].y), etk::as_uint(h.y));
             ASSERT_EQ(etk::as_uint(got[i].z), etk::as_uint(h.z));
         }

@@ -41,7 +41,8 @@ std::string textured_obj(const std::string& dir, const std::string& mtl_body) {
 std::string scene_with_material(const std::string& dir, const std::string& material) {
     const std::string path = dir + "/scene.json";
     write_file(path, R"({"environment": {"sky": {"resolution": [16, 8]}},
-  "materials": {"m": )" + material + R"(},
+  "materials": {"m": )" + material +
+                         R"(},
   "shapes": [{"type": "quad", "material": "m"}]})");
     return path;
 }
@@ -153,8 +154,8 @@ TEST(TextureLoad, BadMtlMapsAreErrorsNamingFileMaterialAndKey) {
     // Without a TextureSet (tools that want geometry only) maps are not read.
     std::vector<et::Material> mats;
     et::TriangleSoup soup;
-    EXPECT_NO_THROW(et::load_obj(textured_obj(dir, "map_Kd missing.png\n"), glm::mat4(1.0f), -1,
-                                 mats, soup));
+    EXPECT_NO_THROW(
+        et::load_obj(textured_obj(dir, "map_Kd missing.png\n"), glm::mat4(1.0f), -1, mats, soup));
 }
 
 TEST(TextureLoad, JsonTexturesAndCheckers) {
@@ -219,8 +220,8 @@ TEST(TextureLoad, BadJsonTexturesNameTheKeyPath) {
     EXPECT_NE(e.find("folder.png"), std::string::npos) << e;
     // Unknown keys are warned about, not fatal.
     ett::WarningCapture w;
-    EXPECT_NO_THROW(et::load_scene(scene_with_material(
-        dir, R"({"albedo": {"texture": "a.png", "filter": "nearest"}})")));
+    EXPECT_NO_THROW(et::load_scene(
+        scene_with_material(dir, R"({"albedo": {"texture": "a.png", "filter": "nearest"}})")));
     ASSERT_FALSE(w.messages().empty());
     EXPECT_NE(w.messages()[0].find("filter"), std::string::npos);
 }

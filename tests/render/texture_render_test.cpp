@@ -21,7 +21,8 @@ class TexturedQuad : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(TexturedQuad, PixelsEqualTheirTexels) {
     const int W = 32, blocks = 4;
-    et::Scene s = ett::base_scene(W, W, et::make_envmap("one", ett::constant_image(64, 32, 1.0f), {}));
+    et::Scene s =
+        ett::base_scene(W, W, et::make_envmap("one", ett::constant_image(64, 32, 1.0f), {}));
     s.settings.strategy = et::Strategy::bsdf;
     s.settings.max_depth = 1;
     // Looking down -Y at the quad [-1, 1]^2 (y = 0), image up = -Z, the quad filling the view.
@@ -124,7 +125,8 @@ TEST(TexturedScene, BackendsBitIdentical) {
 // bigger than CL_DEVICE_MAX_MEM_ALLOC_SIZE (lowered through ENVTRACE_CL_MAX_ALLOC) is refused
 // before anything is allocated, naming the buffer.
 TEST(TexturedScene, TextureBufferCheckedAgainstDeviceLimits) {
-    et::Scene s = ett::base_scene(4, 4, et::make_envmap("one", ett::constant_image(8, 4, 1.0f), {}));
+    et::Scene s =
+        ett::base_scene(4, 4, et::make_envmap("one", ett::constant_image(8, 4, 1.0f), {}));
     et::Material m = ett::diffuse(0.5f);
     m.albedo_tex = s.textures.add(et::make_checker(glm::vec3(1.0f), glm::vec3(0.0f), 256), "test");
     s.materials.push_back(m);

@@ -92,8 +92,8 @@ int mtl_texture(const std::string& obj_path, const tinyobj::material_t& m, const
         return -1;
     const std::string where =
         obj_path + ": material '" + excerpt(m.name, 60) + "': " + key + " '" + excerpt(name) + "'";
-    const glm::vec2 scale(opt.scale[0], opt.scale[1]), offset(opt.origin_offset[0],
-                                                              opt.origin_offset[1]);
+    const glm::vec2 scale(opt.scale[0], opt.scale[1]),
+        offset(opt.origin_offset[0], opt.origin_offset[1]);
     for (float v : {scale.x, scale.y, offset.x, offset.y})
         if (!std::isfinite(v) || std::fabs(v) > 1e6f)
             throw Error(where + ": -s / -o values must be finite and within +-1e6");
@@ -139,8 +139,8 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
             float ns = std::isfinite(m.shininess) ? std::max(0.0f, m.shininess) : 0.0f;
             mat.roughness = std::clamp(std::sqrt(2.0f / (ns + 2.0f)), 0.01f, 1.0f);
             if (textures) {
-                mat.albedo_tex = mtl_texture(path, m, "map_Kd", m.diffuse_texname,
-                                             m.diffuse_texopt, TextureUse::colour, *textures);
+                mat.albedo_tex = mtl_texture(path, m, "map_Kd", m.diffuse_texname, m.diffuse_texopt,
+                                             TextureUse::colour, *textures);
                 mat.specular_tex = mtl_texture(path, m, "map_Ks", m.specular_texname,
                                                m.specular_texopt, TextureUse::colour, *textures);
                 // map_Pr (the PBR extension's roughness); else map_Ns, which Blender's exporter

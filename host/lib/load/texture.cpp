@@ -46,8 +46,8 @@ glm::vec2 read_vec2(const nlohmann::json& j, const char* key, glm::vec2 fallback
     if (allow_scalar && it->is_number())
         return glm::vec2(static_cast<float>(rk.number(*it, lo, hi)));
     if (!it->is_array() || it->size() != 2)
-        rk.fail(std::string("expected [u, v]") + (allow_scalar ? " or one number" : "") +
-                ", got " + json_excerpt(*it));
+        rk.fail(std::string("expected [u, v]") + (allow_scalar ? " or one number" : "") + ", got " +
+                json_excerpt(*it));
     return glm::vec2(static_cast<float>(rk.at(size_t(0)).number((*it)[0], lo, hi)),
                      static_cast<float>(rk.at(size_t(1)).number((*it)[1], lo, hi)));
 }

@@ -65,7 +65,8 @@ void add_textures(const Scene& scene, DeviceScene& d) {
     for (const Texture& t : scene.textures.textures()) {
         const uint32_t offset = static_cast<uint32_t>(d.tex_texels.size());
         d.tex_info.push_back(etk::make_float4(bits(offset), bits(uint32_t(t.width)),
-                                              bits(uint32_t(t.height)), bits(uint32_t(t.channels))));
+                                              bits(uint32_t(t.height)),
+                                              bits(uint32_t(t.channels))));
         d.tex_info.push_back(
             etk::make_float4(t.uv_scale.x, t.uv_scale.y, t.uv_offset.x, t.uv_offset.y));
         d.tex_texels.insert(d.tex_texels.end(), t.texels.begin(), t.texels.end());
