@@ -73,7 +73,8 @@ TEST_P(TexturedQuad, PixelsEqualTheirTexels) {
     EXPECT_EQ(checked, 16 * 16);
 }
 
-INSTANTIATE_TEST_SUITE_P(Backends, TexturedQuad, ::testing::Values("opencl", "cpu"));
+INSTANTIATE_TEST_SUITE_P(Backends, TexturedQuad, ::testing::Values("opencl", "cpu"),
+                         [](const auto& info) { return std::string(info.param); });
 
 TEST(TexturedScene, BackendsBitIdentical) {
     const std::string dir = ett::scratch_dir("texture-render");
