@@ -8,6 +8,7 @@
 #include "params.h"
 #include "path_state.h"
 #include "sampler.h"
+#include "texture.h"
 
 ETK_BEGIN
 
@@ -63,6 +64,7 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, Et
     s.ng = ng;
     s.wo = etk_to_local(wo_world, s.t, s.b, ns);
     s.m = etk_material_load(S.materials, S.tri_material[prim]);
+    s.m = etk_material_textured(S, s.m, S.tri_material[prim], prim, h.b1, h.b2);
     s.m.vndf = p.bsdf_sampling;
     float scale = fmax(fmax(fabs(pos.x), fabs(pos.y)), fmax(fabs(pos.z), 1.0f));
     s.origin = pos + ng * (p.ray_epsilon * scale);

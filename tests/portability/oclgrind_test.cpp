@@ -271,6 +271,8 @@ TEST_P(OclgrindScenes, TinyRenderEqualsPoclBitForBit) {
 
 INSTANTIATE_TEST_SUITE_P(Shipped, OclgrindScenes,
                          ::testing::Values(SceneCase{"default.json", ""},
+                                           SceneCase{"textures.json", ""},
+                                           SceneCase{"textured_cube.json", ""},
                                            SceneCase{"cornell_box.json", "meshes/cornell_box.obj"},
                                            SceneCase{"matpreview.json",
                                                      "envmaps/museum_wells6.exr"},

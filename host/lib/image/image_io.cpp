@@ -532,12 +532,12 @@ struct OiioSource {
     std::vector<unsigned char> scratch; // one band of the decoded channels otherwise
     std::unique_ptr<RgbeDecoder> rgbe;  // Radiance pixels, decoded here
 
-    OiioSource(const std::string& path, uint64_t file_bytes);
+    OiioSource(const std::string& path, uint64_t file_bytes, bool colour);
     int band_rows() const;
     void read_rows(const std::string& path, int y0, int y1, float* dst);
 };
 
-OiioSource::OiioSource(const std::string& path, uint64_t file_bytes) {
+OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour) {
     // PNG, TIFF, TGA, ... colour as stored: OpenImageIO would otherwise multiply it by an
     // unassociated alpha, and a map's texels are radiance whatever its alpha says.
     ImageSpec config;
@@ -591,7 +591,7 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes) {
     const std::string cs = spec.get_string_attribute("oiio:ColorSpace");
     const bool integer =
         spec.format.basetype == TypeDesc::UINT8 || spec.format.basetype == TypeDesc::UINT16;
-    decode_srgb = integer && cs != "Linear" && cs != "linear";
+    decode_srgb = colour && integer && cs != "Linear" && cs != "linear";
     direct = spec.tile_width == 0 && spec.format == TypeDesc::FLOAT &&
              spec.channelformats.empty() && idx[0] == lo && idx[1] == lo + 1 && idx[2] == lo + 2;
     // OpenImageIO 2.4's TIFF reader decodes a range of whole strips itself (zip, 8 or 16 bits,
@@ -680,7 +680,8 @@ struct RgbImageReader::Impl {
     int width = 0, height = 0, next = 0;
 };
 
-RgbImageReader::RgbImageReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
+RgbImageReader::RgbImageReader(const std::string& path, bool colour)
+    : impl_(std::make_unique<Impl>()) {
     impl_->path = path;
     const uint64_t file_bytes = check_regular_file(path, kMaxImageBytes, "image");
     if (file_bytes == 0)
@@ -690,7 +691,7 @@ RgbImageReader::RgbImageReader(const std::string& path) : impl_(std::make_unique
         impl_->width = impl_->pfm->w;
         impl_->height = impl_->pfm->h;
     } else {
-        impl_->oiio = std::make_unique<OiioSource>(path, file_bytes);
+        impl_->oiio = std::make_unique<OiioSource>(path, file_bytes, colour);
         impl_->width = impl_->oiio->spec.width;
         impl_->height = impl_->oiio->spec.height;
     }
@@ -725,8 +726,8 @@ int RgbImageReader::read_rows(int rows, float* dst) {
     return y1 - y0;
 }
 
-RgbImage read_rgb_image(const std::string& path) {
-    RgbImageReader reader(path);
+RgbImage read_rgb_image(const std::string& path, bool colour) {
+    RgbImageReader reader(path, colour);
     RgbImage img;
     img.width = reader.width();
     img.height = reader.height();

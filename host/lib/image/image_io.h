@@ -22,14 +22,15 @@ struct RgbImage {
 // images are decoded from sRGB to linear. One channel is replicated to RGB; otherwise the R, G, B
 // channels are used (the first three when they are not named so), as stored: alpha is ignored,
 // colour is never multiplied or divided by it. Throws et::Error naming the file and the problem.
-RgbImage read_rgb_image(const std::string& path);
+// `colour` false reads data (a roughness texture): 8- and 16-bit values as stored, not decoded.
+RgbImage read_rgb_image(const std::string& path, bool colour = true);
 
 // read_rgb_image a band of rows at a time, from the top, so that a caller can work on the first
 // rows while later ones decode (load_envmap builds the distribution meanwhile).
 class RgbImageReader {
   public:
     // Opens the file and checks its header, as read_rgb_image does; throws et::Error.
-    explicit RgbImageReader(const std::string& path);
+    explicit RgbImageReader(const std::string& path, bool colour = true);
     ~RgbImageReader();
     RgbImageReader(const RgbImageReader&) = delete;
     RgbImageReader& operator=(const RgbImageReader&) = delete;

@@ -14,7 +14,8 @@
 
 namespace et {
 
-bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material) {
+bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material,
+                  const glm::vec2 uv[3]) {
     for (int k = 0; k < 3; ++k)
         if (!std::isfinite(p[k].x) || !std::isfinite(p[k].y) || !std::isfinite(p[k].z))
             return false;
@@ -30,6 +31,12 @@ bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3]
         soup.normals.push_back(l > 0.0f && std::isfinite(l) ? nk / l : ng);
     }
     soup.material.push_back(material);
+    // Kept parallel to the triangles even when a caller filled them without this function.
+    soup.uvs.resize(3 * (soup.material.size() - 1), glm::vec2(0.0f));
+    for (int k = 0; k < 3; ++k) {
+        const glm::vec2 t = uv ? uv[k] : glm::vec2(0.0f);
+        soup.uvs.push_back(std::isfinite(t.x) && std::isfinite(t.y) ? t : glm::vec2(0.0f));
+    }
     return true;
 }
 
@@ -74,8 +81,32 @@ class MtlReader : public tinyobj::MaterialReader {
 
 } // namespace
 
+namespace {
+
+// An MTL texture map of material `m` (map_Kd and the like), resolved against the OBJ's folder,
+// with its -s (scale) and -o (offset) options as the texture's uv transform; -1 when absent.
+int mtl_texture(const std::string& obj_path, const tinyobj::material_t& m, const char* key,
+                const std::string& name, const tinyobj::texture_option_t& opt, TextureUse use,
+                TextureSet& textures) {
+    if (name.empty())
+        return -1;
+    const std::string where =
+        obj_path + ": material '" + excerpt(m.name, 60) + "': " + key + " '" + excerpt(name) + "'";
+    const glm::vec2 scale(opt.scale[0], opt.scale[1]),
+        offset(opt.origin_offset[0], opt.origin_offset[1]);
+    for (float v : {scale.x, scale.y, offset.x, offset.y})
+        if (!std::isfinite(v) || std::fabs(v) > 1e6f)
+            throw Error(where + ": -s / -o values must be finite and within +-1e6");
+    const std::filesystem::path p = std::filesystem::path(name).is_absolute()
+                                        ? std::filesystem::path(name)
+                                        : std::filesystem::path(obj_path).parent_path() / name;
+    return textures.add_file(p.string(), use, scale, offset, where);
+}
+
+} // namespace
+
 void load_obj(const std::string& path, const glm::mat4& transform, int override_material,
-              std::vector<Material>& materials, TriangleSoup& out) {
+              std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures) {
     std::istringstream obj(read_regular_file(path, kMaxMeshBytes, "OBJ file"));
     tinyobj::attrib_t attrib_data;
     std::vector<tinyobj::shape_t> shapes_data;
@@ -107,7 +138,22 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
                 glm::clamp(glm::vec3(m.specular[0], m.specular[1], m.specular[2]), 0.0f, 1.0f);
             float ns = std::isfinite(m.shininess) ? std::max(0.0f, m.shininess) : 0.0f;
             mat.roughness = std::clamp(std::sqrt(2.0f / (ns + 2.0f)), 0.01f, 1.0f);
-            mat.type = std::max({mat.specular.x, mat.specular.y, mat.specular.z}) > 0.0f
+            if (textures) {
+                mat.albedo_tex = mtl_texture(path, m, "map_Kd", m.diffuse_texname, m.diffuse_texopt,
+                                             TextureUse::colour, *textures);
+                mat.specular_tex = mtl_texture(path, m, "map_Ks", m.specular_texname,
+                                               m.specular_texopt, TextureUse::colour, *textures);
+                // map_Pr (the PBR extension's roughness); else map_Ns, which Blender's exporter
+                // writes for a roughness texture.
+                mat.roughness_tex =
+                    !m.roughness_texname.empty()
+                        ? mtl_texture(path, m, "map_Pr", m.roughness_texname, m.roughness_texopt,
+                                      TextureUse::data, *textures)
+                        : mtl_texture(path, m, "map_Ns", m.specular_highlight_texname,
+                                      m.specular_highlight_texopt, TextureUse::data, *textures);
+            }
+            mat.type = std::max({mat.specular.x, mat.specular.y, mat.specular.z}) > 0.0f ||
+                               mat.specular_tex >= 0
                            ? ETK_MAT_MICROFACET
                            : ETK_MAT_DIFFUSE;
             materials.push_back(mat);
@@ -122,7 +168,8 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
     }
 
     const glm::mat3 normal_m = glm::transpose(glm::inverse(glm::mat3(transform)));
-    const size_t nv = attrib.vertices.size() / 3, nn = attrib.normals.size() / 3;
+    const size_t nv = attrib.vertices.size() / 3, nn = attrib.normals.size() / 3,
+                 nt = attrib.texcoords.size() / 2;
     size_t dropped = 0, bad_index = 0;
     for (const auto& shape : shapes) {
         size_t offset = 0;
@@ -134,7 +181,8 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
                 continue;
             }
             glm::vec3 p[3], n[3];
-            bool has_normals = true, ok = true;
+            glm::vec2 uv[3];
+            bool has_normals = true, has_uvs = true, ok = true;
             for (int k = 0; k < 3; ++k) {
                 const auto& idx = shape.mesh.indices[offset + k];
                 if (idx.vertex_index < 0 || static_cast<size_t>(idx.vertex_index) >= nv) {
@@ -149,6 +197,12 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
                 } else {
                     has_normals = false;
                 }
+                if (idx.texcoord_index >= 0 && static_cast<size_t>(idx.texcoord_index) < nt) {
+                    const float* vt = &attrib.texcoords[2 * idx.texcoord_index];
+                    uv[k] = glm::vec2(vt[0], vt[1]);
+                } else {
+                    has_uvs = false;
+                }
             }
             offset += 3;
             if (!ok) {
@@ -161,7 +215,7 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
                 if (id >= 0 && id < static_cast<int>(mtls.size()))
                     mat = base + id;
             }
-            if (!add_triangle(out, p, has_normals ? n : nullptr, mat))
+            if (!add_triangle(out, p, has_normals ? n : nullptr, mat, has_uvs ? uv : nullptr))
                 ++dropped;
         }
     }

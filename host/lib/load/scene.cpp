@@ -105,19 +105,24 @@ void add_sphere(TriangleSoup& soup, glm::vec3 c, float radius, int segments, int
         float th = float(M_PI) * i / rings, ph = 2.0f * float(M_PI) * j / segments;
         return glm::vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
     };
+    // Texture coordinates: u around the axis (from +X towards +Z), v = 1 at the top pole.
+    auto uv = [&](int i, int j) { return glm::vec2(float(j) / segments, 1.0f - float(i) / rings); };
     for (int i = 0; i < rings; ++i)
         for (int j = 0; j < segments; ++j) {
             glm::vec3 n00 = point(i, j), n01 = point(i, j + 1), n10 = point(i + 1, j),
                       n11 = point(i + 1, j + 1);
             glm::vec3 a[3] = {n00, n01, n11}, b[3] = {n00, n11, n10};
-            for (auto* tri : {a, b}) {
-                glm::vec3 p[3] = {c + radius * tri[0], c + radius * tri[1], c + radius * tri[2]};
-                add_triangle(soup, p, tri, material);
-            }
+            glm::vec2 ta[3] = {uv(i, j), uv(i, j + 1), uv(i + 1, j + 1)},
+                      tb[3] = {uv(i, j), uv(i + 1, j + 1), uv(i + 1, j)};
+            glm::vec3 pa[3] = {c + radius * a[0], c + radius * a[1], c + radius * a[2]},
+                      pb[3] = {c + radius * b[0], c + radius * b[1], c + radius * b[2]};
+            add_triangle(soup, pa, a, material, ta);
+            add_triangle(soup, pb, b, material, tb);
         }
 }
 
-Material read_material(const std::string& name, const json& j, const JsonReader& r) {
+Material read_material(const std::string& name, const json& j, const JsonReader& r,
+                       const std::string& dir, TextureSet& textures) {
     Material m;
     m.name = name;
     r.expect_object(j);
@@ -136,9 +141,16 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
         r.at("type").fail("unknown material type " + json_excerpt(j["type"]) +
                           " (use diffuse, microfacet, plastic or mirror)");
     }
-    m.albedo = glm::clamp(read_vec3(j, "albedo", m.albedo, r), 0.0f, 1.0f);
-    m.specular = glm::clamp(read_vec3(j, "specular", m.specular, r), 0.0f, 1.0f);
-    m.roughness = read_float(j, "roughness", m.roughness, 0.0f, 1.0f, r);
+    // Each may be a texture instead of a constant (load/texture.h).
+    m.albedo_tex = read_texture_param(j, "albedo", TextureUse::colour, dir, r, textures);
+    m.specular_tex = read_texture_param(j, "specular", TextureUse::colour, dir, r, textures);
+    m.roughness_tex = read_texture_param(j, "roughness", TextureUse::data, dir, r, textures);
+    if (m.albedo_tex < 0)
+        m.albedo = glm::clamp(read_vec3(j, "albedo", m.albedo, r), 0.0f, 1.0f);
+    if (m.specular_tex < 0)
+        m.specular = glm::clamp(read_vec3(j, "specular", m.specular, r), 0.0f, 1.0f);
+    if (m.roughness_tex < 0)
+        m.roughness = read_float(j, "roughness", m.roughness, 0.0f, 1.0f, r);
     return m;
 }
 
@@ -216,7 +228,8 @@ Scene load_scene(const std::string& path) {
         const JsonReader rm = r.at("materials");
         for (auto it = mp->begin(); it != mp->end(); ++it) {
             by_name[it.key()] = static_cast<int>(scene.materials.size());
-            scene.materials.push_back(read_material(it.key(), it.value(), rm.at(it.key())));
+            scene.materials.push_back(
+                read_material(it.key(), it.value(), rm.at(it.key()), dir, scene.textures));
         }
     }
     auto material_of = [&](const json& s, const JsonReader& rs) {
@@ -257,7 +270,7 @@ Scene load_scene(const std::string& path) {
                     rs.fail("a mesh needs \"file\" (an OBJ file)");
                 const glm::mat4 transform = read_transform(s, rs);
                 std::string file = resolve_data_file(rs.string(s, "file", ""), dir);
-                load_obj(file, transform, mat, scene.materials, scene.triangles);
+                load_obj(file, transform, mat, scene.materials, scene.triangles, &scene.textures);
             } else if (type == "sphere") {
                 rs.warn_unknown_keys(
                     s, {"type", "center", "radius", "material", "segments", "smooth"});
@@ -282,6 +295,8 @@ Scene load_scene(const std::string& path) {
                                    sphere.positions.end());
                 T.normals.insert(T.normals.end(), sphere.normals.begin(), sphere.normals.end());
                 T.material.insert(T.material.end(), sphere.material.begin(), sphere.material.end());
+                T.uvs.resize(3 * (T.size() - sphere.size()), glm::vec2(0.0f));
+                T.uvs.insert(T.uvs.end(), sphere.uvs.begin(), sphere.uvs.end());
             } else if (type == "quad") {
                 rs.warn_unknown_keys(s, {"type", "center", "size", "material", "transform"});
                 glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
@@ -305,9 +320,13 @@ Scene load_scene(const std::string& path) {
                 for (auto& v : q)
                     v = glm::vec3(m * glm::vec4(c + v, 1.0f));
                 glm::vec3 a[3] = {q[0], q[2], q[1]}, b[3] = {q[0], q[3], q[2]};
+                // Texture coordinates: u along +x, v along -z (the image upright seen from above
+                // with -z up), [0, 1] over the quad.
+                const glm::vec2 t[4] = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+                const glm::vec2 ta[3] = {t[0], t[2], t[1]}, tb[3] = {t[0], t[3], t[2]};
                 int qm = mat < 0 ? default_material() : mat;
-                if (!add_triangle(scene.triangles, a, nullptr, qm) ||
-                    !add_triangle(scene.triangles, b, nullptr, qm))
+                if (!add_triangle(scene.triangles, a, nullptr, qm, ta) ||
+                    !add_triangle(scene.triangles, b, nullptr, qm, tb))
                     rs.fail("the quad is degenerate (or not finite after its transform)");
             } else {
                 rs.at("type").fail("unknown shape type " + json_excerpt(s["type"]) +

@@ -4,6 +4,7 @@
 #pragma once
 #include "load/environment_map.h"
 #include "load/render_settings.h"
+#include "load/texture.h"
 
 #include <glm/glm.hpp>
 
@@ -18,6 +19,8 @@ struct Material {
     int type = 0; // ETK_MAT_*
     glm::vec3 albedo{0.8f}, specular{0.0f};
     float roughness = 0.3f;
+    // Textures (indices into Scene::textures, -1: none) that replace albedo, specular, roughness.
+    int albedo_tex = -1, specular_tex = -1, roughness_tex = -1;
 };
 
 struct Camera {
@@ -29,6 +32,7 @@ struct TriangleSoup {
     std::vector<glm::vec3> positions; // 3 per triangle
     std::vector<glm::vec3> normals;   // 3 per triangle (geometric when the mesh has none)
     std::vector<int> material;        // 1 per triangle
+    std::vector<glm::vec2> uvs;       // 3 per triangle: texture coordinates ((0, 0) when none)
     size_t size() const { return material.size(); }
 };
 
@@ -41,17 +45,22 @@ struct Scene {
     std::vector<Material> materials;
     RenderSettings settings;
     std::string output;
+    TextureSet textures;
 };
 
 // Throws et::Error naming the file and the problem (with line:column for malformed JSON); warns
 // about unknown keys, dropped degenerate triangles and odd OBJ content.
 Scene load_scene(const std::string& path);
 
-// Appends an OBJ file (triangulated; materials from its MTL unless `override_material` >= 0).
+// Appends an OBJ file (triangulated, with its texture coordinates; materials from its MTL unless
+// `override_material` >= 0). The MTL's map_Kd, map_Ks and map_Pr / map_Ns (roughness) are read
+// into `textures`; without a TextureSet they are ignored.
 void load_obj(const std::string& path, const glm::mat4& transform, int override_material,
-              std::vector<Material>& materials, TriangleSoup& out);
+              std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures = nullptr);
 
 // Appends the triangle (a, b, c) unless it is degenerate or not finite; returns whether it did.
-bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material);
+// `uv`: its corners' texture coordinates, or nullptr for (0, 0).
+bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material,
+                  const glm::vec2 uv[3] = nullptr);
 
 } // namespace et

@@ -31,6 +31,53 @@ void set_camera(const Scene& scene, etk::EtkParams& p) {
     }
 }
 
+bool uses_textures(const Scene& scene) {
+    for (const Material& m : scene.materials)
+        if (m.albedo_tex >= 0 || m.specular_tex >= 0 || m.roughness_tex >= 0)
+            return true;
+    return false;
+}
+
+// Texture coordinates in BVH order, only when a material is textured (nothing else reads them).
+void add_texture_coordinates(const Scene& scene, const std::vector<int>& order, DeviceScene& d) {
+    if (!uses_textures(scene))
+        return;
+    const auto& uvs = scene.triangles.uvs;
+    d.tri_uv.assign(6 * std::max<size_t>(1, order.size()), 0.0f);
+    for (size_t i = 0; i < order.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            const size_t c = 3 * static_cast<size_t>(order[i]) + k;
+            if (c < uvs.size()) {
+                d.tri_uv[6 * i + 2 * k] = uvs[c].x;
+                d.tri_uv[6 * i + 2 * k + 1] = uvs[c].y;
+            }
+        }
+}
+
+// Every texture into one flat buffer behind a two-float4 header each (kernels/texture.h), and
+// each material's texture slots. TextureSet has kept the total within what the device indexes.
+void add_textures(const Scene& scene, DeviceScene& d) {
+    auto bits = [](uint32_t v) {
+        float f;
+        std::memcpy(&f, &v, 4);
+        return f;
+    };
+    for (const Texture& t : scene.textures.textures()) {
+        const uint32_t offset = static_cast<uint32_t>(d.tex_texels.size());
+        d.tex_info.push_back(etk::make_float4(bits(offset), bits(uint32_t(t.width)),
+                                              bits(uint32_t(t.height)),
+                                              bits(uint32_t(t.channels))));
+        d.tex_info.push_back(
+            etk::make_float4(t.uv_scale.x, t.uv_scale.y, t.uv_offset.x, t.uv_offset.y));
+        d.tex_texels.insert(d.tex_texels.end(), t.texels.begin(), t.texels.end());
+    }
+    for (const Material& m : scene.materials)
+        d.material_tex.insert(d.material_tex.end(),
+                              {m.albedo_tex, m.specular_tex, m.roughness_tex, -1});
+    if (d.material_tex.empty())
+        d.material_tex.assign(ETK_TEX_SLOTS, -1);
+}
+
 void add_triangles(const Scene& scene, DeviceScene& d) {
     Bvh bvh = build_bvh(scene.triangles);
     d.tris = flatten_triangles(scene.triangles, bvh.order);
@@ -45,6 +92,7 @@ void add_triangles(const Scene& scene, DeviceScene& d) {
         }
         d.tri_material[i] = scene.triangles.material[t];
     }
+    add_texture_coordinates(scene, bvh.order, d);
     if (n == 0) // one all-zero triangle (flatten_triangles) that nothing hits
         d.normals.resize(3), d.tri_material.resize(1);
     d.bvh.nodes = bvh.node_count();
@@ -151,6 +199,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     std::fill(p.bin_flags, p.bin_flags + ETK_SHARE_BINS, ETK_BIN_COMPENSATED | ETK_BIN_VNDF);
     add_triangles(scene, d);
     add_materials(scene, d);
+    add_textures(scene, d);
     if (st.strategy == Strategy::lights) {
         if (!lights)
             throw Error("the light-set strategy needs a light set");
