@@ -18,6 +18,7 @@ struct Material {
     int type = 0; // ETK_MAT_*
     glm::vec3 albedo{0.8f}, specular{0.0f};
     float roughness = 0.3f;
+    float ior = 1.5f; // dielectrics: index of refraction inside (the front face is outside)
 };
 
 struct Camera {
