@@ -147,7 +147,9 @@ TEST(Dielectric, RoughSamplingMatchesPdfChiSquareOverTheSphere) {
         EXPECT_NEAR(1.0 - total, lost_fraction,
                     5 * std::sqrt(std::max(lost_fraction, 1e-6) / kSamples) + 2e-4)
             << "pdf integral " << total << ", lost " << lost_fraction;
-        EXPECT_GT(transmitted, kSamples / 100); // both hemispheres were exercised
+        if (c.m.eta > 1.0f || c.cos_o > 0.9f) { // else mostly total internal reflection
+            EXPECT_GT(transmitted, kSamples / 100); // both hemispheres were exercised
+        }
         const ett::Chi2Result r = ett::chi2_test(observed, expected, kPhi, kTheta + 1, alpha);
         if (!r.passed)
             ett::dump_histograms("dielectric-chi2", observed, expected, kPhi, kTheta + 1);
