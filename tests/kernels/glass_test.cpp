@@ -211,4 +211,28 @@ TEST(GlassScene, DielectricMaterialFromJson) {
     }
 }
 
+// MTL illum 4, 6, 7 become dielectrics (scenes/README.md): Ni the index (1.5 without it), Tf the
+// tint (white without it), Pr > 0 rough; other illum models keep the opaque mapping.
+TEST(GlassScene, DielectricFromMtl) {
+    const std::string dir = ett::scratch_dir("glass-mtl");
+    std::ofstream(dir + "/g.mtl") << "newmtl water\nillum 7\nNi 1.33\nTf 0.9 0.8 0.7\n"
+                                  << "newmtl frosted\nillum 4\nPr 0.2\n"
+                                  << "newmtl paint\nillum 2\nKd 0.5 0.5 0.5\nNi 1.5\n";
+    std::ofstream(dir + "/g.obj") << "mtllib g.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                  << "usemtl water\nf 1 2 3\nusemtl frosted\nf 1 2 3\n"
+                                  << "usemtl paint\nf 1 2 3\n";
+    std::vector<et::Material> mats;
+    et::TriangleSoup soup;
+    et::load_obj(dir + "/g.obj", glm::mat4(1.0f), -1, mats, soup);
+    ASSERT_GE(mats.size(), 3u);
+    EXPECT_EQ(mats[0].type, ETK_MAT_SMOOTH_DIELECTRIC);
+    EXPECT_FLOAT_EQ(mats[0].ior, 1.33f);
+    EXPECT_FLOAT_EQ(mats[0].albedo.z, 0.7f);
+    EXPECT_EQ(mats[1].type, ETK_MAT_DIELECTRIC);
+    EXPECT_FLOAT_EQ(mats[1].ior, 1.5f);
+    EXPECT_FLOAT_EQ(mats[1].roughness, 0.2f);
+    EXPECT_FLOAT_EQ(mats[1].albedo.x, 1.0f);
+    EXPECT_EQ(mats[2].type, ETK_MAT_DIFFUSE);
+}
+
 } // namespace
