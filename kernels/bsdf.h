@@ -36,7 +36,7 @@ typedef struct {
     float3 specular;
     float alpha;
     int type;
-    int vndf; // GGX lobe sampled from visible normals (1) or from D(h) cos(theta_h) (0)
+    int vndf;  // GGX lobe sampled from visible normals (1) or from D(h) cos(theta_h) (0)
     float eta; // dielectrics: n(far side) / n(side of wo) (dielectric.h); set by surface.h
 } EtkMaterial;
 
@@ -166,9 +166,8 @@ ETK_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 u, float l
     s.delta = 0;
     s.wi = make_float3(0.0f, 0.0f, 1.0f);
     if (etk_bsdf_is_dielectric(m)) {
-        etk_dielectric_sample(m.albedo, m.eta, m.alpha, m.vndf,
-                              m.type == ETK_MAT_SMOOTH_DIELECTRIC, wo, u, lobe, &s.wi, &s.weight,
-                              &s.pdf, &s.delta);
+        etk_dielectric_sample(m.albedo, m.eta, m.alpha, m.vndf, m.type == ETK_MAT_SMOOTH_DIELECTRIC,
+                              wo, u, lobe, &s.wi, &s.weight, &s.pdf, &s.delta);
         return s;
     }
     if (wo.z <= 0.0f)

@@ -121,8 +121,8 @@ ETK_FN float etk_dielectric_pdf(float eta, float alpha, int vndf, float3 wo, flo
         return 0.0f;
     float oh = dot(wo, h), ih = dot(wi, h);
     float s = ih + oh / eta;
-    return etk_dielectric_half_pdf(wo, h, alpha, vndf) *
-           (1.0f - etk_fresnel_dielectric(oh, eta)) * fabs(ih) / (s * s);
+    return etk_dielectric_half_pdf(wo, h, alpha, vndf) * (1.0f - etk_fresnel_dielectric(oh, eta)) *
+           fabs(ih) / (s * s);
 }
 
 // One sample of the interface: direction, f |cos| / pdf, pdf (for the delta lobe, the

@@ -147,7 +147,7 @@ TEST(Dielectric, RoughSamplingMatchesPdfChiSquareOverTheSphere) {
         EXPECT_NEAR(1.0 - total, lost_fraction,
                     5 * std::sqrt(std::max(lost_fraction, 1e-6) / kSamples) + 2e-4)
             << "pdf integral " << total << ", lost " << lost_fraction;
-        if (c.m.eta > 1.0f || c.cos_o > 0.9f) { // else mostly total internal reflection
+        if (c.m.eta > 1.0f || c.cos_o > 0.9f) {     // else mostly total internal reflection
             EXPECT_GT(transmitted, kSamples / 100); // both hemispheres were exercised
         }
         const ett::Chi2Result r = ett::chi2_test(observed, expected, kPhi, kTheta + 1, alpha);
@@ -253,9 +253,9 @@ TEST(Dielectric, SmoothFresnelAndSnell) {
                 EXPECT_NEAR(t.pdf, 1 - f, 1e-6f);
                 ASSERT_LT(t.wi.z, 0.0f);
                 const double sin_t = std::sqrt(t.wi.x * t.wi.x + t.wi.y * t.wi.y);
-                EXPECT_NEAR(n_t * sin_t, n_o * sin_i, 2e-6 * n2);            // Snell
-                EXPECT_NEAR(t.wi.x * wo.y - t.wi.y * wo.x, 0.0, 1e-6);       // plane of incidence
-                EXPECT_LE(t.wi.x * wo.x + t.wi.y * wo.y, 1e-7);              // the far side
+                EXPECT_NEAR(n_t * sin_t, n_o * sin_i, 2e-6 * n2);      // Snell
+                EXPECT_NEAR(t.wi.x * wo.y - t.wi.y * wo.x, 0.0, 1e-6); // plane of incidence
+                EXPECT_LE(t.wi.x * wo.x + t.wi.y * wo.y, 1e-7);        // the far side
                 EXPECT_NEAR(t.weight.x, 1.0f / (eta * eta), 1e-6f / (eta * eta));
             }
     // Both evaluate to zero (delta lobes) and are delta to the integrator.
@@ -305,8 +305,8 @@ TEST(Dielectric, EnergyAtMostOne) {
                     sum2 += w * w;
                 }
                 const double mc = sum / n, sd = std::sqrt(std::max(0.0, sum2 / n - mc * mc) / n);
-                SCOPED_TRACE(::testing::Message() << "eta " << eta << " alpha " << alpha
-                                                  << " cos " << cos_o << ": " << mc << " +- " << sd);
+                SCOPED_TRACE(::testing::Message() << "eta " << eta << " alpha " << alpha << " cos "
+                                                  << cos_o << ": " << mc << " +- " << sd);
                 EXPECT_LE(mc, 1.0 + 5 * sd + 1e-5);
                 if (alpha == 0.0f) {
                     EXPECT_NEAR(mc, 1.0, 1e-5);

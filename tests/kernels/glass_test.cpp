@@ -67,8 +67,9 @@ void expect_furnace(const ett::RenderResult& r, bool at_most, const std::string&
 TEST(GlassFurnace, SmoothSphereRendersTheMapValue) {
     for (const char* backend : {"cpu", "opencl"})
         for (float ior : {1.33f, 1.5f})
-            expect_furnace(ett::render(furnace_scene(dielectric(ior, 0.0f), 1000, "mis"), backend, 64),
-                           false, std::string(backend) + " smooth ior " + std::to_string(ior));
+            expect_furnace(
+                ett::render(furnace_scene(dielectric(ior, 0.0f), 1000, "mis"), backend, 64), false,
+                std::string(backend) + " smooth ior " + std::to_string(ior));
 }
 
 TEST(GlassFurnace, RoughSphereOfIndexOneIsInvisible) {
@@ -135,7 +136,8 @@ TEST(GlassStrategies, ConvergeToTheSameImage) {
     vndf_scene.settings.bsdf_sampling = et::BsdfSampling::vndf;
     const auto mis_vndf = ett::render(vndf_scene, "cpu", spp);
     const auto adaptive = ett::render(glass_scene(env, "adaptive", depth, 7), "cpu", spp);
-    et::Scene low = glass_scene(env, "adaptive", depth, 8), high = glass_scene(env, "adaptive", depth, 9);
+    et::Scene low = glass_scene(env, "adaptive", depth, 8),
+              high = glass_scene(env, "adaptive", depth, 9);
     low.settings.light_share = 0.125f;
     high.settings.light_share = et::kMaxLightShare;
     const auto adaptive_low = ett::render(low, "cpu", spp);
@@ -191,14 +193,13 @@ TEST(GlassScene, DielectricMaterialFromJson) {
     ASSERT_EQ(smooth.materials.size(), 1u);
     EXPECT_EQ(smooth.materials[0].type, ETK_MAT_SMOOTH_DIELECTRIC);
     EXPECT_FLOAT_EQ(smooth.materials[0].ior, 1.33f);
-    const et::Scene rough = et::load_scene(
-        write(R"("g": {"type": "glass", "roughness": 0.1, "tint": [0.9, 1, 0.9]})"));
+    const et::Scene rough =
+        et::load_scene(write(R"("g": {"type": "glass", "roughness": 0.1, "tint": [0.9, 1, 0.9]})"));
     EXPECT_EQ(rough.materials[0].type, ETK_MAT_DIELECTRIC);
     EXPECT_FLOAT_EQ(rough.materials[0].ior, 1.5f);
     EXPECT_FLOAT_EQ(rough.materials[0].roughness, 0.1f);
     EXPECT_FLOAT_EQ(rough.materials[0].albedo.x, 0.9f);
-    for (const auto& [materials, key] :
-         std::vector<std::pair<std::string, std::string>>{
+    for (const auto& [materials, key] : std::vector<std::pair<std::string, std::string>>{
              {R"("g": {"type": "dielectric", "ior": 0})", "materials.g.ior"},
              {R"("g": {"type": "dielectric", "albedo": [1, 1, 1]})", "materials.g.albedo"},
              {R"("g": {"type": "diffuse", "ior": 1.5})", "materials.g.ior"}}) {
