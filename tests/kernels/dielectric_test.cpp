@@ -66,11 +66,13 @@ int bin_of(const etk::float3& w) {
     return it * kPhi + ip;
 }
 
-double bin_integral(const etk::EtkMaterial& m, etk::float3 wo, int it, int ip, int n) {
-    const double dth = M_PI / kTheta / n, dph = 2 * M_PI / kPhi / n;
+// Integral of pdf sin(theta) over theta in [th0, th1], bin ip in phi, by the n x n midpoint rule.
+double bin_integral(const etk::EtkMaterial& m, etk::float3 wo, double th0, double th1, int ip,
+                    int n) {
+    const double dth = (th1 - th0) / n, dph = 2 * M_PI / kPhi / n;
     double sum = 0.0;
     for (int i = 0; i < n; ++i) {
-        const double th = (it * n + i + 0.5) * dth, st = std::sin(th), ct = std::cos(th);
+        const double th = th0 + (i + 0.5) * dth, st = std::sin(th), ct = std::cos(th);
         for (int j = 0; j < n; ++j) {
             const double ph = (ip * n + j + 0.5) * dph;
             sum += st * etk::etk_bsdf_pdf(m, wo,
@@ -81,19 +83,35 @@ double bin_integral(const etk::EtkMaterial& m, etk::float3 wo, int it, int ip, i
     return sum * dth * dph;
 }
 
+// Refined until two successive estimates agree (as in bsdf_test.cpp).
+double refined_integral(const etk::EtkMaterial& m, etk::float3 wo, double th0, double th1,
+                        int ip) {
+    double prev = bin_integral(m, wo, th0, th1, ip, 4), cur = prev;
+    for (int n = 8; n <= 512; n *= 2) {
+        cur = bin_integral(m, wo, th0, th1, ip, n);
+        if (std::fabs(cur - prev) <= std::max(1e-4 * cur, 0.01 / kSamples))
+            break;
+        prev = cur;
+    }
+    return cur;
+}
+
+// The transmission's pdf jumps at wi.z = -wo.z / eta, where the half vector reaches the horizon
+// (h.z = 0): beyond it no microfacet refracts wo into wi, and with visible-normal sampling the
+// density just inside is not small. A bin holding the jump is integrated in two parts, split
+// there, or a midpoint rule converges to 0 on a bin whose support is a sliver at its edge.
 std::vector<double> integrate_pdf(const etk::EtkMaterial& m, etk::float3 wo) {
     std::vector<double> p(kPhi * kTheta, 0.0);
-    for (int it = 0; it < kTheta; ++it)
-        for (int ip = 0; ip < kPhi; ++ip) {
-            double prev = bin_integral(m, wo, it, ip, 4), cur = prev;
-            for (int n = 8; n <= 512; n *= 2) {
-                cur = bin_integral(m, wo, it, ip, n);
-                if (std::fabs(cur - prev) <= std::max(1e-4 * cur, 0.01 / kSamples))
-                    break;
-                prev = cur;
-            }
-            p[it * kPhi + ip] = cur;
-        }
+    const double z_jump = -wo.z / m.eta;
+    const double th_jump = z_jump > -1.0 ? std::acos(z_jump) : -1.0;
+    for (int it = 0; it < kTheta; ++it) {
+        const double th0 = M_PI * it / kTheta, th1 = M_PI * (it + 1) / kTheta;
+        const bool split = th_jump > th0 && th_jump < th1;
+        for (int ip = 0; ip < kPhi; ++ip)
+            p[it * kPhi + ip] = split ? refined_integral(m, wo, th0, th_jump, ip) +
+                                            refined_integral(m, wo, th_jump, th1, ip)
+                                      : refined_integral(m, wo, th0, th1, ip);
+    }
     return p;
 }
 
