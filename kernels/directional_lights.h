@@ -25,7 +25,7 @@ ETK_BEGIN
 ETK_FN float3 etk_dl_unshadowed(EtkSurface s, float3 wi_world, float3 E) {
     float3 zero = make_float3(0.0f, 0.0f, 0.0f);
     float3 wi = etk_to_local(wi_world, s.t, s.b, s.ns);
-    if (etk_bsdf_is_delta(s.m) || !etk_same_side(wi.z, dot(wi_world, s.ng)))
+    if (etk_bsdf_is_delta(s.m) || !etk_light_side_ok(s.m, wi.z, dot(wi_world, s.ng)))
         return zero;
     return etk_bsdf_eval(s.m, s.wo, wi) * E * fabs(wi.z);
 }

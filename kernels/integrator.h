@@ -231,7 +231,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 ok = bs.pdf > 0.0f;
             }
             float3 wi = etk_to_local(wi_world, t, b, ns);
-            if (ok && etk_same_side(wi.z, dot(wi_world, ng))) {
+            if (ok && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float pb = etk_bsdf_pdf(m, wo, wi);
                 float wq = etk_share_weight(p.heuristic, share, pl, pb, from_light);
                 if (wq > 0.0f)
@@ -252,9 +252,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 pdf_light = ls.pdf;
             }
             float3 wi = etk_to_local(wi_world, t, b, ns);
-            // Either side: a rough dielectric transmits light from below (f is zero there for
-            // every other material).
-            if (pdf_light > 0.0f && etk_same_side(wi.z, dot(wi_world, ng))) {
+            // Above the surface, or below it at a dielectric (it transmits light from there).
+            if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
                 float w = etk_strategy_is_mis(p.strategy)
                               ? etk_mis_weight(p.heuristic, pdf_light, etk_bsdf_pdf(m, wo, wi))

@@ -55,6 +55,11 @@ ETK_FN float3 etk_surface_origin(EtkSurface s, float3 wi_world) {
 ETK_FN int etk_same_side(float wz, float dwg) {
     return (wz > 0.0f && dwg > 0.0f) || (wz < 0.0f && dwg < 0.0f);
 }
+// The same for a light sample at a surface of material m, which only a dielectric can receive
+// from below: the test rejects the other half of the sphere before anything is evaluated.
+ETK_FN int etk_light_side_ok(EtkMaterial m, float wz, float dwg) {
+    return etk_same_side(wz, dwg) && (wz > 0.0f || etk_bsdf_is_dielectric(m));
+}
 
 // The surface at the closest hit h of the ray (o, d). Surfaces are two-sided; the shading
 // normal is flipped to the geometric normal's side.
