@@ -269,16 +269,17 @@ TEST_P(OclgrindScenes, TinyRenderEqualsPoclBitForBit) {
     expect_same_films(ds, 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Shipped, OclgrindScenes,
-                         ::testing::Values(SceneCase{"default.json", ""},
-                                           SceneCase{"cornell_box.json", "meshes/cornell_box.obj"},
-                                           SceneCase{"matpreview.json",
-                                                     "envmaps/museum_wells6.exr"},
-                                           SceneCase{"bunny_grace.json", "envmaps/grace.hdr"}),
-                         [](const auto& info) {
-                             std::string n = info.param.file;
-                             return n.substr(0, n.find('.'));
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Shipped, OclgrindScenes,
+    ::testing::Values(SceneCase{"default.json", ""},
+                      SceneCase{"cornell_box.json", "meshes/cornell_box.obj"},
+                      SceneCase{"matpreview.json", "envmaps/museum_wells6.exr"},
+                      SceneCase{"bunny_grace.json", "envmaps/grace.hdr"},
+                      SceneCase{"glass.json", "envmaps/royal_esplanade_1k.hdr"}),
+    [](const auto& info) {
+        std::string n = info.param.file;
+        return n.substr(0, n.find('.'));
+    });
 
 TEST(Oclgrind, LightSetAndSisRenderEqualPocl) {
     // The shade_lights stage: a directional light set and SIS strata, direct lighting.
