@@ -11,15 +11,23 @@
 // draws a normal that faces away from wo, so fewer samples go below the horizon and the weights
 // f cos / pdf vary only through G1(wi) and the Fresnel term. EtkMaterial.vndf picks which; the
 // pdf follows it.
+//
+// Dielectrics (glass; dielectric.h): ETK_MAT_DIELECTRIC (rough, GGX) and
+// ETK_MAT_SMOOTH_DIELECTRIC (delta) store (tint rgb, type), (ior, -, -, GGX alpha); they transmit
+// (wi.z < 0) and take the relative index eta of the side they are hit from (surface.h).
 #ifndef ETK_BSDF_H
 #define ETK_BSDF_H
 #include "color.h"
 #include "compat.h"
+#include "dielectric.h"
+#include "ggx.h"
 #include "trig.h"
 
 #define ETK_MAT_DIFFUSE 0
 #define ETK_MAT_MICROFACET 1
 #define ETK_MAT_MIRROR 2
+#define ETK_MAT_DIELECTRIC 3        // rough glass (dielectric.h)
+#define ETK_MAT_SMOOTH_DIELECTRIC 4 // smooth glass: delta reflection and refraction
 
 ETK_BEGIN
 
@@ -28,7 +36,8 @@ typedef struct {
     float3 specular;
     float alpha;
     int type;
-    int vndf; // GGX lobe sampled from visible normals (1) or from D(h) cos(theta_h) (0)
+    int vndf;  // GGX lobe sampled from visible normals (1) or from D(h) cos(theta_h) (0)
+    float eta; // dielectrics: n(far side) / n(side of wo) (dielectric.h); set by surface.h
 } EtkMaterial;
 
 ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
@@ -39,6 +48,7 @@ ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
     m.specular = make_float3(b.x, b.y, b.z);
     m.alpha = fmax(b.w, 1e-3f);
     m.vndf = 0;
+    m.eta = b.x; // dielectrics: the ior, as seen from outside
     return m;
 }
 
@@ -86,40 +96,10 @@ ETK_FN float3 etk_sample_uniform_sphere(float2 u) {
     return make_float3(r * sc.y, r * sc.x, z);
 }
 
-ETK_FN float etk_ggx_d(float cos_h, float alpha) {
-    float a2 = alpha * alpha;
-    float c2 = cos_h * cos_h;
-    float d = c2 * (a2 - 1.0f) + 1.0f;
-    return a2 / (ETK_PI * d * d);
-}
-ETK_FN float etk_smith_g1(float cos_v, float alpha) {
-    float c2 = cos_v * cos_v;
-    float tan2 = fmax(0.0f, 1.0f - c2) / fmax(c2, 1e-12f);
-    return 2.0f / (1.0f + sqrt(1.0f + alpha * alpha * tan2));
-}
 ETK_FN float3 etk_schlick(float3 f0, float cos_d) {
     float m = clamp(1.0f - cos_d, 0.0f, 1.0f);
     float m5 = m * m * m * m * m;
     return f0 + (make_float3(1.0f, 1.0f, 1.0f) - f0) * m5;
-}
-
-// A GGX normal visible from wo (wo.z > 0), with density G1(wo) max(0, wo.h) D(h) / wo.z:
-// stretch wo to the unit-roughness configuration, sample the projected hemisphere seen from it
-// (a disk, its far half squeezed by the hemisphere's tilt), unstretch (Heitz 2018, listing 1).
-ETK_FN float3 etk_sample_ggx_vndf(float3 wo, float alpha, float2 u) {
-    float3 vh = normalize(make_float3(alpha * wo.x, alpha * wo.y, wo.z));
-    float lensq = vh.x * vh.x + vh.y * vh.y;
-    float inv = lensq > 0.0f ? 1.0f / sqrt(lensq) : 0.0f;
-    float3 t1 =
-        lensq > 0.0f ? make_float3(-vh.y * inv, vh.x * inv, 0.0f) : make_float3(1.0f, 0.0f, 0.0f);
-    float3 t2 = cross(vh, t1);
-    float r = sqrt(u.x);
-    float2 sc = etk_sincospi(2.0f * u.y);
-    float p1 = r * sc.y, p2 = r * sc.x;
-    float sh = 0.5f * (1.0f + vh.z);
-    p2 = (1.0f - sh) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + sh * p2;
-    float3 nh = t1 * p1 + t2 * p2 + vh * sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2));
-    return normalize(make_float3(alpha * nh.x, alpha * nh.y, fmax(1e-7f, nh.z)));
 }
 
 // Probability of choosing the specular lobe of a microfacet material with a diffuse base.
@@ -129,12 +109,20 @@ ETK_FN float etk_specular_weight(EtkMaterial m) {
     return ws + wd > 0.0f ? ws / (ws + wd) : 1.0f;
 }
 
+ETK_FN int etk_bsdf_is_dielectric(EtkMaterial m) {
+    return m.type == ETK_MAT_DIELECTRIC || m.type == ETK_MAT_SMOOTH_DIELECTRIC;
+}
+
 ETK_FN int etk_bsdf_is_delta(EtkMaterial m) {
-    return m.type == ETK_MAT_MIRROR;
+    return m.type == ETK_MAT_MIRROR ||
+           (etk_bsdf_is_dielectric(m) &&
+            etk_dielectric_is_delta(m.type == ETK_MAT_SMOOTH_DIELECTRIC, m.eta));
 }
 
 ETK_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
     float3 zero = make_float3(0.0f, 0.0f, 0.0f);
+    if (etk_bsdf_is_dielectric(m))
+        return etk_bsdf_is_delta(m) ? zero : etk_dielectric_eval(m.albedo, m.eta, m.alpha, wo, wi);
     if (wo.z <= 0.0f || wi.z <= 0.0f || m.type == ETK_MAT_MIRROR)
         return zero;
     if (m.type == ETK_MAT_DIFFUSE)
@@ -148,6 +136,8 @@ ETK_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
 }
 
 ETK_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
+    if (etk_bsdf_is_dielectric(m))
+        return etk_bsdf_is_delta(m) ? 0.0f : etk_dielectric_pdf(m.eta, m.alpha, m.vndf, wo, wi);
     if (wo.z <= 0.0f || wi.z <= 0.0f || m.type == ETK_MAT_MIRROR)
         return 0.0f;
     float diffuse = wi.z * ETK_INV_PI;
@@ -175,6 +165,11 @@ ETK_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 u, float l
     s.pdf = 0.0f;
     s.delta = 0;
     s.wi = make_float3(0.0f, 0.0f, 1.0f);
+    if (etk_bsdf_is_dielectric(m)) {
+        etk_dielectric_sample(m.albedo, m.eta, m.alpha, m.vndf, m.type == ETK_MAT_SMOOTH_DIELECTRIC,
+                              wo, u, lobe, &s.wi, &s.weight, &s.pdf, &s.delta);
+        return s;
+    }
     if (wo.z <= 0.0f)
         return s;
     if (m.type == ETK_MAT_MIRROR) {

@@ -20,21 +20,21 @@
 ETK_BEGIN
 
 // f(wo, wi) E cos(theta_i) for a light of power E from world direction wi_world, before the
-// shadow ray; zero below the shading or the geometric surface and for delta materials.
+// shadow ray; zero for delta materials and where the shading and geometric surfaces disagree on
+// the side of wi (below both: only a rough dielectric transmits).
 ETK_FN float3 etk_dl_unshadowed(EtkSurface s, float3 wi_world, float3 E) {
     float3 zero = make_float3(0.0f, 0.0f, 0.0f);
-    if (etk_bsdf_is_delta(s.m) || dot(wi_world, s.ng) <= 0.0f)
-        return zero;
     float3 wi = etk_to_local(wi_world, s.t, s.b, s.ns);
-    if (wi.z <= 0.0f)
+    if (etk_bsdf_is_delta(s.m) || !etk_light_side_ok(s.m, wi.z, dot(wi_world, s.ng)))
         return zero;
-    return etk_bsdf_eval(s.m, s.wo, wi) * E * wi.z;
+    return etk_bsdf_eval(s.m, s.wo, wi) * E * fabs(wi.z);
 }
 
 // Whether nothing blocks the direction wi_world from the surface (one any-hit ray).
 ETK_FN int etk_dl_visible(EtkScene S, EtkSurface s, float3 wi_world) {
     EtkHit h;
-    return !etk_bvh_traverse(S.nodes, S.tris, s.origin, wi_world, 3.0e38f, 1, &h);
+    return !etk_bvh_traverse(S.nodes, S.tris, etk_surface_origin(s, wi_world), wi_world, 3.0e38f, 1,
+                             &h);
 }
 
 // A direction uniformly distributed (in solid angle) over the texels of one stratum of a

@@ -41,7 +41,9 @@ ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
 // (Karlik et al. 2019) is used only where a BSDF sample can reach the same direction: the MIS
 // strategies at non-delta vertices (the adaptive strategy keeps a BSDF share, below). Delta
 // vertices draw no light sample, and rays they scatter count in full (escaped stage), so
-// nothing needs the full distribution in these strategies.
+// nothing needs the full distribution in these strategies. A rough dielectric's BSDF sample
+// reaches every direction of either hemisphere where it transmits or reflects anything
+// (dielectric.h), so the compensated distribution serves it over the whole sphere too.
 ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p) {
     return p.strategy == ETK_STRATEGY_COMPENSATED ? S.env_dist_comp : S.env_dist;
 }
@@ -172,7 +174,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     EtkSurface s = etk_path_surface(S, P, p, slot);
     if (depth == 0) // the camera ray's hit: the AOVs
         etk_aov_first_hit(F, p, pixel, s, etk_xyz(P.ray_d[slot]), P.hit[slot].x);
-    float3 t = s.t, b = s.b, ns = s.ns, ng = s.ng, wo = s.wo, origin = s.origin;
+    float3 t = s.t, b = s.b, ns = s.ns, ng = s.ng, wo = s.wo;
     EtkMaterial m = s.m;
     float3 beta = etk_xyz(P.beta[slot]);
     uint pair = 1u + 3u * (uint)depth;
@@ -231,12 +233,12 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 ok = bs.pdf > 0.0f;
             }
             float3 wi = etk_to_local(wi_world, t, b, ns);
-            if (ok && wi.z > 0.0f && dot(wi_world, ng) > 0.0f) {
+            if (ok && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float pb = etk_bsdf_pdf(m, wo, wi);
                 float wq = etk_share_weight(p.heuristic, share, pl, pb, from_light);
                 if (wq > 0.0f)
                     c = beta * etk_bsdf_eval(m, wo, wi) *
-                        etk_env_radiance_uv(S.env_texels, p.env, light_uv) * (wi.z * wq);
+                        etk_env_radiance_uv(S.env_texels, p.env, light_uv) * (fabs(wi.z) * wq);
             }
         } else {
             float2 light_uv; // map coordinates of the light direction
@@ -252,18 +254,21 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 pdf_light = ls.pdf;
             }
             float3 wi = etk_to_local(wi_world, t, b, ns);
-            if (pdf_light > 0.0f && wi.z > 0.0f && dot(wi_world, ng) > 0.0f) {
+            // Above the surface, or below it at a dielectric (it transmits light from there).
+            if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
                 float w = etk_strategy_is_mis(p.strategy)
                               ? etk_mis_weight(p.heuristic, pdf_light, etk_bsdf_pdf(m, wo, wi))
                               : 1.0f;
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
-                c = beta * f * L * (wi.z * w / pdf_light);
+                c = beta * f * L * (fabs(wi.z) * w / pdf_light);
             }
         }
         if (etk_max3(c) > 0.0f) {
             int k = (int)ETK_ATOMIC_INC(Q.counters + ETK_Q_SHADOW);
-            P.shadow_o[slot] = etk_f4(origin, 0.0f);
+            // Shadow rays stop at any surface, glass included: light through glass (caustics)
+            // is the continuation's to find, as indirect light, never the light sample's.
+            P.shadow_o[slot] = etk_f4(etk_surface_origin(s, wi_world), 0.0f);
             P.shadow_d[slot] = etk_f4(wi_world, 3.0e38f);
             P.shadow_L[slot] = etk_f4(c, 0.0f);
             Q.shadow[k] = slot;
@@ -280,6 +285,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     float3 wi_world, weight;
     float pdf; // p_bsdf of the direction for the adaptive strategy; else the pdf it was drawn with
     int delta_sample, b_from_light = 0;
+    float wz; // the direction's cosine in the shading frame: < 0 for a transmission
     if (adaptive && !delta && share > 1.0f &&
         etk_dims(p, pixel, ETK_PAIR_SHARE + (uint)depth).x < share - 1.0f) {
         // Continuation B drawn from the light distribution (last bounce, share > 1).
@@ -287,10 +293,11 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         wi_world = ls.dir;
         float3 wi = etk_to_local(wi_world, t, b, ns);
         pdf = etk_bsdf_pdf(m, wo, wi);
-        if (!(ls.pdf > 0.0f) || !(pdf > 0.0f) || wi.z <= 0.0f)
+        if (!(ls.pdf > 0.0f) || !(pdf > 0.0f) || wi.z == 0.0f)
             return;
-        weight =
-            etk_bsdf_eval(m, wo, wi) * (wi.z / etk_share_continuation_density(share, ls.pdf, pdf));
+        weight = etk_bsdf_eval(m, wo, wi) *
+                 (fabs(wi.z) / etk_share_continuation_density(share, ls.pdf, pdf));
+        wz = wi.z;
         delta_sample = 0;
         b_from_light = 1;
     } else {
@@ -298,6 +305,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         if (!(bs.pdf > 0.0f))
             return;
         wi_world = etk_from_local(bs.wi, t, b, ns);
+        wz = bs.wi.z;
         weight = bs.weight;
         pdf = bs.pdf;
         delta_sample = bs.delta;
@@ -306,8 +314,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             weight = weight * (pdf / etk_share_continuation_density(share, pl, pdf));
         }
     }
-    if (dot(wi_world, ng) <= 0.0f)
-        return; // below the geometric surface: the shading normal would leak light
+    if (!etk_same_side(wz, dot(wi_world, ng)))
+        return; // across the geometric surface from its shading side: would leak light
     beta = beta * weight;
     if (depth + 1 >= p.rr_depth) {
         float survive = fmin(0.95f, etk_max3(beta));
@@ -317,7 +325,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     }
     if (!(etk_max3(beta) > 0.0f) || !isfinite(etk_max3(beta)))
         return;
-    P.ray_o[slot] = etk_f4(origin, (float)(depth + 1));
+    P.ray_o[slot] = etk_f4(etk_surface_origin(s, wi_world), (float)(depth + 1));
     P.ray_d[slot] = etk_f4(normalize(wi_world), delta_sample ? -1.0f : pdf);
     P.beta[slot] = etk_f4(beta, etk_share_code(share, b_from_light, flags));
     Q.ray_out[ETK_ATOMIC_INC(Q.counters + ETK_Q_RAY_OUT)] = slot;

@@ -35,11 +35,32 @@ ETK_FN float3 etk_camera_dir(EtkParams p, int pixel) {
 }
 
 // A surface point's shading frame (t, b, ns), the geometric normal facing the viewer, the
-// outgoing direction in the frame, the material and the origin of rays leaving it.
+// outgoing direction in the frame, the material and the origin of rays leaving it: `origin` on
+// the viewer's side, `origin_back` on the other (rays a dielectric transmits).
 typedef struct {
     float3 t, b, ns, ng, origin, wo;
     EtkMaterial m;
+    float3 origin_back;
 } EtkSurface;
+
+// The origin of a ray leaving the surface in world direction wi: offset to wi's side of the
+// geometric surface, so that a transmitted ray does not hit the surface it crossed.
+ETK_FN float3 etk_surface_origin(EtkSurface s, float3 wi_world) {
+    return dot(wi_world, s.ng) < 0.0f ? s.origin_back : s.origin;
+}
+
+// Whether a direction's local cosine wz (shading frame) and its world side (dwg = dot(wi, ng))
+// agree: a direction on one side of the shading surface but the other of the geometric one
+// would leak light through the shading normal's tilt. Both above: reflection; both below:
+// transmission (only dielectrics evaluate to non-zero there).
+ETK_FN int etk_same_side(float wz, float dwg) {
+    return (wz > 0.0f && dwg > 0.0f) || (wz < 0.0f && dwg < 0.0f);
+}
+// The same for a light sample at a surface of material m, which only a dielectric can receive
+// from below: the test rejects the other half of the sphere before anything is evaluated.
+ETK_FN int etk_light_side_ok(EtkMaterial m, float wz, float dwg) {
+    return etk_same_side(wz, dwg) && (wz > 0.0f || etk_bsdf_is_dielectric(m));
+}
 
 // The surface at the closest hit h of the ray (o, d). Surfaces are two-sided; the shading
 // normal is flipped to the geometric normal's side.
@@ -55,7 +76,8 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, Et
     float nl = length(ns);
     ns = nl > 0.0f && isfinite(nl) ? ns / nl : ng;
     float3 wo_world = -d;
-    if (dot(ng, wo_world) < 0.0f)
+    int front = dot(ng, wo_world) >= 0.0f; // the triangle's winding faces the viewer
+    if (!front)
         ng = -ng;
     if (dot(ns, ng) < 0.0f)
         ns = -ns;
@@ -66,8 +88,13 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, Et
     s.m = etk_material_load(S.materials, S.tri_material[prim]);
     s.m = etk_material_textured(S, s.m, S.tri_material[prim], prim, h.b1, h.b2);
     s.m.vndf = p.bsdf_sampling;
+    // A dielectric's outside is its front face (counter-clockwise winding, the OBJ convention):
+    // from the back, the ray is inside and sees 1 / ior.
+    if (!front && etk_bsdf_is_dielectric(s.m))
+        s.m.eta = 1.0f / s.m.eta;
     float scale = fmax(fmax(fabs(pos.x), fabs(pos.y)), fmax(fabs(pos.z), 1.0f));
     s.origin = pos + ng * (p.ray_epsilon * scale);
+    s.origin_back = pos - ng * (p.ray_epsilon * scale);
     return s;
 }
 

@@ -276,7 +276,8 @@ INSTANTIATE_TEST_SUITE_P(Shipped, OclgrindScenes,
                                            SceneCase{"cornell_box.json", "meshes/cornell_box.obj"},
                                            SceneCase{"matpreview.json",
                                                      "envmaps/museum_wells6.exr"},
-                                           SceneCase{"bunny_grace.json", "envmaps/grace.hdr"}),
+                                           SceneCase{"bunny_grace.json", "envmaps/grace.hdr"},
+                                           SceneCase{"glass.json", "envmaps/royal_esplanade_1k.hdr"}),
                          [](const auto& info) {
                              std::string n = info.param.file;
                              return n.substr(0, n.find('.'));

@@ -156,6 +156,28 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
                                mat.specular_tex >= 0
                            ? ETK_MAT_MICROFACET
                            : ETK_MAT_DIFFUSE;
+            // illum 4, 6, 7 (the MTL's refracting "glass" models) become a dielectric: index Ni
+            // (1.5 where Ni is absent or <= 1: an unrefracting glass is rarely meant), tint Tf
+            // (white where absent or black), smooth unless Pr (PBR roughness) is set.
+            if (m.illum == 4 || m.illum == 6 || m.illum == 7) {
+                const float pr = std::isfinite(m.roughness) ? m.roughness : 0.0f;
+                mat.type = pr >= 1e-3f ? ETK_MAT_DIELECTRIC : ETK_MAT_SMOOTH_DIELECTRIC;
+                mat.roughness = std::clamp(pr, 0.0f, 1.0f);
+                mat.ior = std::isfinite(m.ior) && m.ior > 1.0f ? std::min(m.ior, 4.0f) : 1.5f;
+                glm::vec3 tf(0.0f);
+                for (int k = 0; k < 3; ++k)
+                    tf[k] = std::isfinite(m.transmittance[k])
+                                ? std::clamp(float(m.transmittance[k]), 0.0f, 1.0f)
+                                : 0.0f;
+                mat.albedo = std::max({tf.x, tf.y, tf.z}) > 0.0f ? tf : glm::vec3(1.0f);
+                // A dielectric keeps its tint in albedo and its index in specular.x (bsdf.h):
+                // colour maps would overwrite them, so glass takes no textures.
+                if (mat.albedo_tex >= 0 || mat.specular_tex >= 0 || mat.roughness_tex >= 0)
+                    warn(path + ": material " + m.name +
+                         ": a refracting material (illum " + std::to_string(m.illum) +
+                         ") takes no texture maps; they are ignored");
+                mat.albedo_tex = mat.specular_tex = mat.roughness_tex = -1;
+            }
             materials.push_back(mat);
         }
     }

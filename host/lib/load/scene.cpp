@@ -126,7 +126,7 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
     Material m;
     m.name = name;
     r.expect_object(j);
-    r.warn_unknown_keys(j, {"type", "albedo", "specular", "roughness"});
+    r.warn_unknown_keys(j, {"type", "albedo", "specular", "roughness", "ior", "tint"});
     const std::string type = r.string(j, "type", "diffuse");
     if (type == "diffuse") {
         m.type = ETK_MAT_DIFFUSE;
@@ -137,10 +137,28 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
     } else if (type == "mirror") {
         m.type = ETK_MAT_MIRROR;
         m.specular = glm::vec3(1.0f);
+    } else if (type == "dielectric" || type == "glass") {
+        // Glass: roughness 0 (the default) is the smooth interface, else a GGX one; "tint"
+        // colours the transmission at each crossing.
+        m.type = ETK_MAT_DIELECTRIC;
+        m.roughness = read_float(j, "roughness", 0.0f, 0.0f, 1.0f, r);
+        if (m.roughness < 1e-3f) // the GGX alpha's floor (bsdf.h): below it, a delta lobe
+            m.type = ETK_MAT_SMOOTH_DIELECTRIC;
+        m.ior = read_float(j, "ior", 1.5f, 0.25f, 4.0f, r);
+        m.albedo = glm::clamp(read_vec3(j, "tint", glm::vec3(1.0f), r), 0.0f, 1.0f);
+        for (const char* key : {"albedo", "specular"})
+            if (j.contains(key))
+                r.at(key).fail(std::string("a dielectric has no ") + key +
+                               " (use \"tint\" for a coloured transmission, \"ior\", "
+                               "\"roughness\")");
+        return m;
     } else {
         r.at("type").fail("unknown material type " + json_excerpt(j["type"]) +
-                          " (use diffuse, microfacet, plastic or mirror)");
+                          " (use diffuse, microfacet, plastic, mirror or dielectric)");
     }
+    for (const char* key : {"ior", "tint"})
+        if (j.contains(key))
+            r.at(key).fail(std::string("only a dielectric material has \"") + key + "\"");
     // Each may be a texture instead of a constant (load/texture.h).
     m.albedo_tex = read_texture_param(j, "albedo", TextureUse::colour, dir, r, textures);
     m.specular_tex = read_texture_param(j, "specular", TextureUse::colour, dir, r, textures);

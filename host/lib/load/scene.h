@@ -21,6 +21,7 @@ struct Material {
     float roughness = 0.3f;
     // Textures (indices into Scene::textures, -1: none) that replace albedo, specular, roughness.
     int albedo_tex = -1, specular_tex = -1, roughness_tex = -1;
+    float ior = 1.5f; // dielectrics: index of refraction inside (the front face is outside)
 };
 
 struct Camera {

@@ -114,7 +114,7 @@ std::vector<int> share_bins(const std::vector<Material>& materials) {
         std::vector<std::pair<int, int>> keys;
         for (const Material& m : materials) {
             const int octave =
-                m.type == ETK_MAT_MICROFACET
+                m.type == ETK_MAT_MICROFACET || m.type == ETK_MAT_DIELECTRIC
                     ? static_cast<int>(std::floor(std::log2(std::max(m.roughness, 1e-3f))))
                     : 0;
             const std::pair<int, int> key{m.type, octave};
@@ -135,8 +135,10 @@ void add_materials(const Scene& scene, DeviceScene& d) {
         float type_bits;
         std::memcpy(&type_bits, &type, 4);
         d.materials.push_back(etk::make_float4(m.albedo.x, m.albedo.y, m.albedo.z, type_bits));
-        d.materials.push_back(
-            etk::make_float4(m.specular.x, m.specular.y, m.specular.z, m.roughness));
+        // Dielectrics keep their ior where the others keep F0 (bsdf.h).
+        const bool glass = m.type == ETK_MAT_DIELECTRIC || m.type == ETK_MAT_SMOOTH_DIELECTRIC;
+        d.materials.push_back(etk::make_float4(glass ? m.ior : m.specular.x, m.specular.y,
+                                               m.specular.z, m.roughness));
     }
     if (d.materials.empty())
         d.materials.resize(2);
