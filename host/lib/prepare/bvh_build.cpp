@@ -34,31 +34,20 @@ float as_float_bits(uint32_t u) {
     return f;
 }
 
-// The binary tree as built, before flattening into the kernels' two-box layout.
-struct TreeNode {
-    Box box;
-    int left = -1, right = -1; // children; -1 for a leaf
-    int first = 0, count = 0;  // leaf triangles
-};
-
 struct Builder {
     const std::vector<Box>& boxes;
     const std::vector<glm::vec3>& centroids;
     std::vector<int>& order;
-    std::vector<TreeNode>& nodes;
+    std::vector<BvhTreeNode>& nodes;
     int max_leaf;
-    int depth = 0;
-    double cost = 0.0;
-    float root_area = 1.0f;
-
     void set_leaf(int n, const Box& b, int first, int count) {
-        nodes[n].box = b;
+        nodes[n].lo = b.lo;
+        nodes[n].hi = b.hi;
         nodes[n].first = first;
         nodes[n].count = count;
     }
 
     void build(int node, int begin, int end, int level) {
-        depth = std::max(depth, level);
         Box bounds, cbounds;
         for (int i = begin; i < end; ++i) {
             bounds.grow(boxes[order[i]]);
@@ -66,10 +55,7 @@ struct Builder {
         }
         const int count = end - begin;
         const float area = bounds.area();
-        auto make_leaf = [&] {
-            set_leaf(node, bounds, begin, count);
-            cost += area / root_area * count;
-        };
+        auto make_leaf = [&] { set_leaf(node, bounds, begin, count); };
         if (count <= 1 || level >= kMaxDepth) {
             make_leaf();
             return;
@@ -122,7 +108,7 @@ struct Builder {
                 auto mid = std::partition(order.begin() + begin, order.begin() + end,
                                           [&](int t) { return bin_of(t) <= split; });
                 int m = static_cast<int>(mid - order.begin());
-                emit_inner(node, bounds, begin, m, end, level, area);
+                emit_inner(node, bounds, begin, m, end, level);
                 return;
             }
         }
@@ -134,48 +120,60 @@ struct Builder {
         std::nth_element(order.begin() + begin, order.begin() + (begin + end) / 2,
                          order.begin() + end,
                          [&](int a, int b) { return centroids[a][axis] < centroids[b][axis]; });
-        emit_inner(node, bounds, begin, (begin + end) / 2, end, level, area);
+        emit_inner(node, bounds, begin, (begin + end) / 2, end, level);
     }
 
-    void emit_inner(int node, const Box& bounds, int begin, int mid, int end, int level,
-                    float area) {
-        cost += area / root_area;
+    void emit_inner(int node, const Box& bounds, int begin, int mid, int end, int level) {
         const int left = static_cast<int>(nodes.size());
         nodes.emplace_back();
         build(left, begin, mid, level + 1);
         const int right = static_cast<int>(nodes.size());
         nodes.emplace_back();
         build(right, mid, end, level + 1);
-        nodes[node].box = bounds;
+        nodes[node].lo = bounds.lo;
+        nodes[node].hi = bounds.hi;
         nodes[node].left = left;
         nodes[node].right = right;
     }
 };
 
 // Flattens the tree depth-first into inner nodes of four float4 (kernels/bvh.h): each holds both
-// children's boxes; a leaf child carries its triangles, an inner child its node index.
+// children's boxes; a leaf child carries its triangles, an inner child its node index. Measures
+// depth and SAH cost on the way.
 struct Flattener {
-    const std::vector<TreeNode>& tree;
+    const std::vector<BvhTreeNode>& tree;
     std::vector<etk::float4>& out;
+    double root_area = 1.0;
+    double cost = 0.0;
+    int depth = 0;
 
-    void child(int slot, int c) {
-        const TreeNode& t = tree[c];
+    double area(const BvhTreeNode& t) const {
+        Box b;
+        b.lo = t.lo;
+        b.hi = t.hi;
+        return b.area() / root_area;
+    }
+    void child(int slot, int c, int level) {
+        const BvhTreeNode& t = tree[c];
         uint32_t meta, flags;
         if (t.left < 0) {
             meta = static_cast<uint32_t>(t.first);
             flags = 0x80000000u | static_cast<uint32_t>(t.count);
+            cost += area(t) * t.count;
+            depth = std::max(depth, level);
         } else {
-            meta = static_cast<uint32_t>(emit(c));
+            meta = static_cast<uint32_t>(emit(c, level));
             flags = 0u;
         }
-        out[slot] = etk::make_float4(t.box.lo.x, t.box.lo.y, t.box.lo.z, as_float_bits(meta));
-        out[slot + 1] = etk::make_float4(t.box.hi.x, t.box.hi.y, t.box.hi.z, as_float_bits(flags));
+        out[slot] = etk::make_float4(t.lo.x, t.lo.y, t.lo.z, as_float_bits(meta));
+        out[slot + 1] = etk::make_float4(t.hi.x, t.hi.y, t.hi.z, as_float_bits(flags));
     }
-    int emit(int n) {
+    int emit(int n, int level) {
         const int index = static_cast<int>(out.size() / 4);
+        cost += area(tree[n]);
         out.resize(out.size() + 4);
-        child(4 * index, tree[n].left);
-        child(4 * index + 2, tree[n].right);
+        child(4 * index, tree[n].left, level + 1);
+        child(4 * index + 2, tree[n].right, level + 1);
         return index;
     }
 };
@@ -184,7 +182,6 @@ struct Flattener {
 
 Bvh build_bvh(const TriangleSoup& soup, int max_leaf) {
     Timer timer;
-    Bvh bvh;
     const int n = static_cast<int>(soup.size());
     std::vector<Box> boxes(n);
     std::vector<glm::vec3> centroids(n);
@@ -193,36 +190,49 @@ Bvh build_bvh(const TriangleSoup& soup, int max_leaf) {
             boxes[t].grow(soup.positions[3 * t + k]);
         centroids[t] = 0.5f * (boxes[t].lo + boxes[t].hi);
     }
-    bvh.order.resize(n);
+    std::vector<int> order(n);
     for (int t = 0; t < n; ++t)
-        bvh.order[t] = t;
-    std::vector<TreeNode> tree(1);
+        order[t] = t;
+    std::vector<BvhTreeNode> tree(1);
     if (n > 0) {
-        Builder b{boxes, centroids, bvh.order, tree, std::max(1, max_leaf)};
-        Box root;
-        for (const auto& bx : boxes)
-            root.grow(bx);
-        b.root_area = std::max(root.area(), 1e-30f);
+        Builder b{boxes, centroids, order, tree, std::max(1, max_leaf)};
         b.build(0, 0, n, 0);
-        bvh.depth = b.depth;
-        bvh.sah_cost = b.cost;
+    }
+    Bvh bvh = flatten_bvh(std::move(tree), std::move(order));
+    bvh.build_seconds = timer.seconds();
+    return bvh;
+}
+
+Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
+    Bvh bvh;
+    if (tree.empty() || order.empty()) {
+        tree.assign(1, BvhTreeNode{});
+        tree[0].lo = tree[0].hi = glm::vec3(0.0f);
     }
     if (tree[0].left < 0) {
         // A single leaf (or no triangle at all): a root whose children are that leaf and an
         // empty one, so the kernels always start from an inner node.
-        TreeNode leaf = tree[0], empty;
-        empty.box.lo = empty.box.hi = glm::vec3(0.0f);
-        if (n == 0)
+        BvhTreeNode leaf = tree[0], empty;
+        empty.lo = empty.hi = glm::vec3(0.0f);
+        if (order.empty())
             leaf = empty;
-        tree.assign(1, TreeNode{});
+        tree.assign(1, BvhTreeNode{});
+        tree[0].lo = leaf.lo;
+        tree[0].hi = leaf.hi;
         tree[0].left = 1;
         tree[0].right = 2;
         tree.push_back(leaf);
         tree.push_back(empty);
     }
+    Box root;
+    root.lo = tree[0].lo;
+    root.hi = tree[0].hi;
     Flattener f{tree, bvh.nodes};
-    f.emit(0);
-    bvh.build_seconds = timer.seconds();
+    f.root_area = std::max(root.area(), 1e-30f);
+    f.emit(0, 0);
+    bvh.depth = f.depth;
+    bvh.sah_cost = order.empty() ? 0.0 : f.cost;
+    bvh.order = std::move(order);
     return bvh;
 }
 

@@ -20,6 +20,18 @@ struct Bvh {
 // Leaves hold at most `max_leaf` triangles; depth stays below the kernels' stack size.
 Bvh build_bvh(const TriangleSoup& soup, int max_leaf = 4);
 
+// A binary tree as a builder makes it, before flattening into the kernels' layout. Node 0 is the
+// root; a leaf (left < 0) holds triangles order[first .. first + count).
+struct BvhTreeNode {
+    glm::vec3 lo{1e30f}, hi{-1e30f};
+    int left = -1, right = -1;
+    int first = 0, count = 0;
+};
+
+// The kernels' layout of any binary tree (also one made by another builder: tools/bench), with
+// its depth and SAH cost; build_seconds is left to the caller.
+Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order);
+
 // Triangles in BVH order as the kernels read them: v0, e1, e2 (three float4 each); one all-zero
 // triangle for an empty soup (device buffers cannot be empty).
 std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup, const std::vector<int>& order);
