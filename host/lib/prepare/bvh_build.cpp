@@ -25,7 +25,7 @@ struct Box {
     }
 };
 
-constexpr int kBins = 16;
+constexpr int kBins = 32;
 constexpr int kMaxDepth = ETK_BVH_STACK - 4;
 
 float as_float_bits(uint32_t u) {
@@ -47,6 +47,10 @@ struct Builder {
         nodes[n].count = count;
     }
 
+    int bin_of(int t, int axis, float lo, float scale) const {
+        return std::min(kBins - 1, static_cast<int>((centroids[t][axis] - lo) * scale));
+    }
+
     void build(int node, int begin, int end, int level) {
         Box bounds, cbounds;
         for (int i = begin; i < end; ++i) {
@@ -60,21 +64,20 @@ struct Builder {
             make_leaf();
             return;
         }
-        // Binned SAH over the largest centroid extent.
+        // Binned SAH over all three axes (issue 12: the largest extent alone left the SAH cost
+        // of the bunny scene 1.7x that of Embree's builder); the cheapest split wins.
         glm::vec3 ext = cbounds.hi - cbounds.lo;
         int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
-        int split = -1;
+        int split = -1, split_axis = -1;
         float best = 1e30f;
-        if (ext[axis] > 0.0f) {
+        for (int ax = 0; ax < 3; ++ax) {
+            if (!(ext[ax] > 0.0f))
+                continue;
             Box bin_box[kBins];
             int bin_count[kBins] = {};
-            const float scale = kBins / ext[axis];
-            auto bin_of = [&](int t) {
-                return std::min(kBins - 1,
-                                static_cast<int>((centroids[t][axis] - cbounds.lo[axis]) * scale));
-            };
+            const float scale = kBins / ext[ax];
             for (int i = begin; i < end; ++i) {
-                int b = bin_of(order[i]);
+                int b = bin_of(order[i], ax, cbounds.lo[ax], scale);
                 ++bin_count[b];
                 bin_box[b].grow(boxes[order[i]]);
             }
@@ -99,18 +102,21 @@ struct Builder {
                 if (c < best) {
                     best = c;
                     split = b;
+                    split_axis = ax;
                 }
             }
-            // SAH: traversal cost 1, intersection cost 1 per triangle.
-            if (split >= 0 && count <= max_leaf && best / area + 1.0f >= count)
-                split = -1;
-            if (split >= 0) {
-                auto mid = std::partition(order.begin() + begin, order.begin() + end,
-                                          [&](int t) { return bin_of(t) <= split; });
-                int m = static_cast<int>(mid - order.begin());
-                emit_inner(node, bounds, begin, m, end, level);
-                return;
-            }
+        }
+        // SAH: traversal cost 1, intersection cost 1 per triangle.
+        if (split >= 0 && count <= max_leaf && best / area + 1.0f >= count)
+            split = -1;
+        if (split >= 0) {
+            const float lo = cbounds.lo[split_axis], scale = kBins / ext[split_axis];
+            auto mid = std::partition(order.begin() + begin, order.begin() + end, [&](int t) {
+                return bin_of(t, split_axis, lo, scale) <= split;
+            });
+            int m = static_cast<int>(mid - order.begin());
+            emit_inner(node, bounds, begin, m, end, level);
+            return;
         }
         if (count <= max_leaf) {
             make_leaf();
