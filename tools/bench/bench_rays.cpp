@@ -255,7 +255,7 @@ et::Bvh embree_built_tree(RTCDevice device, const et::TriangleSoup& soup, RTCBui
     a.buildFlags = RTC_BUILD_FLAG_NONE;
     a.buildQuality = q;
     a.maxBranchingFactor = 2;
-    a.maxDepth = ETK_BVH_STACK - 4;
+    a.maxDepth = 60; // as envtrace's builder (kMaxDepth)
     a.sahBlockSize = 1;
     a.minLeafSize = 1;
     a.maxLeafSize = 4;

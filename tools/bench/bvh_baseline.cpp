@@ -26,7 +26,7 @@ struct Box {
 };
 
 constexpr int kBins = 16;
-constexpr int kMaxDepth = ETK_BVH_STACK - 4;
+constexpr int kMaxDepth = BASELINE_BVH_STACK - 4;
 
 float as_float_bits(uint32_t u) {
     float f;

@@ -7,6 +7,7 @@
 
 #include <vector>
 
+#define BASELINE_BVH_STACK 64
 namespace baseline {
 using namespace etk;
 using etk::EtkHit;
@@ -101,7 +102,7 @@ inline int bvh_traverse(const float4* nodes, const float4* tris,
     hit->prim = -1;
     hit->b1 = hit->b2 = 0.0f;
     float3 inv_dir = b_safe_inverse(dir);
-    int stack[ETK_BVH_STACK];
+    int stack[BASELINE_BVH_STACK];
     int sp = 0;
     int node = 0;
     for (;;) {
@@ -125,7 +126,7 @@ inline int bvh_traverse(const float4* nodes, const float4* tris,
         if (in0 && in1) {
             int near_child = b_child_meta(t0 <= t1 ? lo0 : lo1);
             int far_child = b_child_meta(t0 <= t1 ? lo1 : lo0);
-            if (sp < ETK_BVH_STACK)
+            if (sp < BASELINE_BVH_STACK)
                 stack[sp++] = far_child;
             node = near_child;
         } else if (in0) {

@@ -1,10 +1,12 @@
 #include "prepare/bvh_build.h"
 
 #include "kernels/bvh.h"
+#include "util/error.h"
 #include "util/timer.h"
 
 #include <algorithm>
 #include <cstring>
+#include <string>
 
 namespace et {
 namespace {
@@ -26,7 +28,9 @@ struct Box {
 };
 
 constexpr int kBins = 32;
-constexpr int kMaxDepth = ETK_BVH_STACK - 4;
+// Binary depth limit: the 4-wide tree then has at most 31 levels, and traversal needs at most
+// 1 + 3 x 31 stack entries (kernels/bvh.h).
+constexpr int kMaxDepth = 60;
 
 float as_float_bits(uint32_t u) {
     float f;
@@ -143,15 +147,18 @@ struct Builder {
     }
 };
 
-// Flattens the tree depth-first into inner nodes of four float4 (kernels/bvh.h): each holds both
-// children's boxes; a leaf child carries its triangles, an inner child its node index. Measures
-// depth and SAH cost on the way.
+// Flattens the binary tree depth-first into 4-wide nodes of eight float4 (kernels/bvh.h). A node's
+// children are its binary node's children, each inner one replaced by its own two children (so
+// every path descends at least two binary levels per node, and the 4-wide depth is at most half
+// the binary one, plus one), then, while a lane is free, the inner child of largest area replaced
+// by its children. Leaf children carry their triangles, inner ones their node index. Measures
+// the binary tree's depth and SAH cost on the way.
 struct Flattener {
     const std::vector<BvhTreeNode>& tree;
     std::vector<etk::float4>& out;
     double root_area = 1.0;
     double cost = 0.0;
-    int depth = 0;
+    int depth = 0, wide_depth = 0;
 
     double area(const BvhTreeNode& t) const {
         Box b;
@@ -159,27 +166,66 @@ struct Flattener {
         b.hi = t.hi;
         return b.area() / root_area;
     }
-    void child(int slot, int c, int level) {
-        const BvhTreeNode& t = tree[c];
-        uint32_t meta, flags;
+    // SAH cost and depth of the binary tree below n (at `level`).
+    void measure(int n, int level) {
+        const BvhTreeNode& t = tree[n];
         if (t.left < 0) {
-            meta = static_cast<uint32_t>(t.first);
-            flags = 0x80000000u | static_cast<uint32_t>(t.count);
             cost += area(t) * t.count;
             depth = std::max(depth, level);
-        } else {
-            meta = static_cast<uint32_t>(emit(c, level));
-            flags = 0u;
+            return;
         }
-        out[slot] = etk::make_float4(t.lo.x, t.lo.y, t.lo.z, as_float_bits(meta));
-        out[slot + 1] = etk::make_float4(t.hi.x, t.hi.y, t.hi.z, as_float_bits(flags));
+        cost += area(t);
+        measure(t.left, level + 1);
+        measure(t.right, level + 1);
     }
     int emit(int n, int level) {
-        const int index = static_cast<int>(out.size() / 4);
-        cost += area(tree[n]);
-        out.resize(out.size() + 4);
-        child(4 * index, tree[n].left, level + 1);
-        child(4 * index + 2, tree[n].right, level + 1);
+        wide_depth = std::max(wide_depth, level);
+        std::vector<int> kids;
+        for (int c : {tree[n].left, tree[n].right}) {
+            if (tree[c].left < 0) {
+                kids.push_back(c);
+            } else {
+                kids.push_back(tree[c].left);
+                kids.push_back(tree[c].right);
+            }
+        }
+        while (kids.size() < 4) {
+            int best = -1;
+            for (int k = 0; k < static_cast<int>(kids.size()); ++k)
+                if (tree[kids[k]].left >= 0 && (best < 0 || area(tree[kids[k]]) > area(tree[kids[best]])))
+                    best = k;
+            if (best < 0)
+                break;
+            const int c = kids[best];
+            kids[best] = tree[c].left;
+            kids.push_back(tree[c].right);
+        }
+        const int index = static_cast<int>(out.size() / ETK_BVH_NODE);
+        out.resize(out.size() + ETK_BVH_NODE);
+        float lane[8][4];
+        for (int k = 0; k < 4; ++k) {
+            uint32_t meta = 0u, flags = 0x80000000u; // an unused lane: empty leaf, point box
+            glm::vec3 lo(0.0f), hi(0.0f);
+            if (k < static_cast<int>(kids.size())) {
+                const BvhTreeNode& t = tree[kids[k]];
+                lo = t.lo;
+                hi = t.hi;
+                if (t.left < 0) {
+                    meta = static_cast<uint32_t>(t.first);
+                    flags = 0x80000000u | static_cast<uint32_t>(t.count);
+                } else {
+                    meta = static_cast<uint32_t>(emit(kids[k], level + 1));
+                    flags = 0u;
+                }
+            }
+            const float v[8] = {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, as_float_bits(meta),
+                                as_float_bits(flags)};
+            for (int r = 0; r < 8; ++r)
+                lane[r][k] = v[r];
+        }
+        for (int r = 0; r < 8; ++r)
+            out[ETK_BVH_NODE * index + r] =
+                etk::make_float4(lane[r][0], lane[r][1], lane[r][2], lane[r][3]);
         return index;
     }
 };
@@ -235,8 +281,14 @@ Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
     root.hi = tree[0].hi;
     Flattener f{tree, bvh.nodes};
     f.root_area = std::max(root.area(), 1e-30f);
+    f.measure(0, 0);
     f.emit(0, 0);
+    if (1 + 3 * (f.wide_depth + 1) > ETK_BVH_STACK) // kMaxDepth keeps the builder's trees within
+        throw Error("BVH of depth " + std::to_string(f.wide_depth + 1) +
+                    " (4-wide) needs more than the kernels' stack of " +
+                    std::to_string(ETK_BVH_STACK));
     bvh.depth = f.depth;
+    bvh.wide_depth = f.wide_depth + 1;
     bvh.sah_cost = order.empty() ? 0.0 : f.cost;
     bvh.order = std::move(order);
     return bvh;

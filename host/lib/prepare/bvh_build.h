@@ -1,7 +1,7 @@
 // Bounding volume hierarchy over a triangle soup: binned SAH build, flattened to the layout the
 // kernels traverse (kernels/bvh.h).
 #pragma once
-#include "kernels/compat.h"
+#include "kernels/bvh.h"
 #include "load/scene.h"
 
 #include <vector>
@@ -9,12 +9,13 @@
 namespace et {
 
 struct Bvh {
-    std::vector<etk::float4> nodes; // four per inner node (kernels/bvh.h)
+    std::vector<etk::float4> nodes; // ETK_BVH_NODE per 4-wide node (kernels/bvh.h)
     std::vector<int> order; // triangle order: flattened triangle i is soup triangle order[i]
-    int depth = 0;
+    int depth = 0;      // of the binary tree the builder made (leaves' level)
+    int wide_depth = 0; // of the 4-wide tree the kernels traverse (nodes on the longest path)
     double build_seconds = 0.0;
-    double sah_cost = 0.0; // expected cost: traversal 1, triangle test 1, relative to the root area
-    int node_count() const { return static_cast<int>(nodes.size() / 4); } // inner nodes
+    double sah_cost = 0.0; // of the binary tree: traversal 1, triangle test 1, per root area
+    int node_count() const { return static_cast<int>(nodes.size() / ETK_BVH_NODE); }
 };
 
 // Leaves hold at most `max_leaf` triangles; depth stays below the kernels' stack size.
