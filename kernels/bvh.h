@@ -27,20 +27,22 @@ typedef struct {
     float b1, b2; // barycentrics of v1 and v2
 } EtkHit;
 
-// Slab test of one lane's box against [0, tmax]; the slack keeps rays that graze a flat box from
-// missing it.
-ETK_FN int etk_box_hit(float lx, float ly, float lz, float hx, float hy, float hz, float3 org,
-                       float3 inv_dir, float tmax, float* tnear) {
-    float tx0 = (lx - org.x) * inv_dir.x, tx1 = (hx - org.x) * inv_dir.x;
-    float ty0 = (ly - org.y) * inv_dir.y, ty1 = (hy - org.y) * inv_dir.y;
-    float tz0 = (lz - org.z) * inv_dir.z, tz1 = (hz - org.z) * inv_dir.z;
+// Slab tests of a node's four boxes against [0, tmax], lane-wise (one vector operation per step
+// on both back ends): entry and exit distances. A lane is entered when tnear <= tfar * slack; the
+// slack keeps rays that graze a flat box from missing it.
+ETK_FN void etk_box_hit4(ETK_GLOBAL const float4* nd, float4 ox, float4 oy, float4 oz, float4 ix,
+                         float4 iy, float4 iz, float tmax, float4* tnear, float4* tfar) {
+    float4 tx0 = (nd[0] - ox) * ix, tx1 = (nd[3] - ox) * ix;
+    float4 ty0 = (nd[1] - oy) * iy, ty1 = (nd[4] - oy) * iy;
+    float4 tz0 = (nd[2] - oz) * iz, tz1 = (nd[5] - oz) * iz;
     // Finite operands only (etk_safe_inverse): plain min/max suffice.
-    float tn = ETK_MAXF(ETK_MAXF(ETK_MINF(tx0, tx1), ETK_MINF(ty0, ty1)),
-                        ETK_MAXF(ETK_MINF(tz0, tz1), 0.0f));
-    float tf = ETK_MINF(ETK_MINF(ETK_MAXF(tx0, tx1), ETK_MAXF(ty0, ty1)),
-                        ETK_MINF(ETK_MAXF(tz0, tz1), tmax));
-    *tnear = tn;
-    return tn <= tf * 1.00000024f;
+    float4 zero = make_float4(0.0f, 0.0f, 0.0f, 0.0f);
+    float4 tm = make_float4(tmax, tmax, tmax, tmax);
+    *tnear = ETK_MAXF(ETK_MAXF(ETK_MINF(tx0, tx1), ETK_MINF(ty0, ty1)),
+                      ETK_MAXF(ETK_MINF(tz0, tz1), zero));
+    *tfar = ETK_MINF(ETK_MINF(ETK_MAXF(tx0, tx1), ETK_MAXF(ty0, ty1)),
+                     ETK_MINF(ETK_MAXF(tz0, tz1), tm)) *
+            1.00000024f;
 }
 
 // Moller-Trumbore; updates hit when closer than hit->t. Written on scalar components: OpenCL
@@ -117,6 +119,11 @@ ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const flo
     hit->prim = -1;
     hit->b1 = hit->b2 = 0.0f;
     float3 inv_dir = etk_safe_inverse(dir);
+    float4 ox = make_float4(org.x, org.x, org.x, org.x), oy = make_float4(org.y, org.y, org.y, org.y);
+    float4 oz = make_float4(org.z, org.z, org.z, org.z);
+    float4 ix = make_float4(inv_dir.x, inv_dir.x, inv_dir.x, inv_dir.x);
+    float4 iy = make_float4(inv_dir.y, inv_dir.y, inv_dir.y, inv_dir.y);
+    float4 iz = make_float4(inv_dir.z, inv_dir.z, inv_dir.z, inv_dir.z);
     int stack[ETK_BVH_STACK];
     float stack_t[ETK_BVH_STACK];
     int sp = 1;
@@ -127,20 +134,20 @@ ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const flo
         if (!(stack_t[sp] <= hit->t * 1.0000005f))
             continue; // entered beyond the closest hit found since it was pushed
         ETK_GLOBAL const float4* nd = nodes + ETK_BVH_NODE * stack[sp];
-        float4 lx = nd[0], ly = nd[1], lz = nd[2], hx = nd[3], hy = nd[4], hz = nd[5];
+        float4 tn, tf;
+        etk_box_hit4(nd, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
         float4 meta = nd[6], flags = nd[7];
-        float t0, t1, t2, t3;
-        int in0 = etk_box_hit(lx.x, ly.x, lz.x, hx.x, hy.x, hz.x, org, inv_dir, hit->t, &t0);
-        int in1 = etk_box_hit(lx.y, ly.y, lz.y, hx.y, hy.y, hz.y, org, inv_dir, hit->t, &t1);
-        int in2 = etk_box_hit(lx.z, ly.z, lz.z, hx.z, hy.z, hz.z, org, inv_dir, hit->t, &t2);
-        int in3 = etk_box_hit(lx.w, ly.w, lz.w, hx.w, hy.w, hz.w, org, inv_dir, hit->t, &t3);
         int child[4];
         float tc[4];
         int n = 0;
-        if (etk_bvh_lane(tris, in0, t0, meta.x, flags.x, org, dir, any_hit, hit, child, tc, &n) ||
-            etk_bvh_lane(tris, in1, t1, meta.y, flags.y, org, dir, any_hit, hit, child, tc, &n) ||
-            etk_bvh_lane(tris, in2, t2, meta.z, flags.z, org, dir, any_hit, hit, child, tc, &n) ||
-            etk_bvh_lane(tris, in3, t3, meta.w, flags.w, org, dir, any_hit, hit, child, tc, &n))
+        if (etk_bvh_lane(tris, tn.x <= tf.x, tn.x, meta.x, flags.x, org, dir, any_hit, hit, child,
+                         tc, &n) ||
+            etk_bvh_lane(tris, tn.y <= tf.y, tn.y, meta.y, flags.y, org, dir, any_hit, hit, child,
+                         tc, &n) ||
+            etk_bvh_lane(tris, tn.z <= tf.z, tn.z, meta.z, flags.z, org, dir, any_hit, hit, child,
+                         tc, &n) ||
+            etk_bvh_lane(tris, tn.w <= tf.w, tn.w, meta.w, flags.w, org, dir, any_hit, hit, child,
+                         tc, &n))
             return 1;
         // Push far-first (insertion by entry distance, at most four), the nearest on top.
         if (sp + n > ETK_BVH_STACK) // never, for trees the host builds (see the top)
