@@ -74,32 +74,38 @@ struct Builder {
         int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
         int split = -1, split_axis = -1;
         float best = 1e30f;
+        // One pass bins the triangles along all three axes.
+        Box bin_box[3][kBins];
+        int bin_count[3][kBins] = {};
+        float scale[3];
+        for (int ax = 0; ax < 3; ++ax)
+            scale[ax] = ext[ax] > 0.0f ? kBins / ext[ax] : 0.0f;
+        for (int i = begin; i < end; ++i) {
+            const int t = order[i];
+            for (int ax = 0; ax < 3; ++ax) {
+                const int b = bin_of(t, ax, cbounds.lo[ax], scale[ax]);
+                ++bin_count[ax][b];
+                bin_box[ax][b].grow(boxes[t]);
+            }
+        }
         for (int ax = 0; ax < 3; ++ax) {
             if (!(ext[ax] > 0.0f))
                 continue;
-            Box bin_box[kBins];
-            int bin_count[kBins] = {};
-            const float scale = kBins / ext[ax];
-            for (int i = begin; i < end; ++i) {
-                int b = bin_of(order[i], ax, cbounds.lo[ax], scale);
-                ++bin_count[b];
-                bin_box[b].grow(boxes[order[i]]);
-            }
             float right_area[kBins];
             int right_count[kBins];
             Box acc;
             int n = 0;
             for (int b = kBins - 1; b > 0; --b) {
-                acc.grow(bin_box[b]);
-                n += bin_count[b];
+                acc.grow(bin_box[ax][b]);
+                n += bin_count[ax][b];
                 right_area[b] = acc.area();
                 right_count[b] = n;
             }
             acc = Box();
             n = 0;
             for (int b = 0; b < kBins - 1; ++b) {
-                acc.grow(bin_box[b]);
-                n += bin_count[b];
+                acc.grow(bin_box[ax][b]);
+                n += bin_count[ax][b];
                 if (n == 0 || right_count[b + 1] == 0)
                     continue;
                 float c = acc.area() * n + right_area[b + 1] * right_count[b + 1];
