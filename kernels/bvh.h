@@ -96,19 +96,29 @@ ETK_FN int etk_leaf_hit(ETK_GLOBAL const float4* tris, int first, int count, flo
 }
 
 // One lane of a node: a leaf the ray enters is intersected now (returns 1 for an any-hit
-// query that found one); an inner child it enters goes into the candidates (*n of them).
+// query that found one); an inner child it enters is pushed, in stack sorted order: entry
+// distances decrease towards the top, so the nearest is popped first. The host keeps the stack
+// within ETK_BVH_STACK (see the top); `base` is where this node's pushes began.
 ETK_FN int etk_bvh_lane(ETK_GLOBAL const float4* tris, int in, float t, float meta, float flags,
-                        float3 org, float3 dir, int any_hit, EtkHit* hit, int* child, float* tc,
-                        int* n) {
+                        float3 org, float3 dir, int any_hit, EtkHit* hit, int* stack,
+                        float* stack_t, int base, int* sp) {
     if (!in || !(t <= hit->t * 1.0000005f)) // slack: tnear and t round differently
         return 0;
     uint f = as_uint(flags);
     if (f & 0x80000000u)
         return etk_leaf_hit(tris, (int)as_uint(meta), (int)(f & 0x7fffffffu), org, dir, any_hit,
                             hit);
-    child[*n] = (int)as_uint(meta);
-    tc[*n] = t;
-    *n = *n + 1;
+    int j = *sp;
+    if (j >= ETK_BVH_STACK) // never, for trees the host builds
+        return 0;
+    while (j > base && stack_t[j - 1] < t) { // insertion: at most three moves
+        stack[j] = stack[j - 1];
+        stack_t[j] = stack_t[j - 1];
+        --j;
+    }
+    stack[j] = (int)as_uint(meta);
+    stack_t[j] = t;
+    *sp = *sp + 1;
     return 0;
 }
 
@@ -137,33 +147,16 @@ ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const flo
         float4 tn, tf;
         etk_box_hit4(nd, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
         float4 meta = nd[6], flags = nd[7];
-        int child[4];
-        float tc[4];
-        int n = 0;
-        if (etk_bvh_lane(tris, tn.x <= tf.x, tn.x, meta.x, flags.x, org, dir, any_hit, hit, child,
-                         tc, &n) ||
-            etk_bvh_lane(tris, tn.y <= tf.y, tn.y, meta.y, flags.y, org, dir, any_hit, hit, child,
-                         tc, &n) ||
-            etk_bvh_lane(tris, tn.z <= tf.z, tn.z, meta.z, flags.z, org, dir, any_hit, hit, child,
-                         tc, &n) ||
-            etk_bvh_lane(tris, tn.w <= tf.w, tn.w, meta.w, flags.w, org, dir, any_hit, hit, child,
-                         tc, &n))
-            return 1;
-        // Push far-first (insertion by entry distance, at most four), the nearest on top.
-        if (sp + n > ETK_BVH_STACK) // never, for trees the host builds (see the top)
-            n = ETK_BVH_STACK - sp;
         int base = sp;
-        for (int k = 0; k < n; ++k) {
-            int j = sp;
-            while (j > base && stack_t[j - 1] < tc[k]) {
-                stack[j] = stack[j - 1];
-                stack_t[j] = stack_t[j - 1];
-                --j;
-            }
-            stack[j] = child[k];
-            stack_t[j] = tc[k];
-            ++sp;
-        }
+        if (etk_bvh_lane(tris, tn.x <= tf.x, tn.x, meta.x, flags.x, org, dir, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(tris, tn.y <= tf.y, tn.y, meta.y, flags.y, org, dir, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(tris, tn.z <= tf.z, tn.z, meta.z, flags.z, org, dir, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(tris, tn.w <= tf.w, tn.w, meta.w, flags.w, org, dir, any_hit, hit, stack,
+                         stack_t, base, &sp))
+            return 1;
     }
     return hit->prim >= 0;
 }
