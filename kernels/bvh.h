@@ -129,7 +129,8 @@ ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const flo
     hit->prim = -1;
     hit->b1 = hit->b2 = 0.0f;
     float3 inv_dir = etk_safe_inverse(dir);
-    float4 ox = make_float4(org.x, org.x, org.x, org.x), oy = make_float4(org.y, org.y, org.y, org.y);
+    float4 ox = make_float4(org.x, org.x, org.x, org.x),
+           oy = make_float4(org.y, org.y, org.y, org.y);
     float4 oz = make_float4(org.z, org.z, org.z, org.z);
     float4 ix = make_float4(inv_dir.x, inv_dir.x, inv_dir.x, inv_dir.x);
     float4 iy = make_float4(inv_dir.y, inv_dir.y, inv_dir.y, inv_dir.y);

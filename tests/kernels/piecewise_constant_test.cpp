@@ -144,17 +144,25 @@ TEST(PiecewiseConstant1D, RandomUniformsOnRandomFunctions) {
 // every CDF entry and its neighbours (issue 12 shortened the search: the result must not move).
 TEST(PiecewiseConstant1D, SearchEqualsUpperBound) {
     std::mt19937 rng(12);
-    std::vector<int> sizes = {1, 2, 3, 4, 5, 7, 8, 9, 31, 32, 33, 100, 511, 512, 513, 1024, 4096,
-                              65535, 65536};
+    std::vector<int> sizes = {1,  2,   3,   4,   5,   7,    8,    9,     31,   32,
+                              33, 100, 511, 512, 513, 1024, 4096, 65535, 65536};
     for (int n : sizes)
         for (int kind = 0; kind < 4; ++kind) {
             std::vector<float> f(n);
             for (int i = 0; i < n; ++i) {
                 switch (kind) {
-                case 0: f[i] = static_cast<float>(rng() % 1000); break;    // random, some zeros
-                case 1: f[i] = rng() % 97 == 0 ? 1e6f : 1e-3f; break;      // peaky
-                case 2: f[i] = (i / 7) % 2 ? 0.0f : 1.0f; break;           // runs of zero mass
-                default: f[i] = i == n / 2 ? 1.0f : 0.0f; break;           // one cell
+                case 0:
+                    f[i] = static_cast<float>(rng() % 1000);
+                    break; // random, some zeros
+                case 1:
+                    f[i] = rng() % 97 == 0 ? 1e6f : 1e-3f;
+                    break; // peaky
+                case 2:
+                    f[i] = (i / 7) % 2 ? 0.0f : 1.0f;
+                    break; // runs of zero mass
+                default:
+                    f[i] = i == n / 2 ? 1.0f : 0.0f;
+                    break; // one cell
                 }
             }
             Dist1D d(f);

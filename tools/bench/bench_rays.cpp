@@ -77,15 +77,15 @@ template <typename F> void parallel_for(int threads, size_t n, F&& f) {
 template <typename Traverse>
 Tracer native_tracer(const std::vector<float4>& nodes, const std::vector<float4>& tris,
                      const std::vector<int>& order, int threads, Traverse traverse) {
-    return [&nodes, &tris, &order, threads, traverse](const Rays& r, bool any,
-                                                      std::vector<int>& out) {
-        parallel_for(threads, r.size(), [&](size_t i) {
-            etk::EtkHit h;
-            const int hit = traverse(nodes.data(), tris.data(), xyz(r.org[i]), xyz(r.dir[i]),
-                                     r.org[i].w, any ? 1 : 0, &h);
-            out[i] = !hit ? -1 : any ? 1 : order[h.prim];
-        });
-    };
+    return
+        [&nodes, &tris, &order, threads, traverse](const Rays& r, bool any, std::vector<int>& out) {
+            parallel_for(threads, r.size(), [&](size_t i) {
+                etk::EtkHit h;
+                const int hit = traverse(nodes.data(), tris.data(), xyz(r.org[i]), xyz(r.dir[i]),
+                                         r.org[i].w, any ? 1 : 0, &h);
+                out[i] = !hit ? -1 : any ? 1 : order[h.prim];
+            });
+        };
 }
 
 // The OpenCL back end: kernels/bvh_test.cl (etk_bvh_traverse, one ray per work-item).
@@ -344,9 +344,12 @@ et::Bvh embree_built_tree(RTCDevice device, const et::TriangleSoup& soup, RTCBui
     RTCBounds rb{1e30f, 1e30f, 1e30f, 0, -1e30f, -1e30f, -1e30f, 0};
     if (!root->leaf)
         for (const RTCBounds& c : root->bounds) {
-            rb.lower_x = std::min(rb.lower_x, c.lower_x), rb.upper_x = std::max(rb.upper_x, c.upper_x);
-            rb.lower_y = std::min(rb.lower_y, c.lower_y), rb.upper_y = std::max(rb.upper_y, c.upper_y);
-            rb.lower_z = std::min(rb.lower_z, c.lower_z), rb.upper_z = std::max(rb.upper_z, c.upper_z);
+            rb.lower_x = std::min(rb.lower_x, c.lower_x),
+            rb.upper_x = std::max(rb.upper_x, c.upper_x);
+            rb.lower_y = std::min(rb.lower_y, c.lower_y),
+            rb.upper_y = std::max(rb.upper_y, c.upper_y);
+            rb.lower_z = std::min(rb.lower_z, c.lower_z),
+            rb.upper_z = std::max(rb.upper_z, c.upper_z);
         }
     convert(root, rb);
     rtcReleaseBVH(bvh);
@@ -453,15 +456,14 @@ int main(int argc, char** argv) try {
         int nodes_bytes = 0;
     };
     std::vector<Entry> entries;
-    entries.push_back({"envtrace native", native_tracer(ds.nodes, ds.tris, cur.order, threads,
-                                                        &etk::etk_bvh_traverse),
+    entries.push_back({"envtrace native",
+                       native_tracer(ds.nodes, ds.tris, cur.order, threads, &etk::etk_bvh_traverse),
                        cur.sah_cost, cur.build_seconds,
                        static_cast<int>(ds.nodes.size() * sizeof(float4))});
-    entries.push_back({"baseline native (main d2e3a75)",
-                       native_tracer(base.nodes, base_tris, base.order, threads,
-                                     &baseline::bvh_traverse),
-                       base.sah_cost, base.build_seconds,
-                       static_cast<int>(base.nodes.size() * sizeof(float4))});
+    entries.push_back(
+        {"baseline native (main d2e3a75)",
+         native_tracer(base.nodes, base_tris, base.order, threads, &baseline::bvh_traverse),
+         base.sah_cost, base.build_seconds, static_cast<int>(base.nodes.size() * sizeof(float4))});
     std::unique_ptr<ClTracer> cl;
     if (use_cl) {
         cl = std::make_unique<ClTracer>(st.device, ds.nodes, ds.tris, cur.order);
@@ -470,23 +472,22 @@ int main(int argc, char** argv) try {
     }
 #ifdef ENVTRACE_HAVE_EMBREE
     Embree embree(soup);
-    entries.push_back({"Embree rtcIntersect1/rtcOccluded1", embree.tracer(threads), -1,
-                       embree.build_seconds, 0});
+    entries.push_back(
+        {"Embree rtcIntersect1/rtcOccluded1", embree.tracer(threads), -1, embree.build_seconds, 0});
     double ebuild_m = 0, ebuild_h = 0;
-    const et::Bvh emb_m = embree_built_tree(embree.device, soup, RTC_BUILD_QUALITY_MEDIUM, &ebuild_m);
+    const et::Bvh emb_m =
+        embree_built_tree(embree.device, soup, RTC_BUILD_QUALITY_MEDIUM, &ebuild_m);
     const et::Bvh emb_h = embree_built_tree(embree.device, soup, RTC_BUILD_QUALITY_HIGH, &ebuild_h);
     const std::vector<float4> emb_m_tris = et::flatten_triangles(soup, emb_m.order);
     const std::vector<float4> emb_h_tris = et::flatten_triangles(soup, emb_h.order);
-    entries.push_back({"envtrace traversal, Embree-built tree (binned SAH)",
-                       native_tracer(emb_m.nodes, emb_m_tris, emb_m.order, threads,
-                                     &etk::etk_bvh_traverse),
-                       emb_m.sah_cost, ebuild_m,
-                       static_cast<int>(emb_m.nodes.size() * sizeof(float4))});
-    entries.push_back({"envtrace traversal, Embree-built tree (spatial splits)",
-                       native_tracer(emb_h.nodes, emb_h_tris, emb_h.order, threads,
-                                     &etk::etk_bvh_traverse),
-                       emb_h.sah_cost, ebuild_h,
-                       static_cast<int>(emb_h.nodes.size() * sizeof(float4))});
+    entries.push_back(
+        {"envtrace traversal, Embree-built tree (binned SAH)",
+         native_tracer(emb_m.nodes, emb_m_tris, emb_m.order, threads, &etk::etk_bvh_traverse),
+         emb_m.sah_cost, ebuild_m, static_cast<int>(emb_m.nodes.size() * sizeof(float4))});
+    entries.push_back(
+        {"envtrace traversal, Embree-built tree (spatial splits)",
+         native_tracer(emb_h.nodes, emb_h_tris, emb_h.order, threads, &etk::etk_bvh_traverse),
+         emb_h.sah_cost, ebuild_h, static_cast<int>(emb_h.nodes.size() * sizeof(float4))});
 #endif
     const int n_native = static_cast<int>(entries.size());
     const int n_all = n_native + (cl ? 1 : 0);
@@ -497,10 +498,8 @@ int main(int argc, char** argv) try {
         names.push_back("envtrace OpenCL (" + cl->name() + ")");
 
     // results[set][tracer] of the last run, checked against tracer 0.
-    std::vector<std::vector<std::vector<int>>> results(
-        2, std::vector<std::vector<int>>(n_all));
-    std::vector<std::vector<std::vector<double>>> mrays(
-        2, std::vector<std::vector<double>>(n_all));
+    std::vector<std::vector<std::vector<int>>> results(2, std::vector<std::vector<int>>(n_all));
+    std::vector<std::vector<std::vector<double>>> mrays(2, std::vector<std::vector<double>>(n_all));
     std::vector<std::vector<double>> total(n_all);
     for (int run = 0; run < runs; ++run) {
         std::vector<double> secs(n_all, 0.0);

@@ -47,8 +47,7 @@ inline int b_box_hit(float4 lo, float4 hi, float3 org, float3 inv_dir, float tma
 // Moller-Trumbore; updates hit when closer than hit->t. Written on scalar components: OpenCL
 // compilers otherwise do cross/dot as 3-wide vector shuffles, slower than scalar code on CPUs,
 // and both back ends then round the very same operations.
-inline int b_triangle_hit(const float4* tris, int prim, float3 org, float3 dir,
-                            EtkHit* hit) {
+inline int b_triangle_hit(const float4* tris, int prim, float3 org, float3 dir, EtkHit* hit) {
     float4 v0 = tris[3 * prim], e1 = tris[3 * prim + 1], e2 = tris[3 * prim + 2];
     float px = dir.y * e2.z - dir.z * e2.y; // p = dir x e2
     float py = dir.z * e2.x - dir.x * e2.z;
@@ -86,8 +85,8 @@ inline float3 b_safe_inverse(float3 d) {
 }
 
 // Intersects the triangles of a leaf; returns 1 when any_hit and one was hit.
-inline int b_leaf_hit(const float4* tris, float4 lo, float4 hi, float3 org, float3 dir,
-                        int any_hit, EtkHit* hit) {
+inline int b_leaf_hit(const float4* tris, float4 lo, float4 hi, float3 org, float3 dir, int any_hit,
+                      EtkHit* hit) {
     int first = b_child_meta(lo), count = b_child_count(hi);
     for (int i = 0; i < count; ++i)
         if (b_triangle_hit(tris, first + i, org, dir, hit) && any_hit)
@@ -96,8 +95,8 @@ inline int b_leaf_hit(const float4* tris, float4 lo, float4 hi, float3 org, floa
 }
 
 // Closest hit with t in (0, tmax), or any hit when any_hit != 0. Returns whether it hit.
-inline int bvh_traverse(const float4* nodes, const float4* tris,
-                            float3 org, float3 dir, float tmax, int any_hit, EtkHit* hit) {
+inline int bvh_traverse(const float4* nodes, const float4* tris, float3 org, float3 dir, float tmax,
+                        int any_hit, EtkHit* hit) {
     hit->t = tmax;
     hit->prim = -1;
     hit->b1 = hit->b2 = 0.0f;

@@ -198,7 +198,8 @@ struct Flattener {
         while (kids.size() < 4) {
             int best = -1;
             for (int k = 0; k < static_cast<int>(kids.size()); ++k)
-                if (tree[kids[k]].left >= 0 && (best < 0 || area(tree[kids[k]]) > area(tree[kids[best]])))
+                if (tree[kids[k]].left >= 0 &&
+                    (best < 0 || area(tree[kids[k]]) > area(tree[kids[best]])))
                     best = k;
             if (best < 0)
                 break;
@@ -224,8 +225,8 @@ struct Flattener {
                     flags = 0u;
                 }
             }
-            const float v[8] = {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, as_float_bits(meta),
-                                as_float_bits(flags)};
+            const float v[8] = {
+                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, as_float_bits(meta), as_float_bits(flags)};
             for (int r = 0; r < 8; ++r)
                 lane[r][k] = v[r];
         }

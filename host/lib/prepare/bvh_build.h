@@ -11,8 +11,8 @@ namespace et {
 struct Bvh {
     std::vector<etk::float4> nodes; // ETK_BVH_NODE per 4-wide node (kernels/bvh.h)
     std::vector<int> order; // triangle order: flattened triangle i is soup triangle order[i]
-    int depth = 0;      // of the binary tree the builder made (leaves' level)
-    int wide_depth = 0; // of the 4-wide tree the kernels traverse (nodes on the longest path)
+    int depth = 0;          // of the binary tree the builder made (leaves' level)
+    int wide_depth = 0;     // of the 4-wide tree the kernels traverse (nodes on the longest path)
     double build_seconds = 0.0;
     double sah_cost = 0.0; // of the binary tree: traversal 1, triangle test 1, per root area
     int node_count() const { return static_cast<int>(nodes.size() / ETK_BVH_NODE); }
