@@ -1,18 +1,23 @@
-// Closest-hit and any-hit traversal of the flattened BVH the host builds (host/lib/bvh.h).
+// Closest-hit and any-hit traversal of the flattened 4-wide BVH the host builds
+// (host/lib/prepare/bvh_build.cpp).
 //
-// Each inner node is four float4 holding both children: (box min, meta) and (box max, flags)
-// for the first child, then the same for the second; integers are stored as float bits. An inner
-// child has flags 0 and meta = its node index. A leaf child has flags = 0x80000000 | count and
-// meta = its first triangle; leaves are intersected straight from their parent, so a leaf costs
-// no node fetch. Node 0 is the root (a scene of one leaf or none gets a root whose other child
-// is an empty leaf). Both child boxes are tested together and the nearer is visited first. The
-// host keeps the tree shallower than ETK_BVH_STACK.
+// Each node is eight float4 holding its four children in the lanes x, y, z, w (structure of
+// arrays, so that the four box tests are the same operation on four lanes: what PoCL's
+// work-item vectoriser and GCC's SLP vectoriser both handle): lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
+// meta, flags; integers are stored as float bits. An inner child has flags 0 and meta = its node
+// index. A leaf child has flags = 0x80000000 | count and meta = its first triangle; leaves are
+// intersected straight from their parent, so a leaf costs no node fetch. An unused lane is an
+// empty leaf (count 0) with a point box. Node 0 is the root. Inner children that the ray enters
+// are pushed far-first with their entry distance, so the nearest is visited next and a popped
+// node that lies beyond the closest hit found meanwhile is skipped without a fetch. The host
+// keeps the tree shallow enough for ETK_BVH_STACK (at most 1 + 3 x depth entries).
 // Triangles are three float4 each: v0, edge1 = v1 - v0, edge2 = v2 - v0 (Moller-Trumbore).
 #ifndef ETK_BVH_H
 #define ETK_BVH_H
 #include "compat.h"
 
-#define ETK_BVH_STACK 64
+#define ETK_BVH_STACK 96
+#define ETK_BVH_NODE 8 // float4 per node
 
 ETK_BEGIN
 
@@ -22,28 +27,22 @@ typedef struct {
     float b1, b2; // barycentrics of v1 and v2
 } EtkHit;
 
-ETK_FN int etk_child_meta(float4 lo) {
-    return (int)as_uint(lo.w);
-}
-ETK_FN int etk_child_is_leaf(float4 hi) {
-    return (as_uint(hi.w) & 0x80000000u) != 0u;
-}
-ETK_FN int etk_child_count(float4 hi) {
-    return (int)(as_uint(hi.w) & 0x7fffffffu);
-}
-
-// Slab test against [0, tmax]; the slack keeps rays that graze a flat box from missing it.
-ETK_FN int etk_box_hit(float4 lo, float4 hi, float3 org, float3 inv_dir, float tmax, float* tnear) {
-    float tx0 = (lo.x - org.x) * inv_dir.x, tx1 = (hi.x - org.x) * inv_dir.x;
-    float ty0 = (lo.y - org.y) * inv_dir.y, ty1 = (hi.y - org.y) * inv_dir.y;
-    float tz0 = (lo.z - org.z) * inv_dir.z, tz1 = (hi.z - org.z) * inv_dir.z;
+// Slab tests of a node's four boxes against [0, tmax], lane-wise (one vector operation per step
+// on both back ends): entry and exit distances. A lane is entered when tnear <= tfar * slack; the
+// slack keeps rays that graze a flat box from missing it.
+ETK_FN void etk_box_hit4(ETK_GLOBAL const float4* nd, float4 ox, float4 oy, float4 oz, float4 ix,
+                         float4 iy, float4 iz, float tmax, float4* tnear, float4* tfar) {
+    float4 tx0 = (nd[0] - ox) * ix, tx1 = (nd[3] - ox) * ix;
+    float4 ty0 = (nd[1] - oy) * iy, ty1 = (nd[4] - oy) * iy;
+    float4 tz0 = (nd[2] - oz) * iz, tz1 = (nd[5] - oz) * iz;
     // Finite operands only (etk_safe_inverse): plain min/max suffice.
-    float tn = ETK_MAXF(ETK_MAXF(ETK_MINF(tx0, tx1), ETK_MINF(ty0, ty1)),
-                        ETK_MAXF(ETK_MINF(tz0, tz1), 0.0f));
-    float tf = ETK_MINF(ETK_MINF(ETK_MAXF(tx0, tx1), ETK_MAXF(ty0, ty1)),
-                        ETK_MINF(ETK_MAXF(tz0, tz1), tmax));
-    *tnear = tn;
-    return tn <= tf * 1.00000024f;
+    float4 zero = make_float4(0.0f, 0.0f, 0.0f, 0.0f);
+    float4 tm = make_float4(tmax, tmax, tmax, tmax);
+    *tnear = ETK_MAXF(ETK_MAXF(ETK_MINF(tx0, tx1), ETK_MINF(ty0, ty1)),
+                      ETK_MAXF(ETK_MINF(tz0, tz1), zero));
+    *tfar = ETK_MINF(ETK_MINF(ETK_MAXF(tx0, tx1), ETK_MAXF(ty0, ty1)),
+                     ETK_MINF(ETK_MAXF(tz0, tz1), tm)) *
+            1.00000024f;
 }
 
 // Moller-Trumbore; updates hit when closer than hit->t. Written on scalar components: OpenCL
@@ -88,12 +87,38 @@ ETK_FN float3 etk_safe_inverse(float3 d) {
 }
 
 // Intersects the triangles of a leaf; returns 1 when any_hit and one was hit.
-ETK_FN int etk_leaf_hit(ETK_GLOBAL const float4* tris, float4 lo, float4 hi, float3 org, float3 dir,
+ETK_FN int etk_leaf_hit(ETK_GLOBAL const float4* tris, int first, int count, float3 org, float3 dir,
                         int any_hit, EtkHit* hit) {
-    int first = etk_child_meta(lo), count = etk_child_count(hi);
     for (int i = 0; i < count; ++i)
         if (etk_triangle_hit(tris, first + i, org, dir, hit) && any_hit)
             return 1;
+    return 0;
+}
+
+// One lane of a node: a leaf the ray enters is intersected now (returns 1 for an any-hit
+// query that found one); an inner child it enters is pushed, in stack sorted order: entry
+// distances decrease towards the top, so the nearest is popped first. The host keeps the stack
+// within ETK_BVH_STACK (see the top); `base` is where this node's pushes began.
+ETK_FN int etk_bvh_lane(ETK_GLOBAL const float4* tris, int in, float t, float meta, float flags,
+                        float3 org, float3 dir, int any_hit, EtkHit* hit, int* stack,
+                        float* stack_t, int base, int* sp) {
+    if (!in || !(t <= hit->t * 1.0000005f)) // slack: tnear and t round differently
+        return 0;
+    uint f = as_uint(flags);
+    if (f & 0x80000000u)
+        return etk_leaf_hit(tris, (int)as_uint(meta), (int)(f & 0x7fffffffu), org, dir, any_hit,
+                            hit);
+    int j = *sp;
+    if (j >= ETK_BVH_STACK) // never, for trees the host builds
+        return 0;
+    while (j > base && stack_t[j - 1] < t) { // insertion: at most three moves
+        stack[j] = stack[j - 1];
+        stack_t[j] = stack_t[j - 1];
+        --j;
+    }
+    stack[j] = (int)as_uint(meta);
+    stack_t[j] = t;
+    *sp = *sp + 1;
     return 0;
 }
 
@@ -104,42 +129,35 @@ ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const flo
     hit->prim = -1;
     hit->b1 = hit->b2 = 0.0f;
     float3 inv_dir = etk_safe_inverse(dir);
+    float4 ox = make_float4(org.x, org.x, org.x, org.x),
+           oy = make_float4(org.y, org.y, org.y, org.y);
+    float4 oz = make_float4(org.z, org.z, org.z, org.z);
+    float4 ix = make_float4(inv_dir.x, inv_dir.x, inv_dir.x, inv_dir.x);
+    float4 iy = make_float4(inv_dir.y, inv_dir.y, inv_dir.y, inv_dir.y);
+    float4 iz = make_float4(inv_dir.z, inv_dir.z, inv_dir.z, inv_dir.z);
     int stack[ETK_BVH_STACK];
-    int sp = 0;
-    int node = 0;
-    for (;;) {
-        ETK_GLOBAL const float4* n = nodes + 4 * node;
-        float4 lo0 = n[0], hi0 = n[1], lo1 = n[2], hi1 = n[3];
-        float t0, t1;
-        int in0 = etk_box_hit(lo0, hi0, org, inv_dir, hit->t, &t0);
-        int in1 = etk_box_hit(lo1, hi1, org, inv_dir, hit->t, &t1);
-        if (in0 && etk_child_is_leaf(hi0)) {
-            if (etk_leaf_hit(tris, lo0, hi0, org, dir, any_hit, hit))
-                return 1;
-            in0 = 0;
-        }
-        if (in1 && etk_child_is_leaf(hi1)) {
-            if (t1 <= hit->t * 1.0000005f && etk_leaf_hit(tris, lo1, hi1, org, dir, any_hit, hit))
-                return 1;
-            in1 = 0;
-        }
-        in0 = in0 && t0 <= hit->t * 1.0000005f; // slack: tnear and t round differently
-        in1 = in1 && t1 <= hit->t * 1.0000005f;
-        if (in0 && in1) {
-            int near_child = etk_child_meta(t0 <= t1 ? lo0 : lo1);
-            int far_child = etk_child_meta(t0 <= t1 ? lo1 : lo0);
-            if (sp < ETK_BVH_STACK)
-                stack[sp++] = far_child;
-            node = near_child;
-        } else if (in0) {
-            node = etk_child_meta(lo0);
-        } else if (in1) {
-            node = etk_child_meta(lo1);
-        } else {
-            if (sp == 0)
-                break;
-            node = stack[--sp];
-        }
+    float stack_t[ETK_BVH_STACK];
+    int sp = 1;
+    stack[0] = 0;
+    stack_t[0] = 0.0f;
+    while (sp > 0) {
+        --sp;
+        if (!(stack_t[sp] <= hit->t * 1.0000005f))
+            continue; // entered beyond the closest hit found since it was pushed
+        ETK_GLOBAL const float4* nd = nodes + ETK_BVH_NODE * stack[sp];
+        float4 tn, tf;
+        etk_box_hit4(nd, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
+        float4 meta = nd[6], flags = nd[7];
+        int base = sp;
+        if (etk_bvh_lane(tris, tn.x <= tf.x, tn.x, meta.x, flags.x, org, dir, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(tris, tn.y <= tf.y, tn.y, meta.y, flags.y, org, dir, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(tris, tn.z <= tf.z, tn.z, meta.z, flags.z, org, dir, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(tris, tn.w <= tf.w, tn.w, meta.w, flags.w, org, dir, any_hit, hit, stack,
+                         stack_t, base, &sp))
+            return 1;
     }
     return hit->prim >= 0;
 }

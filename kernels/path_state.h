@@ -8,7 +8,7 @@
 
 // Scene buffers, read-only, one element type each: X(type, name).
 #define ETK_SCENE_BUFFERS(X)                                                                       \
-    X(float4, nodes)        /* BVH: two child boxes per node (bvh.h) */                            \
+    X(float4, nodes)        /* BVH: 4-wide nodes (bvh.h) */                                    \
     X(float4, tris)         /* v0, e1, e2 per triangle */                                          \
     X(float4, normals)      /* three vertex normals per triangle */                                \
     X(int, tri_material)    /* material index per triangle */                                      \

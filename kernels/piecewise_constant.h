@@ -34,10 +34,15 @@ ETK_FN int etk_dist2d_size(int w, int h) {
 // never returned for u in [0,1): the last of a run of equal entries is the one whose successor
 // is larger.
 ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
-    // Binary lifting with a fixed number of steps (n <= 65536) and no branches: every work-item
-    // runs the same instructions, so OpenCL compilers can vectorise across work-items.
+    // Binary lifting with no branches and a number of steps that depends on n only: every
+    // work-item runs the same instructions, so OpenCL compilers can vectorise across work-items.
+    // Steps of n or more never move (mid >= n), so the search starts at the largest power of
+    // two below n: log2(n) steps rather than 17 (issue 12), the same result.
+    int first = 1;
+    while (2 * first < n)
+        first *= 2;
     int lo = 0; // invariant: cdf[lo] <= u
-    for (int step = 1 << 16; step > 0; step >>= 1) {
+    for (int step = first; step > 0; step >>= 1) {
         int mid = lo + step;
         float c = cdf[min(mid, n - 1)];
         lo = (mid < n && c <= u) ? mid : lo;

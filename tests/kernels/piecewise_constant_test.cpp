@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -135,6 +136,47 @@ TEST(PiecewiseConstant1D, RandomUniformsOnRandomFunctions) {
         for (int k = 0; k < 200; ++k)
             check_sample(d, std::min(uni(rng), ETK_ONE_MINUS_EPS));
     }
+}
+
+// etk_find_interval against the definition (the last cell whose CDF entry is <= u and whose
+// successor is larger, i.e. std::upper_bound - 1 over the first n entries) for sizes around
+// powers of two up to 65536, on random, peaky, tied and zero-mass functions, at random u and at
+// every CDF entry and its neighbours (issue 12 shortened the search: the result must not move).
+TEST(PiecewiseConstant1D, SearchEqualsUpperBound) {
+    std::mt19937 rng(12);
+    std::vector<int> sizes = {1,  2,   3,   4,   5,   7,    8,    9,     31,   32,
+                              33, 100, 511, 512, 513, 1024, 4096, 65535, 65536};
+    for (int n : sizes)
+        for (int kind = 0; kind < 4; ++kind) {
+            std::vector<float> f(n);
+            for (int i = 0; i < n; ++i) {
+                switch (kind) {
+                case 0:
+                    f[i] = static_cast<float>(rng() % 1000);
+                    break; // random, some zeros
+                case 1:
+                    f[i] = rng() % 97 == 0 ? 1e6f : 1e-3f;
+                    break; // peaky
+                case 2:
+                    f[i] = (i / 7) % 2 ? 0.0f : 1.0f;
+                    break; // runs of zero mass
+                default:
+                    f[i] = i == n / 2 ? 1.0f : 0.0f;
+                    break; // one cell
+                }
+            }
+            Dist1D d(f);
+            std::vector<float> us = edge_uniforms(d);
+            std::uniform_real_distribution<float> uni(0.0f, 1.0f);
+            for (int k = 0; k < 2000; ++k)
+                us.push_back(std::min(uni(rng), ETK_ONE_MINUS_EPS));
+            for (float u : us) {
+                const int expect = static_cast<int>(
+                    std::upper_bound(d.cdf.begin(), d.cdf.begin() + n, u) - d.cdf.begin() - 1);
+                ASSERT_EQ(etk::etk_find_interval(d.cdf.data(), n, u), std::max(0, expect))
+                    << "n " << n << " kind " << kind << " u " << u;
+            }
+        }
 }
 
 TEST(PiecewiseConstant1D, AllZeroFunctionHasLinearCdfAndZeroDensity) {

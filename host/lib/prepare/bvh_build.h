@@ -1,7 +1,7 @@
 // Bounding volume hierarchy over a triangle soup: binned SAH build, flattened to the layout the
 // kernels traverse (kernels/bvh.h).
 #pragma once
-#include "kernels/compat.h"
+#include "kernels/bvh.h"
 #include "load/scene.h"
 
 #include <vector>
@@ -9,16 +9,29 @@
 namespace et {
 
 struct Bvh {
-    std::vector<etk::float4> nodes; // four per inner node (kernels/bvh.h)
+    std::vector<etk::float4> nodes; // ETK_BVH_NODE per 4-wide node (kernels/bvh.h)
     std::vector<int> order; // triangle order: flattened triangle i is soup triangle order[i]
-    int depth = 0;
+    int depth = 0;          // of the binary tree the builder made (leaves' level)
+    int wide_depth = 0;     // of the 4-wide tree the kernels traverse (nodes on the longest path)
     double build_seconds = 0.0;
-    double sah_cost = 0.0; // expected cost: traversal 1, triangle test 1, relative to the root area
-    int node_count() const { return static_cast<int>(nodes.size() / 4); } // inner nodes
+    double sah_cost = 0.0; // of the binary tree: traversal 1, triangle test 1, per root area
+    int node_count() const { return static_cast<int>(nodes.size() / ETK_BVH_NODE); }
 };
 
 // Leaves hold at most `max_leaf` triangles; depth stays below the kernels' stack size.
 Bvh build_bvh(const TriangleSoup& soup, int max_leaf = 4);
+
+// A binary tree as a builder makes it, before flattening into the kernels' layout. Node 0 is the
+// root; a leaf (left < 0) holds triangles order[first .. first + count).
+struct BvhTreeNode {
+    glm::vec3 lo{1e30f}, hi{-1e30f};
+    int left = -1, right = -1;
+    int first = 0, count = 0;
+};
+
+// The kernels' layout of any binary tree (also one made by another builder: tools/bench), with
+// its depth and SAH cost; build_seconds is left to the caller.
+Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order);
 
 // Triangles in BVH order as the kernels read them: v0, e1, e2 (three float4 each); one all-zero
 // triangle for an empty soup (device buffers cannot be empty).
