@@ -551,6 +551,13 @@ int OiioSource::band_rows() const {
                    : static_cast<int>(std::clamp<int64_t>((4 << 20) / row_bytes, 1, 256));
     if (unit > 0 && unit <= spec.height)
         rows = (rows + unit - 1) / unit * unit;
+    // At most 64 MB of texels a band (whole blocks where they fit; a 16384-wide map keeps its
+    // 256-row bands): the reader touches memory a band ahead of the data, so a header that
+    // declares a very wide image its file cannot hold (a 25 kB EXR claiming 1048640x32, one
+    // 403 MB band) fails having touched one band, not the whole image (F7's class).
+    const int max_rows = static_cast<int>(std::max<int64_t>(1, (int64_t(64) << 20) / row_bytes));
+    if (rows > max_rows)
+        rows = unit > 0 && max_rows >= unit ? max_rows / unit * unit : max_rows;
     return std::max(1, std::min(rows, spec.height));
 }
 
