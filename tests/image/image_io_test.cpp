@@ -1040,6 +1040,11 @@ TEST(ImageIo, ExrHeadersThatCannotBeRightAreRefusedBeforeOpenExrReadsThem) {
         e.flags = 0x200;
         e.attrs.push_back(exr_attr("tiles", "tiledesc", le32(65536) + le32(65536) + '\0'));
     });
+    // A mutant found by walking: 16x6225936 tiles of a 37x21 image took 1.27 GB.
+    variant("tall-tiles", "larger than both the image and 256 MB", [](HandExr& e) {
+        e.flags = 0x200;
+        e.attrs.push_back(exr_attr("tiles", "tiledesc", le32(16) + le32(6225936) + '\0'));
+    });
     variant("flags", "unknown flags", [](HandExr& e) { e.flags = 0x4000; });
     variant("multipart-no-name", "no name, type, chunkCount attribute",
             [](HandExr& e) { e.flags = 0x1000; });

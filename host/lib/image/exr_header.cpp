@@ -406,15 +406,26 @@ void check_part(const Walker& in, Header& h, int part, bool multipart, bool tile
                     (tiled ? " in a tiled image" : " that does not divide the data window"));
     }
     if (tiled) {
-        uint64_t pixel = 0;
-        for (const Channel& c : h.channels)
+        // A tile may be larger than the image (a 16x8 map in 64x64 tiles), but OpenEXR and
+        // OpenImageIO allocate, and fill, whole tiles: 16x6225936 tiles of a 37x21 image took
+        // 1.27 GB. So a tile is at most the memory budget, and at most 256 MB unless the image
+        // itself is larger.
+        uint64_t pixel = 0, image = 0;
+        for (const Channel& c : h.channels) {
             pixel += pixel_bytes(c);
-        if (h.tile_w < 1 || h.tile_h < 1 || h.tile_w > INT_MAX || h.tile_h > INT_MAX ||
-            checked_mul(checked_mul(h.tile_w, h.tile_h, "EXR tiles"), pixel, "EXR tiles") >
-                kMaxBufferBytes)
+            image +=
+                uint64_t(pixel_bytes(c)) * uint64_t(h.data.width()) * uint64_t(h.data.height());
+        }
+        const uint64_t tile =
+            h.tile_w < 1 || h.tile_h < 1
+                ? 0
+                : checked_mul(checked_mul(h.tile_w, h.tile_h, "EXR tiles"), pixel, "EXR tiles");
+        if (tile == 0 || h.tile_w > INT_MAX || h.tile_h > INT_MAX || tile > kMaxBufferBytes ||
+            tile > std::max<uint64_t>(image, uint64_t(256) << 20))
             in.fail(where + "tiles of " + std::to_string(h.tile_w) + "x" +
                     std::to_string(h.tile_h) + " pixels of " + std::to_string(pixel) +
-                    " bytes are empty or larger than the memory budget");
+                    " bytes are empty, larger than the memory budget, or larger than both the "
+                    "image and 256 MB");
     }
 }
 
