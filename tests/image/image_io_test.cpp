@@ -17,6 +17,7 @@
 #include <random>
 #include <sstream>
 #include <cstdint>
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -848,6 +849,349 @@ TEST(ImageIo, ExrAttributeSizesBeyondTheFileAreRefusedBeforeOpenExrAllocates) {
             const std::string m = e.what();
             EXPECT_EQ(m.rfind(path, 0), 0u) << m;
             EXPECT_NE(m.find("corrupt EXR header"), std::string::npos) << m;
+        }
+    }
+}
+
+namespace {
+
+std::string le32(uint32_t v) {
+    return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+}
+
+// One header attribute: name, type, size (the value's length unless given) and value.
+std::string exr_attr(const std::string& name, const std::string& type, const std::string& value,
+                     int64_t size = -1) {
+    return name + '\0' + type + '\0' +
+           le32(static_cast<uint32_t>(size < 0 ? int64_t(value.size()) : size)) + value;
+}
+
+std::string exr_box(int x0, int y0, int x1, int y1) {
+    return le32(x0) + le32(y0) + le32(x1) + le32(y1);
+}
+
+// A channel list of FLOAT (or `type`) channels sampled 1x1.
+std::string exr_chlist(const std::vector<std::string>& names, int type = 2) {
+    std::string v;
+    for (const std::string& n : names)
+        v += n + '\0' + le32(type) + std::string(4, '\0') + le32(1) + le32(1);
+    return v + '\0';
+}
+
+// A hand-written single-part scanline EXR of 4x2 float B, G, R pixels, uncompressed: magic,
+// version field (2 | flags), `attrs` (the required ones by default, in the order OpenEXR writes
+// them), the end of the header, the offset table and two chunks. Pixel (x, y) is
+// (1 + x, 10 + y, 0.5). The attribute list is a vector so that tests can damage one entry.
+struct HandExr {
+    uint32_t flags = 0;
+    std::vector<std::string> attrs = {
+        exr_attr("channels", "chlist", exr_chlist({"B", "G", "R"})),
+        exr_attr("compression", "compression", std::string(1, '\0')),
+        exr_attr("dataWindow", "box2i", exr_box(0, 0, 3, 1)),
+        exr_attr("displayWindow", "box2i", exr_box(0, 0, 3, 1)),
+        exr_attr("lineOrder", "lineOrder", std::string(1, '\0')),
+        exr_attr("pixelAspectRatio", "float", le32(0x3f800000)),
+        exr_attr("screenWindowCenter", "v2f", std::string(8, '\0')),
+        exr_attr("screenWindowWidth", "float", le32(0x3f800000)),
+    };
+    std::string bytes() const {
+        std::string head = std::string("\x76\x2f\x31\x01", 4) + le32(2 | flags);
+        for (const std::string& a : attrs)
+            head += a;
+        head += '\0';
+        if (flags & 0x1000)
+            head += '\0'; // the empty header that ends a multi-part file's headers
+        std::string chunks[2];
+        for (int y = 0; y < 2; ++y) {
+            std::string data;
+            for (float v : {0.5f, 10.0f + y}) // B, then G: planar per channel, x fastest
+                for (int x = 0; x < 4; ++x) {
+                    uint32_t u;
+                    std::memcpy(&u, &v, 4);
+                    data += le32(u);
+                }
+            for (int x = 0; x < 4; ++x) {
+                const float v = 1.0f + x; // R
+                uint32_t u;
+                std::memcpy(&u, &v, 4);
+                data += le32(u);
+            }
+            chunks[y] = le32(y) + le32(static_cast<uint32_t>(data.size())) + data;
+        }
+        const uint64_t first = head.size() + 16;
+        auto le64 = [](uint64_t v) { return le32(uint32_t(v)) + le32(uint32_t(v >> 32)); };
+        return head + le64(first) + le64(first + chunks[0].size()) + chunks[0] + chunks[1];
+    }
+};
+
+// Peak resident memory of this process so far, in MB.
+double peak_rss_mb() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss / 1024.0;
+}
+
+} // namespace
+
+// Fuzz finding F11 and its class: OpenEXR reads a value of a type it knows by its content, not by
+// its size field, and reads the next attribute where that content ended. A channel list whose
+// size field claims more than its entries (F11: 527 bytes) hid, inside the bytes F10's walk
+// skipped, a string that OpenEXR then allocated (1 GB; 1.2 GB peak, 2.4 s). Every header is now
+// parsed as OpenEXR parses it, and each way a header can claim what its file cannot hold, or
+// lack what the reader needs, is one et::Error naming the file and the problem, before OpenEXR
+// allocates anything. The valid hand-written file beside them loads, so each broken variant is
+// refused for its own damage.
+TEST(ImageIo, ExrHeadersThatCannotBeRightAreRefusedBeforeOpenExrReadsThem) {
+    const std::string dir = ett::scratch_dir("image-io-exr-walk");
+    const HandExr good;
+    {
+        const std::string path = dir + "/good.exr";
+        std::ofstream(path, std::ios::binary) << good.bytes();
+        const et::RgbImage img = et::read_rgb_image(path);
+        ASSERT_EQ(img.width, 4);
+        ASSERT_EQ(img.height, 2);
+        for (int y = 0; y < 2; ++y)
+            for (int x = 0; x < 4; ++x) {
+                EXPECT_EQ(img.at(x, y)[0], 1.0f + x);
+                EXPECT_EQ(img.at(x, y)[1], 10.0f + y);
+                EXPECT_EQ(img.at(x, y)[2], 0.5f);
+            }
+    }
+    struct Case {
+        const char* name;
+        HandExr exr;
+        const char* expect; // in the message
+    };
+    std::vector<Case> cases;
+    auto variant = [&](const char* name, const char* expect, auto&& damage) {
+        HandExr e;
+        damage(e);
+        cases.push_back({name, e, expect});
+    };
+    // F11's shape: the channel list's size covers a string attribute claiming 1.09 GB (the
+    // file's own 0x41000004), which OpenEXR reads as the next attribute.
+    variant("f11-hidden-string", "channels take", [](HandExr& e) {
+        const std::string hidden = exr_attr("comments", "string", "", 0x41000004);
+        const std::string list = exr_chlist({"B", "G", "R"});
+        e.attrs[0] = exr_attr("channels", "chlist", list + hidden, list.size() + hidden.size());
+    });
+    variant("chlist-short", "channels take", [](HandExr& e) {
+        e.attrs[0] = exr_attr("channels", "chlist", exr_chlist({"B", "G", "R"}), 20);
+    });
+    variant("chlist-type", "pixel type 7", [](HandExr& e) {
+        e.attrs[0] = exr_attr("channels", "chlist", exr_chlist({"B", "G", "R"}, 7));
+    });
+    variant("chlist-twice", "appears twice in the channel list", [](HandExr& e) {
+        e.attrs[0] = exr_attr("channels", "chlist", exr_chlist({"B", "B", "R"}));
+    });
+    variant("chlist-empty", "channel list is empty", [](HandExr& e) {
+        e.attrs[0] = exr_attr("channels", "chlist", exr_chlist({}));
+    });
+    variant("box-size", "a box2i has 16 bytes", [](HandExr& e) {
+        e.attrs.push_back(exr_attr("crop", "box2i", std::string(8, '\0')));
+    });
+    variant("float-size", "a float has 4 bytes", [](HandExr& e) {
+        e.attrs[5] = exr_attr("pixelAspectRatio", "float", std::string(40, '\0'));
+    });
+    variant("stringvector", "a string claims 1090519044 bytes", [](HandExr& e) {
+        e.attrs.push_back(
+            exr_attr("multiView", "stringvector", le32(5) + "right" + le32(0x41000004) + "le"));
+    });
+    variant("huge-string", "claims 1700000000 bytes", [](HandExr& e) {
+        e.attrs.push_back(exr_attr("owner", "string", "abc", 1700000000));
+    });
+    variant("no-data-window", "no dataWindow attribute", [](HandExr& e) {
+        e.attrs.erase(e.attrs.begin() + 2);
+    });
+    variant("no-channels", "no channels attribute", [](HandExr& e) {
+        e.attrs.erase(e.attrs.begin());
+    });
+    variant("data-window-type", "expected type box2i", [](HandExr& e) {
+        e.attrs[2] = exr_attr("dataWindow", "v2f", std::string(8, '\0'));
+    });
+    variant("attribute-twice", "appears twice", [](HandExr& e) {
+        e.attrs.push_back(e.attrs[4]);
+    });
+    variant("compression", "unknown compression method 42", [](HandExr& e) {
+        e.attrs[1] = exr_attr("compression", "compression", std::string(1, char(42)));
+    });
+    variant("window-empty", "dataWindow (0, 0) - (-5, 1) is empty", [](HandExr& e) {
+        e.attrs[2] = exr_attr("dataWindow", "box2i", exr_box(0, 0, -5, 1));
+    });
+    // 300000000 x 1 float RGB: 3.6 GB of texels, refused by the budget before OpenEXR sees it.
+    // PIZ: no ratio bound on what the file holds, so the budget is what refuses it.
+    variant("window-budget", "memory budget", [](HandExr& e) {
+        e.attrs[1] = exr_attr("compression", "compression", std::string(1, char(4)));
+        e.attrs[2] = exr_attr("dataWindow", "box2i", exr_box(0, 0, 299999999, 0));
+    });
+    // 1 x 50000000 (600 MB of texels, within the budget): 50M offsets of 8 bytes.
+    variant("chunk-table", "chunks need at least", [](HandExr& e) {
+        e.attrs[2] = exr_attr("dataWindow", "box2i", exr_box(0, 0, 0, 49999999));
+    });
+    // 30000 x 1 uncompressed (360 kB stored, about 1000:1 of the file): OpenEXR read such a
+    // header "successfully" (a mutant of 5439552x32 half took 2 GB and 70 s), filling texels from
+    // nowhere; uncompressed pixels must be in the file.
+    variant("pixels-beyond-file", "more than uncompressed storage can fit", [](HandExr& e) {
+        e.attrs[2] = exr_attr("dataWindow", "box2i", exr_box(0, 0, 29999, 0));
+    });
+    variant("deep", "deep EXR images are not supported", [](HandExr& e) { e.flags = 0x800; });
+    variant("tiled-no-tiles", "no tiles attribute", [](HandExr& e) { e.flags = 0x200; });
+    variant("huge-tiles", "larger than the memory budget", [](HandExr& e) {
+        e.flags = 0x200;
+        e.attrs.push_back(exr_attr("tiles", "tiledesc", le32(65536) + le32(65536) + '\0'));
+    });
+    // A mutant found by walking: 16x6225936 tiles of a 37x21 image took 1.27 GB.
+    variant("tall-tiles", "larger than both the image and 256 MB", [](HandExr& e) {
+        e.flags = 0x200;
+        e.attrs.push_back(exr_attr("tiles", "tiledesc", le32(16) + le32(6225936) + '\0'));
+    });
+    variant("flags", "unknown flags", [](HandExr& e) { e.flags = 0x4000; });
+    variant("multipart-no-name", "no name, type, chunkCount attribute",
+            [](HandExr& e) { e.flags = 0x1000; });
+    variant("multipart-chunks", "chunkCount 1000000000", [](HandExr& e) {
+        e.flags = 0x1000;
+        e.attrs.push_back(exr_attr("name", "string", "rgba"));
+        e.attrs.push_back(exr_attr("type", "string", "scanlineimage"));
+        e.attrs.push_back(exr_attr("chunkCount", "int", le32(1000000000)));
+    });
+
+    const double rss_before = peak_rss_mb();
+    for (const Case& c : cases) {
+        // Named .png too: the check goes by the magic, not the name.
+        for (const char* ext : {".exr", ".png"}) {
+            const std::string path = dir + "/" + c.name + ext;
+            std::ofstream(path, std::ios::binary) << c.exr.bytes();
+            try {
+                et::read_rgb_image(path);
+                ADD_FAILURE() << path << ": read";
+            } catch (const et::Error& e) {
+                const std::string m = e.what();
+                EXPECT_EQ(m.rfind(path + ": ", 0), 0u) << m;
+                EXPECT_NE(m.find(c.expect), std::string::npos) << c.name << ": " << m;
+                EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+            }
+        }
+    }
+    // Before the walk parsed values, the F11 variant alone took over 1 GB (OpenEXR zero-fills the
+    // string it allocates); refused files cost nothing like that now.
+    EXPECT_LT(peak_rss_mb() - rss_before, 200.0);
+}
+
+// The walk accepts what OpenEXR writes: every compression, half and float, tiles of any size,
+// MIP-mapped textures, multi-part files (the first part is read), data windows off the origin,
+// decreasing line order, extra channels. Each still reads as written.
+TEST(ImageIo, ValidExrLayoutsStillLoadPastTheHeaderWalk) {
+    const std::string dir = ett::scratch_dir("image-io-exr-valid");
+    const int w = 37, h = 21;
+    const std::vector<float> px = hdr_pixels(w, h, 3, 11);
+    struct Layout {
+        std::string name;
+        OIIO::TypeDesc type;
+        std::string compression;
+        int tile_w = 0, tile_h = 0, x = 0, y = 0;
+        bool decreasing = false, multipart = false;
+        int channels = 3;
+    };
+    std::vector<Layout> layouts;
+    for (const char* c : {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa",
+                          "dwab"})
+        for (OIIO::TypeDesc t : {OIIO::TypeDesc::HALF, OIIO::TypeDesc::FLOAT})
+            layouts.push_back({std::string(c) + (t == OIIO::TypeDesc::HALF ? "-half" : "-float"),
+                               t, c});
+    layouts.push_back({"tiled-16", OIIO::TypeDesc::HALF, "zip", 16, 16});
+    layouts.push_back({"tiled-odd", OIIO::TypeDesc::FLOAT, "piz", 24, 10});
+    layouts.push_back({"tiled-big", OIIO::TypeDesc::FLOAT, "zip", 64, 64});
+    layouts.push_back({"window", OIIO::TypeDesc::HALF, "zip", 0, 0, -5, 7});
+    layouts.push_back({"decreasing", OIIO::TypeDesc::FLOAT, "zip", 0, 0, 0, 0, true});
+    layouts.push_back({"multipart", OIIO::TypeDesc::HALF, "zip", 0, 0, 0, 0, false, true});
+    layouts.push_back({"rgbaz", OIIO::TypeDesc::FLOAT, "zip", 0, 0, 0, 0, false, false, 5});
+    for (const Layout& l : layouts) {
+        const std::string path = dir + "/" + l.name + ".exr";
+        auto out = OIIO::ImageOutput::create(path);
+        ASSERT_TRUE(out);
+        OIIO::ImageSpec spec(w, h, l.channels, l.type);
+        spec.x = l.x;
+        spec.y = l.y;
+        spec.tile_width = l.tile_w;
+        spec.tile_height = l.tile_h;
+        spec.attribute("compression", l.compression);
+        if (l.decreasing)
+            spec.attribute("openexr:lineOrder", "decreasingY");
+        std::vector<float> data(static_cast<size_t>(w) * h * l.channels, 0.25f);
+        for (size_t p = 0; p < size_t(w) * h; ++p)
+            for (int c = 0; c < 3; ++c)
+                data[p * l.channels + c] = px[3 * p + c];
+        if (l.multipart) {
+            OIIO::ImageSpec specs[2] = {spec, spec};
+            specs[1].width = 8; // the display window must be the same in every part
+            ASSERT_TRUE(out->open(path, 2, specs)) << out->geterror();
+            ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, data.data())) << out->geterror();
+            ASSERT_TRUE(out->open(path, specs[1], OIIO::ImageOutput::AppendSubimage))
+                << out->geterror();
+            ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, data.data(), OIIO::AutoStride,
+                                         w * l.channels * sizeof(float)))
+                << out->geterror();
+        } else {
+            ASSERT_TRUE(out->open(path, spec)) << out->geterror();
+            ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, data.data())) << out->geterror();
+        }
+        ASSERT_TRUE(out->close()) << out->geterror();
+        out.reset();
+        try {
+            const et::RgbImage img = et::read_rgb_image(path);
+            ASSERT_EQ(img.width, w) << path;
+            ASSERT_EQ(img.height, h) << path;
+            // The texels OpenImageIO reads from the file itself (lossy methods included).
+            auto in = OIIO::ImageInput::open(path);
+            ASSERT_TRUE(in) << OIIO::geterror();
+            std::vector<float> ref(px.size());
+            ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, ref.data()));
+            EXPECT_EQ(img.rgb, ref) << path;
+        } catch (const et::Error& e) {
+            ADD_FAILURE() << e.what();
+        }
+    }
+    // MIP-mapped textures, as maketx makes them: tiled, every level in the offset table, levels
+    // rounded down or up (OpenEXR's level arithmetic, which the walk repeats to size the table).
+    for (int rounding : {0, 1}) {
+        const std::string tex = dir + "/mip-" + std::to_string(rounding) + ".exr";
+        auto out = OIIO::ImageOutput::create(tex);
+        ASSERT_TRUE(out);
+        OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::HALF);
+        spec.tile_width = spec.tile_height = 8;
+        spec.attribute("textureformat", "Plain Texture");
+        spec.attribute("openexr:roundingmode", rounding);
+        ASSERT_TRUE(out->open(tex, spec, OIIO::ImageOutput::Create)) << out->geterror();
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data())) << out->geterror();
+        // floor(log2(max)) levels below level 0, one more when rounding up a non-power of two.
+        const int top = std::max(w, h);
+        int levels = 0;
+        for (int n = top; n > 1; n >>= 1)
+            ++levels;
+        const int extra = rounding && (top & (top - 1)) ? 1 : 0;
+        for (int l = 1; l <= levels + extra; ++l) {
+            auto size = [&](int n) {
+                int s = n >> l;
+                if (rounding && (s << l) < n)
+                    ++s;
+                return std::max(s, 1);
+            };
+            OIIO::ImageSpec level(size(w), size(h), 3, OIIO::TypeDesc::HALF);
+            level.tile_width = level.tile_height = 8;
+            ASSERT_TRUE(out->open(tex, level, OIIO::ImageOutput::AppendMIPLevel))
+                << out->geterror();
+            std::vector<float> small(size_t(level.width) * level.height * 3, 1.0f);
+            ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, small.data())) << out->geterror();
+        }
+        ASSERT_TRUE(out->close()) << out->geterror();
+        out.reset(); // OpenImageIO flushes the file when the output is destroyed
+        try {
+            const et::RgbImage img = et::read_rgb_image(tex);
+            EXPECT_EQ(img.width, w);
+            EXPECT_EQ(img.height, h);
+            EXPECT_NEAR(img.rgb[0], px[0], 1e-3 * px[0]) << tex;
+        } catch (const et::Error& e) {
+            ADD_FAILURE() << e.what();
         }
     }
 }

@@ -1,4 +1,5 @@
 #include "image/image_io.h"
+#include "image/exr_header.h"
 
 #include "util/error.h"
 
@@ -450,75 +451,6 @@ bool starts_with(const std::string& path, const char* magic) {
     return ok;
 }
 
-// OpenEXR 3.1 allocates (and zero-fills) what a header attribute's size field claims before it
-// reads the value: a 456-byte file whose string attribute claimed 1.7 GB took 1.8 GB and 4 s to
-// be refused (fuzz finding F10). So the header is walked here first, reading only names, types
-// and sizes: each header is a list of attributes (name, type, both NUL-terminated, an int32 size,
-// the value) ended by an empty name; a multi-part file (version flag 0x1000) has headers until
-// an empty one. Every size must fit in what is left of the file, and a preview (width, height,
-// 4 bytes a pixel) must be as large as it says. Anything else odd is left to OpenEXR to report.
-void check_exr_header(const std::string& path, uint64_t file_bytes) {
-    struct Closer {
-        void operator()(std::FILE* f) const { std::fclose(f); }
-    };
-    std::unique_ptr<std::FILE, Closer> file(std::fopen(path.c_str(), "rb"));
-    std::FILE* const f = file.get();
-    unsigned char head[8];
-    if (!f || std::fread(head, 1, 8, f) != 8)
-        return;
-    const bool multipart = head[5] & 0x10;
-    auto read_name = [&](std::string& out) { // false at the end of the file or past 255 bytes
-        out.clear();
-        for (int c = std::fgetc(f); c != 0; c = std::fgetc(f)) {
-            if (c == EOF || out.size() >= 255)
-                return false;
-            out.push_back(static_cast<char>(c));
-        }
-        return true;
-    };
-    auto read_u32 = [&](uint32_t& v) {
-        unsigned char b[4];
-        if (std::fread(b, 1, 4, f) != 4)
-            return false;
-        v = uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
-        return true;
-    };
-    std::string name, type;
-    for (int part = 0; part < 100000; ++part) {
-        int attributes = 0;
-        for (;; ++attributes) {
-            if (!read_name(name))
-                return;
-            if (name.empty())
-                break;
-            uint32_t size = 0;
-            if (!read_name(type) || !read_u32(size))
-                return;
-            const long at = std::ftell(f);
-            if (at < 0)
-                return;
-            const uint64_t left = file_bytes > uint64_t(at) ? file_bytes - uint64_t(at) : 0;
-            const int32_t claimed = static_cast<int32_t>(size);
-            if (claimed < 0 || uint64_t(claimed) > left)
-                throw Error(path + ": corrupt EXR header: attribute '" + excerpt(name, 32) +
-                            "' claims " + std::to_string(claimed) + " bytes, the file has " +
-                            std::to_string(left) + " left");
-            if (type == "preview") {
-                uint32_t pw = 0, ph = 0;
-                if (size < 8 || !read_u32(pw) || !read_u32(ph) ||
-                    8 + 4 * uint64_t(pw) * ph != size)
-                    throw Error(path + ": corrupt EXR header: preview of " + std::to_string(pw) +
-                                "x" + std::to_string(ph) + " pixels in an attribute of " +
-                                std::to_string(size) + " bytes");
-            }
-            if (fseeko(f, static_cast<off_t>(at) + static_cast<off_t>(size), SEEK_SET) != 0)
-                return;
-        }
-        if (!multipart || attributes == 0)
-            return;
-    }
-}
-
 // An image OpenImageIO reads, decoded a band of rows at a time.
 struct OiioSource {
     std::unique_ptr<BufferedFileProxy> proxy; // outlives `in`, which reads through it
@@ -542,8 +474,12 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
     // unassociated alpha, and a map's texels are radiance whatever its alpha says.
     ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
-    if (starts_with(path, "\x76\x2f\x31\x01")) // OpenEXR, whatever the file is called
-        check_exr_header(path, file_bytes);
+    if (starts_with(path, "\x76\x2f\x31\x01")) { // OpenEXR, whatever the file is called
+        // Every header walked before OpenEXR allocates what it claims (F10, F11), and the first
+        // part's size checked against the budget before OpenEXR sizes its tables by it.
+        const ExrHeaderInfo exr = check_exr_header(path, file_bytes);
+        check_declared_size(path, exr.width, exr.height, 1, exr.stored_bytes, file_bytes);
+    }
     if (starts_with(path, "#?")) { // Radiance HDR, read through our buffered proxy
         proxy = std::make_unique<BufferedFileProxy>(path, file_bytes);
         Filesystem::IOProxy* p = proxy.get();
@@ -615,6 +551,13 @@ int OiioSource::band_rows() const {
                    : static_cast<int>(std::clamp<int64_t>((4 << 20) / row_bytes, 1, 256));
     if (unit > 0 && unit <= spec.height)
         rows = (rows + unit - 1) / unit * unit;
+    // At most 64 MB of texels a band (whole blocks where they fit; a 16384-wide map keeps its
+    // 256-row bands): the reader touches memory a band ahead of the data, so a header that
+    // declares a very wide image its file cannot hold (a 25 kB EXR claiming 1048640x32, one
+    // 403 MB band) fails having touched one band, not the whole image (F7's class).
+    const int max_rows = static_cast<int>(std::max<int64_t>(1, (int64_t(64) << 20) / row_bytes));
+    if (rows > max_rows)
+        rows = unit > 0 && max_rows >= unit ? max_rows / unit * unit : max_rows;
     return std::max(1, std::min(rows, spec.height));
 }
 
