@@ -156,8 +156,7 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
             if (p.strategy == ETK_STRATEGY_VISIBILITY) // beta.w: the vertex's grid cell
                 pl *= etk_guide_factor(S, p, (int)P.beta[slot].w, uv);
             w = etk_mis_weight(p.heuristic, d.w, pl);
-        }
-        else if (p.strategy != ETK_STRATEGY_BSDF)
+        } else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
     }
     if (w > 0.0f) {

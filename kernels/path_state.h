@@ -37,7 +37,7 @@
     X(float4, shadow_L) /* tentative contribution of the shadow ray */                             \
     X(int, pixel)       /* film pixel of the path */                                               \
     X(int, learn_bin)   /* adaptive learning passes: light-share bin of the first hit, -1: none */ \
-    X(int, guide_key)   /* visibility learning: per shadow ray (queue order), cell x regions +    \
+    X(int, guide_key)   /* visibility learning: per shadow ray (queue order), cell x regions +     \
                            region of its direction */                                              \
     X(float, guide_val) /* visibility learning: its unoccluded L cos / pdf, 0 if blocked */
 

@@ -76,8 +76,7 @@ double uv_density(const Fixture& f, int row, int col) {
     const int w = f.p.env.dist_w, h = f.p.env.dist_h;
     const double pmap = double(f.dist.table[row]) *
                         f.dist.table[etk::etk_dist2d_conditional_pdf(h) + row * w + col];
-    const etk::float2 uv =
-        etk::make_float2((col + 0.5f) / float(w), (row + 0.5f) / float(h));
+    const etk::float2 uv = etk::make_float2((col + 0.5f) / float(w), (row + 0.5f) / float(h));
     return pmap * etk::etk_guide_factor(f.S, f.p, 0, uv);
 }
 
@@ -94,8 +93,10 @@ TEST_P(VisibilityGuide, SamplesMatchTheirDensity) {
     double inv_pdf = 0.0, inv_pdf2 = 0.0;
     int bad = 0, mismatched = 0;
     for (int i = 0; i < n; ++i) {
-        const etk::float2 u = etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
-        const etk::float2 sel = etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
+        const etk::float2 u =
+            etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
+        const etk::float2 sel =
+            etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
         const etk::EtkEnvSample s = etk::etk_guide_sample(f.S, f.p, 0, u, sel);
         if (!(s.pdf > 0.0f) || !std::isfinite(s.pdf)) {
             ++bad;
@@ -121,7 +122,8 @@ TEST_P(VisibilityGuide, SamplesMatchTheirDensity) {
             expected[static_cast<size_t>(r) * w + c] = n * d;
         }
     EXPECT_NEAR(integral, 1.0, 1e-4) << "the mixture's density does not integrate to one";
-    const ett::Chi2Result chi = ett::chi2_test(observed, expected, w, h, ett::sidak_alpha(0.01, kTests));
+    const ett::Chi2Result chi =
+        ett::chi2_test(observed, expected, w, h, ett::sidak_alpha(0.01, kTests));
     EXPECT_TRUE(chi.passed) << chi.report;
     // E[1 / pdf] = the sphere's area where the density is positive everywhere (this map).
     const double mean = inv_pdf / n, var = inv_pdf2 / n - mean * mean;

@@ -267,10 +267,14 @@ def geomean(xs):
 
 def write_tables(rows, strategies, band_names, a, ref_seconds, out_dir):
     scenes, g = gains(rows, strategies, "mse")
+    film = f"{a.size[0]}x{a.size[1]}" if a.size else "each scene's film"
+    scenes_arg = f" --scenes {' '.join(a.scenes)}" if a.scenes else ""
+    size_arg = f" --size {a.size[0]} {a.size[1]}" if a.scenes and a.size else ""
     lines = [f"Efficiency (1 / (relative MSE x time)) relative to the paper's MIS; budgets "
              f"{', '.join(f'{b:g} s' for b in a.budgets)}, {a.seeds} seeds, "
-             (f"{a.size[0]}x{a.size[1]}" if a.size else "each scene's film") + ", native back end, reference {ref_seconds:g} s of MIS. "
-             f"Command: `tools/experiments/efficiency.py --budgets {' '.join(f'{b:g}' for b in a.budgets)} "
+             f"{film}, native back end, reference {ref_seconds:g} s of MIS. "
+             f"Command: `tools/experiments/efficiency.py{scenes_arg}{size_arg} --budgets "
+             f"{' '.join(f'{b:g}' for b in a.budgets)} "
              f"--seeds {a.seeds} --strategies {' '.join(strategies)}`.", ""]
     lines.append("| scene | " + " | ".join(strategies) + " | best of light/bsdf/mis |")
     lines.append("|---" * (len(strategies) + 2) + "|")

@@ -48,7 +48,9 @@ class CpuDevice::Lane : public StageExecutor {
         std::copy(guide_val_.begin(), guide_val_.begin() + n, values);
     }
     // The cells' tables live in the device, not the (read-only) prepared scene.
-    void set_guide_cells(const float* cells) { scene_.guide_cells = cells; }
+    void set_guide_cells(const float* cells) {
+        scene_.guide_cells = cells;
+    }
 
     void launch(int stage, int n, const etk::EtkParams& p) override {
         if (n <= 0)

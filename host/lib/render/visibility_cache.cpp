@@ -15,16 +15,16 @@ constexpr double kMaxValue = 4096.0;
 } // namespace
 
 std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, int h) {
-    std::vector<float> out(static_cast<size_t>(K) + static_cast<size_t>(ETK_GUIDE_COLS) *
-                                                        (h + ETK_GUIDE_ROWS),
-                           0.0f);
+    std::vector<float> out(
+        static_cast<size_t>(K) + static_cast<size_t>(ETK_GUIDE_COLS) * (h + ETK_GUIDE_ROWS), 0.0f);
     const float* marginal = dist.data();
     const float* ccdf = dist.data() + etk::etk_dist2d_conditional_cdf(w, h);
     std::vector<double> mass(K, 0.0);
     for (int Rc = 0; Rc < ETK_GUIDE_COLS; ++Rc) {
         const int c0 = etk::etk_guide_col_start(Rc, w), c1 = etk::etk_guide_col_start(Rc + 1, w);
         for (int Rr = 0; Rr < ETK_GUIDE_ROWS; ++Rr) {
-            const int r0 = etk::etk_guide_row_start(Rr, h), r1 = etk::etk_guide_row_start(Rr + 1, h);
+            const int r0 = etk::etk_guide_row_start(Rr, h),
+                      r1 = etk::etk_guide_row_start(Rr + 1, h);
             // Row r's share of the region: p(v_r) / h x the row's conditional mass in [c0, c1).
             std::vector<double> cum(r1 - r0 + 1, 0.0);
             for (int r = r0; r < r1; ++r) {
@@ -94,8 +94,8 @@ std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slot
 VisibilityCache::VisibilityCache(const VisibilityOptions& options,
                                  const std::vector<float>& regions, double scale)
     : opt_(options), mass_(regions.begin(), regions.begin() + K),
-      inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0),
-      sums_(static_cast<size_t>(options.slots) * K, 0), counts_(options.slots, 0) {}
+      inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0), sums_(static_cast<size_t>(options.slots) * K, 0),
+      counts_(options.slots, 0) {}
 
 void VisibilityCache::add(const int* keys, const float* values, int n) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -104,7 +104,8 @@ void VisibilityCache::add(const int* keys, const float* values, int n) {
         if (key < 0 || key >= opt_.slots * K)
             continue;
         const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
-        sums_[key] += static_cast<uint64_t>(std::llround(std::min(v * inv_scale_, kMaxValue) * kUnit));
+        sums_[key] +=
+            static_cast<uint64_t>(std::llround(std::min(v * inv_scale_, kMaxValue) * kUnit));
         ++counts_[key / K];
         ++records_;
     }
