@@ -20,6 +20,7 @@
 #include "path_state.h"
 #include "sampler.h"
 #include "surface.h"
+#include "visibility_guide.h"
 
 ETK_BEGIN
 
@@ -153,9 +154,12 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
             float pl = etk_env_pdf_uv(comp ? S.env_dist_comp : S.env_dist, p.env, uv);
             w = etk_share_continuation_density(s, pl, d.w) *
                 etk_share_weight(p.heuristic, s, pl, d.w, from_light);
-        } else if (etk_strategy_is_mis(p.strategy))
-            w = etk_mis_weight(p.heuristic, d.w, etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv));
-        else if (p.strategy != ETK_STRATEGY_BSDF)
+        } else if (etk_strategy_is_mis(p.strategy)) {
+            float pl = etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
+            if (p.strategy == ETK_STRATEGY_VISIBILITY) // beta.w: the vertex's grid cell
+                pl *= etk_guide_factor(S, p, (int)P.beta[slot].w, uv);
+            w = etk_mis_weight(p.heuristic, d.w, pl);
+        } else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
     }
     if (w > 0.0f) {
@@ -194,12 +198,16 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         if (p.learn && depth == 0)
             P.learn_bin[slot] = S.material_bin[S.tri_material[prim]];
     }
+    int guided = p.strategy == ETK_STRATEGY_VISIBILITY;
+    int cell = guided ? etk_guide_cell(p, s.origin, ng) : 0;
 
     // Light sample (sample A of the adaptive strategy).
     if (p.strategy != ETK_STRATEGY_BSDF && !delta) {
         float2 u = etk_dims(p, pixel, pair);
         float3 c = make_float3(0.0f, 0.0f, 0.0f);
         float3 wi_world;
+        float learn_val = 0.0f;
+        int learn_key = 0;
         if (p.strategy == ETK_STRATEGY_SIS) {
             // One stratum per sample, every stratum once in each run of light_count samples,
             // weighted by light_count x its power.
@@ -248,7 +256,10 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 light_uv = etk_env_uv(p.env, wi_world);
                 pdf_light = 0.25f * ETK_INV_PI;
             } else {
-                EtkEnvSample ls = etk_env_sample(dist, p.env, u);
+                EtkEnvSample ls =
+                    guided ? etk_guide_sample(S, p, cell, u,
+                                              etk_dims(p, pixel, ETK_PAIR_GUIDE + (uint)depth))
+                           : etk_env_sample(dist, p.env, u);
                 wi_world = ls.dir;
                 light_uv = ls.uv;
                 pdf_light = ls.pdf;
@@ -262,15 +273,18 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                               : 1.0f;
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
+                // Visibility learning: what this direction would bring, unweighted, and where.
+                learn_val = etk_luma(L) * fabs(wi.z) / pdf_light;
+                learn_key = cell * ETK_GUIDE_REGIONS + etk_guide_region(p.env, light_uv);
             }
         }
         if (etk_max3(c) > 0.0f) {
             int k = (int)ETK_ATOMIC_INC(Q.counters + ETK_Q_SHADOW);
             // Shadow rays stop at any surface, glass included: light through glass (caustics)
             // is the continuation's to find, as indirect light, never the light sample's.
-            P.shadow_o[slot] = etk_f4(etk_surface_origin(s, wi_world), 0.0f);
+            P.shadow_o[slot] = etk_f4(etk_surface_origin(s, wi_world), as_float((uint)learn_key));
             P.shadow_d[slot] = etk_f4(wi_world, 3.0e38f);
-            P.shadow_L[slot] = etk_f4(c, 0.0f);
+            P.shadow_L[slot] = etk_f4(c, learn_val);
             Q.shadow[k] = slot;
         }
     }
@@ -327,20 +341,24 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         return;
     P.ray_o[slot] = etk_f4(etk_surface_origin(s, wi_world), (float)(depth + 1));
     P.ray_d[slot] = etk_f4(normalize(wi_world), delta_sample ? -1.0f : pdf);
-    P.beta[slot] = etk_f4(beta, etk_share_code(share, b_from_light, flags));
+    P.beta[slot] = etk_f4(beta, guided ? (float)cell : etk_share_code(share, b_from_light, flags));
     Q.ray_out[ETK_ATOMIC_INC(Q.counters + ETK_Q_RAY_OUT)] = slot;
 }
 
 // Stage 5: shadow rays add their contribution when nothing blocks them.
 ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
     (void)F;
-    (void)p;
     int slot = Q.shadow[i];
     float4 o = P.shadow_o[slot], d = P.shadow_d[slot];
     EtkHit h;
-    if (!etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), d.w, 1, &h)) {
+    int visible = !etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), d.w, 1, &h);
+    if (visible) {
         float4 r = P.radiance[slot];
         P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.shadow_L[slot]), 0.0f);
+    }
+    if (p.guide_learn) { // the visibility strategy's records, in shadow-queue order (host reads)
+        P.guide_key[i] = (int)as_uint(o.w);
+        P.guide_val[i] = visible ? P.shadow_L[slot].w : 0.0f;
     }
 }
 

@@ -14,6 +14,7 @@
 #define ETK_STRATEGY_LIGHTS 5      // a directional light set, all lights at every hit
 #define ETK_STRATEGY_COMPENSATED 6 // MIS with the compensated map distribution (env_dist_comp)
 #define ETK_STRATEGY_ADAPTIVE 7    // compensated map, light/BSDF share learned per material bin
+#define ETK_STRATEGY_VISIBILITY 8  // MIS, light samples guided by learned visibility
 #define ETK_HEURISTIC_BALANCE 0
 #define ETK_HEURISTIC_POWER 1
 // Material bins of the adaptive strategy's light shares (host/lib/render/light_share.h).
@@ -23,7 +24,8 @@ ETK_BEGIN
 
 // The strategies that draw one light and one BSDF sample and weight them by MIS.
 ETK_FN int etk_strategy_is_mis(int strategy) {
-    return strategy == ETK_STRATEGY_MIS || strategy == ETK_STRATEGY_COMPENSATED;
+    return strategy == ETK_STRATEGY_MIS || strategy == ETK_STRATEGY_COMPENSATED ||
+           strategy == ETK_STRATEGY_VISIBILITY;
 }
 
 // Adaptive strategy: how a material bin samples, as flags beside its light share.
@@ -71,6 +73,15 @@ typedef struct {
     // and how the bin samples (ETK_BIN_*).
     float light_share[ETK_SHARE_BINS];
     int bin_flags[ETK_SHARE_BINS];
+    // Visibility strategy (kernels/visibility_guide.h): the hash grid over surface positions
+    // (origin, 1 / cell size, slots: a power of two), the map's defensive share, whether the
+    // cells' tables hold anything learned yet, and whether this pass records shadow-ray outcomes.
+    float guide_origin[3];
+    float guide_inv_cell;
+    int guide_slots;
+    float guide_alpha;
+    int guide_ready;
+    int guide_learn;
 } EtkParams;
 
 ETK_END

@@ -24,7 +24,9 @@
     X(int, material_tex)    /* textures of each material, ETK_TEX_SLOTS ints (texture.h) */        \
     X(float, tri_uv)        /* texture coordinates: (u, v) of 3 corners per triangle */            \
     X(float4, tex_info)     /* per texture: (offset, width, height, channels), uv transform */     \
-    X(float, tex_texels)    /* every texture's texels, one flat array */
+    X(float, tex_texels)    /* every texture's texels, one flat array */                           \
+    X(float, guide_regions) /* visibility: the map's mass and row tables per region */             \
+    X(float, guide_cells)   /* visibility: per hash-grid cell, a CDF over the regions */
 
 // Path state, one element per path in flight: X(type, name).
 #define ETK_PATH_FIELDS(X)                                                                         \
@@ -38,7 +40,10 @@
     X(float4, shadow_d) /* shadow ray direction; w: its length */                                  \
     X(float4, shadow_L) /* tentative contribution of the shadow ray */                             \
     X(int, pixel)       /* film pixel of the path */                                               \
-    X(int, learn_bin)   /* adaptive learning passes: light-share bin of the first hit, -1: none */
+    X(int, learn_bin)   /* adaptive learning passes: light-share bin of the first hit, -1: none */ \
+    X(int, guide_key)   /* visibility learning: per shadow ray (queue order), cell x regions +     \
+                           region of its direction */                                              \
+    X(float, guide_val) /* visibility learning: its unoccluded L cos / pdf, 0 if blocked */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces.

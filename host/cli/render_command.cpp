@@ -188,6 +188,13 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                             {"learning_passes_extra", s.learning_passes},
                             {"materials", shares}};
     }
+    if (st.strategy == Strategy::visibility)
+        j["visibility"] = {{"learning_passes_extra", s.learning_passes},
+                           {"learning_seconds", s.guide_learning_seconds},
+                           {"update_seconds", s.guide_update_seconds},
+                           {"records", s.guide_records},
+                           {"host_bytes", s.guide_host_bytes},
+                           {"device_bytes", s.guide_device_bytes}};
     j["render_seconds"] = render_s;
     j["seconds_per_spp"] = render_s / std::max(1, rendered);
     j["nonfinite_samples"] = s.nonfinite_samples;

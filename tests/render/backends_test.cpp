@@ -78,8 +78,10 @@ TEST_P(Backends, DepthOneEqualUpToRounding) {
     // The paper's MIS, MIS with the compensated distribution and visible-normal sampling, and
     // the adaptive strategy (its light shares learned from the first passes on each back end:
     // equal records give equal shares).
-    for (et::Strategy strategy :
-         {et::Strategy::mis, et::Strategy::compensated, et::Strategy::adaptive}) {
+    // The visibility strategy: its tables learned from the first passes on each back end (equal
+    // records, summed in fixed point, give equal tables).
+    for (et::Strategy strategy : {et::Strategy::mis, et::Strategy::compensated,
+                                  et::Strategy::adaptive, et::Strategy::visibility}) {
         SCOPED_TRACE(et::name_of(strategy));
         s.settings.strategy = strategy;
         const auto cl = ett::render(s, "opencl", spp, false);

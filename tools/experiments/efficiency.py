@@ -29,6 +29,11 @@ OUT/ref/ by scene and duration.
 Fireflies: the brightest pixel of each render over the brightest pixel of the reference (max over
 seeds); NaN/Inf: the renders' nonfinite_samples and any non-finite pixel.
 
+--scenes FILE... measures given scene files instead (issue 11: the interiors of the visibility
+strategy), each at its own depth and film size (--size overrides it), the whole image as one
+region: `tools/experiments/efficiency.py --scenes scenes/interiors/window_room.json --strategies
+mis visibility --budgets 4 16 --ref-seconds 240 --out docs/figures/visibility`.
+
 Writes OUT/efficiency.csv (every render), OUT/efficiency.md (the tables for docs/results.md) and
 OUT/efficiency.png."""
 import json
@@ -73,6 +78,30 @@ def scene_json(map_file, depth, width, height):
         "shapes": shapes,
         "render": {"max_depth": depth},
     }
+
+
+def file_scene(path, cache, size):
+    """A scene file copied into the cache with its relative files made absolute (so it renders
+    from there) and, with `size`, its film resized. Returns (name, path)."""
+    path = os.path.abspath(path)
+    with open(path) as f:
+        s = json.load(f)
+    here = os.path.dirname(path)
+    for shape in s.get("shapes", []):
+        if "file" in shape and os.path.exists(os.path.join(here, shape["file"])):
+            shape["file"] = os.path.join(here, shape["file"])
+    env = s.get("environment", {})
+    if "map" in env and os.path.exists(os.path.join(here, env["map"])):
+        env["map"] = os.path.join(here, env["map"])
+    if size:
+        s.setdefault("film", {})["width"], s["film"]["height"] = size
+    s.pop("output", None)
+    name = os.path.splitext(os.path.basename(path))[0]
+    w, h = s.get("film", {}).get("width", 0), s.get("film", {}).get("height", 0)
+    out = os.path.join(cache, f"{name}-{w}x{h}.json")
+    with open(out, "w") as f:
+        json.dump(s, f, indent=1)
+    return name, out
 
 
 def read_pfm(path):
@@ -144,7 +173,9 @@ def main():
     p.add_argument("--strategies", nargs="+", default=["light", "bsdf", "mis"])
     p.add_argument("--ref-seconds", type=float, default=None,
                    help="reference render time (default 40 x the largest budget)")
-    p.add_argument("--size", type=int, nargs=2, default=[320, 72])
+    p.add_argument("--size", type=int, nargs=2, default=None, help="film (default 320 x 72; "
+                   "with --scenes, each scene's own)")
+    p.add_argument("--scenes", nargs="+", default=None, help="scene files instead of the suite")
     a = p.parse_args()
     if a.tiny:
         a.budgets, a.seeds, a.maps, a.depths = [0.05], 2, ["grace"], [1]
@@ -155,20 +186,31 @@ def main():
     os.makedirs(cache, exist_ok=True)
     work = common.tmpdir("efficiency")
     extra = []  # common.render: the native back end
-    width, height = a.size
+    if a.size is None and not a.scenes:
+        a.size = [320, 72]
+    width, height = a.size or (0, 0)
     strategies = a.strategies if "mis" in a.strategies else ["mis"] + a.strategies
     band_names = [b for b, _ in MATERIALS]
 
     rows = []  # one per render
-    for map_key in a.maps:
-        for depth in a.depths:
-            name = f"{map_key}-d{depth}"
-            scene = os.path.join(cache, f"{name}-{width}x{height}.json")
-            with open(scene, "w") as f:
-                json.dump(scene_json(MAPS[map_key][0], depth, width, height), f, indent=1)
-            ref, ref_var = reference(scene, f"{name}-{width}x{height}", ref_seconds, cache, extra)
+    if a.scenes:
+        band_names = []
+        cases = [file_scene(f, cache, a.size) + (None, None) for f in a.scenes]
+    else:
+        cases = []
+        for map_key in a.maps:
+            for depth in a.depths:
+                name = f"{map_key}-d{depth}"
+                scene = os.path.join(cache, f"{name}-{width}x{height}.json")
+                with open(scene, "w") as f:
+                    json.dump(scene_json(MAPS[map_key][0], depth, width, height), f, indent=1)
+                cases.append((name, scene, map_key, depth))
+    for name, scene, map_key, depth in cases:
+            tag = os.path.splitext(os.path.basename(scene))[0] if a.scenes else f"{name}-{width}x{height}"
+            ref, ref_var = reference(scene, tag, ref_seconds, cache, extra)
             ref_max = float(ref.mean(axis=2).max())
-            regions = [(0, width)] + bands(width)
+            width = ref.shape[1]
+            regions = [(0, width)] + (bands(width) if band_names else [])
             rel_denom = ref ** 2 + (0.01 * float(ref.mean())) ** 2
             ref_noise = [float((ref_var / rel_denom)[:, c0:c1].mean()) for c0, c1 in regions]
             for budget in a.budgets:
@@ -225,10 +267,14 @@ def geomean(xs):
 
 def write_tables(rows, strategies, band_names, a, ref_seconds, out_dir):
     scenes, g = gains(rows, strategies, "mse")
+    film = f"{a.size[0]}x{a.size[1]}" if a.size else "each scene's film"
+    scenes_arg = f" --scenes {' '.join(a.scenes)}" if a.scenes else ""
+    size_arg = f" --size {a.size[0]} {a.size[1]}" if a.scenes and a.size else ""
     lines = [f"Efficiency (1 / (relative MSE x time)) relative to the paper's MIS; budgets "
              f"{', '.join(f'{b:g} s' for b in a.budgets)}, {a.seeds} seeds, "
-             f"{a.size[0]}x{a.size[1]}, native back end, reference {ref_seconds:g} s of MIS. "
-             f"Command: `tools/experiments/efficiency.py --budgets {' '.join(f'{b:g}' for b in a.budgets)} "
+             f"{film}, native back end, reference {ref_seconds:g} s of MIS. "
+             f"Command: `tools/experiments/efficiency.py{scenes_arg}{size_arg} --budgets "
+             f"{' '.join(f'{b:g}' for b in a.budgets)} "
              f"--seeds {a.seeds} --strategies {' '.join(strategies)}`.", ""]
     lines.append("| scene | " + " | ".join(strategies) + " | best of light/bsdf/mis |")
     lines.append("|---" * (len(strategies) + 2) + "|")

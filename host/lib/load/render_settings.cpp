@@ -16,7 +16,8 @@ constexpr Named<Strategy> kStrategies[] = {
     {Strategy::light, "light"},       {Strategy::bsdf, "bsdf"},
     {Strategy::mis, "mis"},           {Strategy::uniform, "uniform"},
     {Strategy::sis, "sis"},           {Strategy::compensated, "compensated"},
-    {Strategy::adaptive, "adaptive"}, {Strategy::lights, "lights"}};
+    {Strategy::adaptive, "adaptive"}, {Strategy::visibility, "visibility"},
+    {Strategy::lights, "lights"}};
 constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::balance, "balance"},
                                                {MisHeuristic::power, "power"}};
 constexpr Named<SamplerKind> kSamplers[] = {{SamplerKind::sobol, "sobol"},
@@ -53,7 +54,7 @@ E parse_in(const Named<E> (&table)[N], const std::string& s, const std::string& 
     throw Error(what + ": unknown " + kind + " '" + shown + "' (use " + choices + ")");
 }
 
-constexpr size_t kUserStrategies = 7; // all but "lights"
+constexpr size_t kUserStrategies = 8; // all but "lights"
 
 } // namespace
 

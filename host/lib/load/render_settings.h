@@ -20,6 +20,7 @@ enum class Strategy : int {
     compensated = ETK_STRATEGY_COMPENSATED, // MIS, light samples from the compensated map
     adaptive = ETK_STRATEGY_ADAPTIVE, // compensated map, light/BSDF shares learned per material
     lights = ETK_STRATEGY_LIGHTS,     // a directional light set (--lights), never named by a user
+    visibility = ETK_STRATEGY_VISIBILITY, // MIS, light samples guided by learned visibility
 };
 // How GGX lobes are sampled (kernels/bsdf.h): automatic picks vndf for the compensated and
 // adaptive strategies and ndf, the paper's, for the others, so that `mis` stays the paper's

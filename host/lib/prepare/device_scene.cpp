@@ -2,6 +2,7 @@
 #include "prepare/env_compensation.h"
 
 #include "prepare/bvh_build.h"
+#include "render/visibility_cache.h"
 #include "util/error.h"
 
 #include <algorithm>
@@ -169,6 +170,31 @@ void add_strata(const VoronoiStrata& v, DeviceScene& d) {
     d.params.strata_height = v.height;
 }
 
+// The visibility strategy: its hash grid over the scene's bounds, the map's region tables and
+// the cells' initial tables (the map's own distribution).
+void add_visibility_guide(const Scene& scene, DeviceScene& d) {
+    const VisibilityOptions opt;
+    glm::vec3 lo(0.0f), hi(0.0f);
+    if (!scene.triangles.positions.empty()) {
+        lo = hi = scene.triangles.positions[0];
+        for (const glm::vec3& v : scene.triangles.positions) {
+            lo = glm::min(lo, v);
+            hi = glm::max(hi, v);
+        }
+    }
+    const glm::vec3 ext = hi - lo;
+    const float longest = std::max({ext.x, ext.y, ext.z, 1e-6f});
+    etk::EtkParams& p = d.params;
+    for (int k = 0; k < 3; ++k)
+        p.guide_origin[k] = lo[k];
+    p.guide_inv_cell = static_cast<float>(opt.resolution) / longest;
+    p.guide_slots = opt.slots;
+    p.guide_alpha = opt.alpha;
+    d.guide_regions = guide_region_tables(d.env_dist, p.env.dist_w, p.env.dist_h);
+    d.guide_cells = guide_prior_cells(d.guide_regions, opt.slots);
+    d.guide_map_power = guide_map_power(d.env_texels, p.env.tex_w, p.env.tex_h);
+}
+
 } // namespace
 
 etk::EtkScene DeviceScene::view() const {
@@ -220,6 +246,8 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
         d.env_dist_comp = compensate_distribution(scene.env.dist).table;
     d.env_dist = std::move(scene.env.dist.table);
     d.env_texels = std::move(scene.env.image.rgb);
+    if (st.strategy == Strategy::visibility)
+        add_visibility_guide(scene, d);
     return d;
 }
 

@@ -24,6 +24,7 @@ struct DeviceScene {
     size_t triangle_count = 0;
     int map_width = 0, map_height = 0;
     double map_build_seconds = 0.0;
+    double guide_map_power = 0.0; // visibility strategy: the learning's unit
     struct {
         int nodes = 0, depth = 0;
         double sah_cost = 0.0, build_seconds = 0.0;

@@ -3,6 +3,7 @@
 #include "util/error.h"
 
 #include <algorithm>
+#include <string>
 
 namespace et {
 namespace {
@@ -86,6 +87,10 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     args_[etk::ETK_ARG_##name] = upload(ctx, scene.name, lim.host_unified);
         ETK_SCENE_BUFFERS(ET_UPLOAD)
 #undef ET_UPLOAD
+        // The visibility strategy rewrites its tables between passes: a copy of its own, never
+        // the prepared scene's memory.
+        args_[etk::ETK_ARG_guide_cells] = upload(ctx, scene.guide_cells, false);
+        guide_floats_ = std::max<size_t>(1, scene.guide_cells.size());
 #define ET_ALLOC(type, name)                                                                       \
     args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * n);
         ETK_PATH_FIELDS(ET_ALLOC)
@@ -163,6 +168,25 @@ void ClDevice::read_counters(uint32_t* out) {
 
 void ClDevice::read_learning(int n, int* bins) {
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_learn_bin], CL_TRUE, 0, sizeof(cl_int) * n, bins);
+}
+
+void ClDevice::read_guide(int n, int* keys, float* values) {
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_key], CL_TRUE, 0, sizeof(cl_int) * n, keys);
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_val], CL_TRUE, 0, sizeof(cl_float) * n,
+                             values);
+}
+
+void ClDevice::upload_guide(const std::vector<float>& cells) {
+    if (cells.size() != guide_floats_)
+        throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
+                    std::to_string(guide_floats_));
+    try {
+        queue_.enqueueWriteBuffer(args_[etk::ETK_ARG_guide_cells], CL_TRUE, 0,
+                                  sizeof(cl_float) * cells.size(), cells.data());
+    } catch (const cl::Error& e) {
+        throw Error(std::string("cannot upload the visibility tables (") + e.what() +
+                    "): " + cl_error_name(e.err()));
+    }
 }
 
 void ClDevice::launch(int stage, int n, const etk::EtkParams& params) {

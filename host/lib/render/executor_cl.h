@@ -31,6 +31,8 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     void reset_counters() override;
     void read_counters(uint32_t* counters) override;
     void read_learning(int n, int* bins) override;
+    void read_guide(int n, int* keys, float* values) override;
+    void upload_guide(const std::vector<float>& cells) override;
     void launch(int stage, int n, const etk::EtkParams& params) override;
 
     // Events of launches not yet accounted (for tests: stays bounded during a render).
@@ -54,6 +56,7 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     cl::Buffer queue_a_, queue_b_; // bound to ray_in / ray_out
     std::vector<double> seconds_;  // per stage: finished launches
     std::vector<std::pair<int, cl::Event>> pending_;
+    size_t guide_floats_ = 1; // size of the visibility tables' buffer
 };
 
 } // namespace et

@@ -1,9 +1,11 @@
 #include "render/executor_cpu.h"
 
+#include "util/error.h"
 #include "util/parallel.h"
 #include "util/timer.h"
 
 #include <algorithm>
+#include <string>
 
 namespace et {
 
@@ -41,6 +43,14 @@ class CpuDevice::Lane : public StageExecutor {
     void read_learning(int n, int* bins) override {
         std::copy(learn_bin_.begin(), learn_bin_.begin() + n, bins);
     }
+    void read_guide(int n, int* keys, float* values) override {
+        std::copy(guide_key_.begin(), guide_key_.begin() + n, keys);
+        std::copy(guide_val_.begin(), guide_val_.begin() + n, values);
+    }
+    // The cells' tables live in the device, not the (read-only) prepared scene.
+    void set_guide_cells(const float* cells) {
+        scene_.guide_cells = cells;
+    }
 
     void launch(int stage, int n, const etk::EtkParams& p) override {
         if (n <= 0)
@@ -77,10 +87,19 @@ class CpuDevice::Lane : public StageExecutor {
 };
 
 CpuDevice::CpuDevice(const DeviceScene& scene, Film& film, int threads, int wave)
-    : wave_(wave > 0 ? wave : 1024) {
+    : guide_cells_(scene.guide_cells), wave_(wave > 0 ? wave : 1024) {
     const int n = thread_count(threads);
-    for (int t = 0; t < n; ++t)
+    for (int t = 0; t < n; ++t) {
         lanes_.push_back(std::make_unique<Lane>(scene, film, wave_));
+        lanes_.back()->set_guide_cells(guide_cells_.data());
+    }
+}
+
+void CpuDevice::upload_guide(const std::vector<float>& cells) {
+    if (cells.size() != guide_cells_.size())
+        throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
+                    std::to_string(guide_cells_.size()));
+    std::copy(cells.begin(), cells.end(), guide_cells_.begin()); // between passes: no reader
 }
 
 CpuDevice::~CpuDevice() = default;

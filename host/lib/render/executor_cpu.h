@@ -26,8 +26,10 @@ class CpuDevice : public WavefrontDevice {
     void download_film(Film&) override {} // the stages write the host film directly
     void upload_film(const Film&) override {}
     std::vector<std::pair<std::string, double>> stage_seconds() override;
+    void upload_guide(const std::vector<float>& cells) override;
 
   private:
+    std::vector<float> guide_cells_; // the visibility strategy's tables, read by every lane
     class Lane;
     std::vector<std::unique_ptr<Lane>> lanes_;
     int wave_;

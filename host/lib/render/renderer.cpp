@@ -18,18 +18,30 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
     choices_.fill(-1);
     learning_ = scene.settings.strategy == Strategy::adaptive && scene.settings.light_share < 0.0f;
     options_.last_bounce = scene.settings.max_depth <= 1;
+    guide_ = scene.settings.strategy == Strategy::visibility;
+    if (guide_) {
+        cache_ = std::make_unique<VisibilityCache>(guide_options_, scene.guide_regions,
+                                                   scene.guide_map_power);
+        stats_.guide_host_bytes = cache_->bytes();
+        stats_.guide_device_bytes =
+            (scene.guide_cells.size() + scene.guide_regions.size()) * sizeof(float);
+    }
+}
+
+int Renderer::learning_pass_count() const {
+    return learning_ ? options_.learning_passes : guide_ ? guide_options_.learning_passes : 0;
 }
 
 void Renderer::render_sample(uint32_t sample_index) {
     Timer timer;
     // Learning needs samples 0 .. L-1 in order; rendered first, and kept only by the process
     // whose first sample is 0.
-    while (learning_ && next_learning_pass_ < options_.learning_passes &&
-           sample_index != static_cast<uint32_t>(next_learning_pass_)) {
+    const int L = learning_pass_count();
+    while (next_learning_pass_ < L && sample_index != static_cast<uint32_t>(next_learning_pass_)) {
         run(static_cast<uint32_t>(next_learning_pass_), true, false);
         ++stats_.learning_passes;
     }
-    run(sample_index, learning_ && next_learning_pass_ < options_.learning_passes, true);
+    run(sample_index, next_learning_pass_ < L, true);
     stats_.samples_per_pixel += 1;
     stats_.seconds += timer.seconds();
 }
@@ -42,8 +54,11 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     // Samples 0 .. L-1 are learning samples whether or not they are learnt from: the image
     // depends on the sample index alone.
     p.learn = learning_ && sample_index < static_cast<uint32_t>(options_.learning_passes);
+    p.guide_ready = guide_ready_ ? 1 : 0;
+    p.guide_learn = guide_ && learn ? 1 : 0;
+    Timer pass_timer;
     LightShareLearner* learner = nullptr;
-    if (learn) {
+    if (learn && learning_) {
         if (!learner_)
             learner_ = std::make_unique<LightShareLearner>(options_, film_.width(), film_.height(),
                                                            scene_.params.seed);
@@ -56,13 +71,26 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     ETK_FILM_FIELDS(ET_ZERO)
 #undef ET_ZERO
     device_->upload_film(film_);
-    const RayCounts c = run_pass(*device_, p, learner);
+    const RayCounts c = run_pass(*device_, p, learner, p.guide_learn ? cache_.get() : nullptr);
     device_->download_film(film_);
     if (keep)
         sums_.add_pass(film_);
-    if (learn) {
+    if (learn && guide_) {
+        // The tables for the passes that follow: rebuilt after passes 1, 2, 4, ... L.
+        if (VisibilityCache::update_after(next_learning_pass_, guide_options_.learning_passes)) {
+            Timer t;
+            device_->upload_guide(cache_->tables());
+            guide_ready_ = true;
+            stats_.guide_update_seconds += t.seconds();
+        }
+        stats_.guide_records = cache_->records();
+        stats_.guide_learning_seconds += pass_timer.seconds();
+        if (next_learning_pass_ + 1 == guide_options_.learning_passes)
+            cache_.reset(); // learned: the sums are no longer needed
+    }
+    if (learn && learning_) {
         learner->end_pass(film_.film_sum);
-        if (++next_learning_pass_ == options_.learning_passes) {
+        if (next_learning_pass_ + 1 == options_.learning_passes) {
             choices_ = learner_->choices();
             for (int b = 0; b < ETK_SHARE_BINS; ++b) {
                 shares_[b] = etk::etk_learning_share(choices_[b], options_.last_bounce);
@@ -71,6 +99,8 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
             learner_.reset();
         }
     }
+    if (learn)
+        ++next_learning_pass_;
     stats_.camera_rays += c.camera;
     stats_.continuation_rays += c.continuation;
     stats_.shadow_rays += c.shadow;

@@ -11,6 +11,7 @@
 #include "render/film_sums.h"
 #include "render/light_share.h"
 #include "render/schedule.h"
+#include "render/visibility_cache.h"
 
 #include <array>
 #include <cstdint>
@@ -28,6 +29,10 @@ struct RenderStats {
     int samples_per_pixel = 0;
     int learning_passes = 0; // adaptive: passes rendered only to learn (resumes, sample ranges)
     double seconds = 0.0;
+    // Visibility strategy: learning passes' time (records read and summed included), the
+    // tables' rebuilds and uploads, records, and the learned structure's memory.
+    double guide_learning_seconds = 0.0, guide_update_seconds = 0.0;
+    uint64_t guide_records = 0, guide_host_bytes = 0, guide_device_bytes = 0;
     // Time per stage (seconds): device time from profiling events for OpenCL, thread time natively.
     std::vector<std::pair<std::string, double>> stage_seconds;
     uint64_t rays() const { return camera_rays + continuation_rays + shadow_rays; }
@@ -73,6 +78,11 @@ class Renderer {
     int next_learning_pass_ = 0; // the learning pass that comes next (L: learned)
     LightShareOptions options_;
     std::unique_ptr<LightShareLearner> learner_;
+    bool guide_ = false;       // visibility strategy
+    bool guide_ready_ = false; // its tables hold something learned
+    VisibilityOptions guide_options_;
+    std::unique_ptr<VisibilityCache> cache_;
+    int learning_pass_count() const;
 };
 
 // The renderer for scene.settings (back end, device, paths in flight, threads). `build`

@@ -1,6 +1,8 @@
 #include "render/schedule.h"
 
 #include "render/light_share.h"
+#include "render/visibility_cache.h"
+#include "util/error.h"
 
 #include <algorithm>
 #include <atomic>
@@ -15,6 +17,14 @@ const char* stage_name(int stage) {
     return stage >= 0 && stage < etk::ETK_STAGE_COUNT ? names[stage] : "?";
 }
 
+void StageExecutor::read_guide(int, int*, float*) {
+    throw Error("this back end cannot read the visibility strategy's records");
+}
+
+void WavefrontDevice::upload_guide(const std::vector<float>&) {
+    throw Error("this back end cannot take the visibility strategy's tables");
+}
+
 RayCounts& RayCounts::operator+=(const RayCounts& o) {
     camera += o.camera;
     continuation += o.continuation;
@@ -25,8 +35,10 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
 }
 
 void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
-              LightShareLearner* learner) {
+              LightShareLearner* learner, VisibilityCache* guide) {
     p.first_pixel = first;
+    std::vector<int> keys;
+    std::vector<float> values;
     // A light set sums all its lights at a hit; every other strategy takes one light sample.
     const int shade =
         p.strategy == ETK_STRATEGY_LIGHTS ? etk::ETK_STAGE_shade_lights : etk::ETK_STAGE_shade_hits;
@@ -49,6 +61,13 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
         ex.read_counters(c);
         ex.launch(etk::ETK_STAGE_trace_shadows, static_cast<int>(c[etk::ETK_Q_SHADOW]), p);
         counts.shadow += c[etk::ETK_Q_SHADOW] + c[etk::ETK_Q_LIGHT_RAYS];
+        if (guide && p.guide_learn && c[etk::ETK_Q_SHADOW] > 0) {
+            const int m = static_cast<int>(c[etk::ETK_Q_SHADOW]);
+            keys.resize(m);
+            values.resize(m);
+            ex.read_guide(m, keys.data(), values.data());
+            guide->add(keys.data(), values.data(), m);
+        }
         rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
         swapped = !swapped;
     }
@@ -61,7 +80,7 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
 }
 
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
-                   LightShareLearner* learner) {
+                   LightShareLearner* learner, VisibilityCache* guide) {
     const int pixels = params.width * params.height, wave = device.wave_size();
     std::atomic<int> next{0};
     std::vector<RayCounts> counts(device.lanes());
@@ -71,7 +90,7 @@ RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
             if (first >= pixels)
                 break;
             run_wave(device.lane(k), params, first, std::min(wave, pixels - first), counts[k],
-                     learner);
+                     learner, guide);
         }
     });
     device.finish();

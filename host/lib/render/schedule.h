@@ -29,6 +29,9 @@ class StageExecutor {
     virtual void launch(int stage, int n, const etk::EtkParams& params) = 0;
     // Learning passes of the adaptive strategy: the first hit's bin of path slots 0 .. n-1.
     virtual void read_learning(int n, int* bins) = 0;
+    // Learning passes of the visibility strategy: the records of shadow rays 0 .. n-1 (in queue
+    // order) of the last trace_shadows launch.
+    virtual void read_guide(int n, int* keys, float* values);
 };
 
 struct RayCounts {
@@ -40,6 +43,7 @@ struct RayCounts {
 
 class Film;
 class LightShareLearner;
+class VisibilityCache;
 
 // A back end: one or more executors ("lanes") that can run waves concurrently, and the film.
 class WavefrontDevice {
@@ -57,17 +61,20 @@ class WavefrontDevice {
     virtual void upload_film(const Film& film) = 0;
     // Time per stage so far: device time for OpenCL, summed thread time natively.
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
+    // The visibility strategy's per-cell tables (EtkScene.guide_cells) for the passes to come.
+    virtual void upload_guide(const std::vector<float>& cells);
 };
 
 // One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
 // the film. Adds the rays traced to `counts`.
-// With params.learn, hands the first-hit bins of the wave's pixels to `learner`.
+// With params.learn, hands the first-hit bins of the wave's pixels to `learner`; with
+// params.guide_learn, every bounce's shadow-ray records to `guide`.
 void run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
-              LightShareLearner* learner = nullptr);
+              LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr);
 
 // One pass: sample params.sample_index of every pixel, in waves of the device's size handed
 // to its lanes as they free up (learner: as run_wave).
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
-                   LightShareLearner* learner = nullptr);
+                   LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr);
 
 } // namespace et

@@ -1,0 +1,70 @@
+// The visibility strategy's learned tables (kernels/visibility_guide.h), on the host: the map's
+// region tables (built once from its distribution), the hash grid's placement over the scene, and
+// the learning between passes.
+//
+// Learning: during the learning passes (samples 0 .. L-1) every shadow ray of the visibility
+// strategy leaves a record (cell x regions + region, value): value = luminance(L) cos / pdf of
+// its direction if nothing blocked it, else 0 (the shadow stage writes them in queue order; the
+// schedule hands each bounce's records here). Per cell and region the values are summed in
+// 64-bit fixed point, so the sums -- and the tables -- do not depend on the order records
+// arrive in (threads, lanes, wave sizes, back ends): the tables depend on the seed alone. Each
+// value estimates, for the cell, the integral of L V cos over the region times the samples
+// drawn; after passes 1, 2, 4, 8 ... L the host turns the sums into a CDF per cell:
+//   P(R) = n / (n + n0) S(R) / sum S  +  n0 / (n + n0) M_R        (n records in the cell)
+// -- shrinkage towards the map's own region masses M_R where a cell has few records, the map's
+// distribution where it has none or saw no light -- uploaded for the passes that follow.
+// Passes L and later render with the last table and record nothing.
+#pragma once
+#include "kernels/visibility_guide.h"
+
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+namespace et {
+
+struct VisibilityOptions {
+    int slots = 1 << 14;      // hash-grid cells (a power of two)
+    int resolution = 8;       // cells along the scene's longest side (few records per cell
+                              // otherwise: measured in docs/results.md, issue 11)
+    float alpha = 0.25f;      // the map's defensive share of every light sample
+    int learning_passes = 16; // samples 0 .. 15 record shadow rays
+    double prior = 32.0;      // n0: records a cell needs before its own sums weigh half
+};
+
+// The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).
+std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, int h);
+
+// The map's power (luminance over the sphere), the unit the learning's fixed point is relative to.
+double guide_map_power(const std::vector<float>& rgb, int w, int h);
+
+// Every cell's table before anything is learned: the map's region masses (the map's own
+// distribution).
+std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots);
+
+class VisibilityCache {
+  public:
+    // regions: guide_region_tables; scale: the map's power (values are kept relative to it).
+    VisibilityCache(const VisibilityOptions& options, const std::vector<float>& regions,
+                    double scale);
+    // One bounce's records (thread-safe).
+    void add(const int* keys, const float* values, int n);
+    // The per-cell CDFs from everything recorded so far (slots x (K + 1) floats).
+    std::vector<float> tables() const;
+    // Host memory of the sums, bytes.
+    uint64_t bytes() const { return sums_.size() * sizeof(uint64_t) + counts_.size() * 4; }
+    uint64_t records() const { return records_; }
+    // Whether the table should be rebuilt after learning pass `pass` (0-based): 1, 2, 4, ...
+    static bool update_after(int pass, int learning_passes);
+
+  private:
+    VisibilityOptions opt_;
+    std::vector<double> mass_; // M_R
+    double inv_scale_;
+    std::vector<uint64_t> sums_;   // slots x K, fixed point
+    std::vector<uint32_t> counts_; // records per slot
+    uint64_t records_ = 0;
+    mutable std::mutex mutex_;
+};
+
+} // namespace et

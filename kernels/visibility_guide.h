@@ -1,0 +1,147 @@
+// Environment sampling that learns visibility (the visibility strategy; issue 11). In a room lit
+// through windows most directions the map's distribution picks hit a wall: the map knows the
+// light, not what blocks it. A hash grid over surface positions (with the dominant axis and sign
+// of the geometric normal) holds per cell a distribution over ETK_GUIDE_REGIONS coarse lat-long
+// regions of the map, learned from the outcomes of earlier shadow rays
+// (host/lib/render/visibility_cache.h). A light sample draws
+//   with probability alpha     from the map's distribution (the paper's),
+//   otherwise                  a region R from the cell's table, then a direction inside R
+//                              proportionally to the map (the map's own 2D table restricted to
+//                              R's rows and columns, so the map's fine structure is kept),
+// so the density is p(w) = p_map(w) (alpha + (1 - alpha) P_cell(R(w)) / M_R(w)), M_R the map's
+// mass in R: positive wherever the map is (unbiased), and evaluated the same way for MIS by the
+// escaped stage. Collisions of the hash merge two cells' tables: the density stays the one
+// sampled, only less well fitted.
+//
+// guide_regions: [0, K) the map's mass per region, M_R (sum 1); then, per region column C and
+// row R, the CDF over the region's distribution rows of p(v_r) x the row's mass in C's columns:
+// rows(R) + 1 entries at K + C (h + ETK_GUIDE_ROWS) + row_start(R) + R.
+// guide_cells: per slot, K + 1 CDF entries over the regions (0 ... 1).
+#ifndef ETK_VISIBILITY_GUIDE_H
+#define ETK_VISIBILITY_GUIDE_H
+#include "color.h"
+#include "compat.h"
+#include "envmap.h"
+#include "params.h"
+#include "path_state.h"
+#include "piecewise_constant.h"
+
+#define ETK_GUIDE_ROWS 8
+#define ETK_GUIDE_COLS 16
+#define ETK_GUIDE_REGIONS (ETK_GUIDE_ROWS * ETK_GUIDE_COLS)
+// The technique choice of the light sample at bounce d: (map or table, region).
+#define ETK_PAIR_GUIDE 0x50000000u
+
+ETK_BEGIN
+
+// Region R's first distribution row (of h), region C's first column (of w); region R ends where
+// R + 1 starts. Regions of zero rows (h < ETK_GUIDE_ROWS) have zero mass.
+ETK_FN int etk_guide_row_start(int R, int h) {
+    return (R * h) / ETK_GUIDE_ROWS;
+}
+ETK_FN int etk_guide_col_start(int C, int w) {
+    return (C * w) / ETK_GUIDE_COLS;
+}
+// The region holding distribution row r (the largest R with row_start(R) <= r), column c.
+ETK_FN int etk_guide_region_row(int r, int h) {
+    return ((r + 1) * ETK_GUIDE_ROWS - 1) / h;
+}
+ETK_FN int etk_guide_region_col(int c, int w) {
+    return ((c + 1) * ETK_GUIDE_COLS - 1) / w;
+}
+ETK_FN int etk_guide_region(EtkEnvMap env, float2 uv) {
+    int r = etk_cell_of(uv.y, env.dist_h), c = etk_cell_of(uv.x, env.dist_w);
+    return etk_guide_region_row(r, env.dist_h) * ETK_GUIDE_COLS +
+           etk_guide_region_col(c, env.dist_w);
+}
+ETK_FN int etk_guide_row_table(int R, int C, int h) {
+    return ETK_GUIDE_REGIONS + C * (h + ETK_GUIDE_ROWS) + etk_guide_row_start(R, h) + R;
+}
+
+// The hash-grid slot of surface point `pos` with geometric normal `n`.
+ETK_FN int etk_guide_cell(EtkParams p, float3 pos, float3 n) {
+    float3 q = (pos - make_float3(p.guide_origin[0], p.guide_origin[1], p.guide_origin[2])) *
+               p.guide_inv_cell;
+    int ix = (int)floor(clamp(q.x, -1.0e6f, 1.0e6f));
+    int iy = (int)floor(clamp(q.y, -1.0e6f, 1.0e6f));
+    int iz = (int)floor(clamp(q.z, -1.0e6f, 1.0e6f));
+    float ax = fabs(n.x), ay = fabs(n.y), az = fabs(n.z);
+    int axis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+    float comp = axis == 0 ? n.x : (axis == 1 ? n.y : n.z);
+    uint nb = (uint)(2 * axis + (comp < 0.0f ? 1 : 0));
+    uint h = (uint)ix * 73856093u ^ (uint)iy * 19349663u ^ (uint)iz * 83492791u ^ nb * 2654435761u;
+    h ^= h >> 16;
+    h *= 0x7feb352du;
+    h ^= h >> 15;
+    return (int)(h & (uint)(p.guide_slots - 1));
+}
+
+// p(w) / p_map(w) at map coordinates uv for a vertex in `cell`: alpha + (1 - alpha) P / M.
+ETK_FN float etk_guide_factor(EtkScene S, EtkParams p, int cell, float2 uv) {
+    if (!p.guide_ready)
+        return 1.0f;
+    int R = etk_guide_region(p.env, uv);
+    float M = S.guide_regions[R];
+    ETK_GLOBAL const float* cdf = S.guide_cells + cell * (ETK_GUIDE_REGIONS + 1);
+    float P = cdf[R + 1] - cdf[R];
+    return p.guide_alpha + (1.0f - p.guide_alpha) * (M > 0.0f ? P / M : 0.0f);
+}
+
+// Map coordinates drawn inside region R (row band Rr, column band Rc) proportionally to the map,
+// from u in [0,1)^2; by inversion of the map's own CDFs restricted to the region.
+ETK_FN float2 etk_guide_sample_region(EtkScene S, EtkEnvMap env, int R, float2 u) {
+    int w = env.dist_w, h = env.dist_h;
+    int Rr = R / ETK_GUIDE_COLS, Rc = R % ETK_GUIDE_COLS;
+    int r0 = etk_guide_row_start(Rr, h), nr = etk_guide_row_start(Rr + 1, h) - r0;
+    int c0 = etk_guide_col_start(Rc, w), c1 = etk_guide_col_start(Rc + 1, w);
+    // The row: the region's own row CDF (nr + 1 entries).
+    ETK_GLOBAL const float* rcdf = S.guide_regions + etk_guide_row_table(Rr, Rc, h);
+    int i = etk_find_interval(rcdf, nr, u.y);
+    float rw = rcdf[i + 1] - rcdf[i];
+    float t = rw > 0.0f ? (u.y - rcdf[i]) / rw : 0.5f;
+    int row = r0 + i;
+    float v = etk_cell_coordinate(row, clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS), h);
+    // The column: the row's conditional CDF, its span over columns [c0, c1).
+    ETK_GLOBAL const float* ccdf = S.env_dist + etk_dist2d_conditional_cdf(w, h) + row * (w + 1);
+    float a = ccdf[c0], b = ccdf[c1];
+    float x = a + clamp(u.x, 0.0f, ETK_ONE_MINUS_EPS) * (b - a);
+    int c = clamp(etk_find_interval(ccdf, w, x), c0, c1 - 1);
+    float cw = ccdf[c + 1] - ccdf[c];
+    float tc = cw > 0.0f ? (x - ccdf[c]) / cw : 0.5f;
+    float uu = etk_cell_coordinate(c, clamp(tc, 5.9604645e-8f, ETK_ONE_MINUS_EPS), w);
+    return make_float2(uu, v);
+}
+
+// The region of a cell's table (ETK_GUIDE_REGIONS + 1 CDF entries) for u in [0,1): the largest R
+// with cdf[R] <= u, as etk_find_interval but in the 7 steps a 128-entry table needs.
+ETK_FN int etk_guide_find_region(ETK_GLOBAL const float* cdf, float u) {
+    int lo = 0;
+    for (int step = ETK_GUIDE_REGIONS / 2; step > 0; step >>= 1) {
+        int mid = lo + step;
+        lo = cdf[mid] <= u ? mid : lo;
+    }
+    return lo;
+}
+
+// A light sample of the visibility strategy at a vertex in `cell`: u the direction's pair, sel
+// the technique's (map or table; region). pdf: the mixture's, 0 for no sample.
+ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u, float2 sel) {
+    EtkEnvSample s;
+    if (!p.guide_ready || sel.x < p.guide_alpha) {
+        s = etk_env_sample(S.env_dist, p.env, u);
+    } else {
+        ETK_GLOBAL const float* cdf = S.guide_cells + cell * (ETK_GUIDE_REGIONS + 1);
+        int R = etk_guide_find_region(cdf, sel.y);
+        s.uv = etk_guide_sample_region(S, p.env, R, u);
+        s.dir = etk_env_to_world(p.env, etk_latlong_to_dir(s.uv));
+        s.row = etk_cell_of(s.uv.y, p.env.dist_h);
+        s.col = etk_cell_of(s.uv.x, p.env.dist_w);
+        s.pdf = etk_env_pdf_uv(S.env_dist, p.env, s.uv);
+    }
+    s.pdf *= etk_guide_factor(S, p, cell, s.uv);
+    return s;
+}
+
+ETK_END
+
+#endif

@@ -1,0 +1,190 @@
+// The visibility strategy's light sampling (kernels/visibility_guide.h): the mixture of the map's
+// distribution and a cell's learned table over regions, each region sampled in proportion to the
+// map, must draw directions with exactly the density it reports (chi-square over the map's
+// distribution cells, where both are piecewise constant in the lat-long square, so expected
+// counts are exact), that density must integrate to one (and E[1 / pdf] over the sphere must be
+// its area: no direction the map lights is missed), and the learned tables must not depend on
+// the order records arrive in (host/lib/render/visibility_cache.h).
+#include "chi2.h"
+#include "kernels/visibility_guide.h"
+#include "load/env_distribution.h"
+#include "render/visibility_cache.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace {
+
+constexpr int K = ETK_GUIDE_REGIONS;
+constexpr int kTests = 4; // chi-square tests in this file, family-wise alpha 0.01
+
+struct Fixture {
+    et::EnvDistribution dist;
+    std::vector<float> regions, cells;
+    etk::EtkScene S{};
+    etk::EtkParams p{};
+};
+
+// A w x h map of random positive radiance with a bright spot, its distribution, the region
+// tables and one cell whose table is random (with some regions at zero).
+void make(Fixture& f, int w, int h, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> U(0.05f, 1.0f);
+    et::RgbImage img;
+    img.width = w;
+    img.height = h;
+    img.rgb.resize(static_cast<size_t>(w) * h * 3);
+    for (float& x : img.rgb)
+        x = U(rng);
+    for (int k = 0; k < 3; ++k) // a sun
+        img.rgb[3 * (static_cast<size_t>(h / 3) * w + w / 5) + k] = 500.0f;
+    et::DistributionOptions o;
+    o.threads = 1;
+    f.dist = et::build_env_distribution(img, o);
+    f.regions = et::guide_region_tables(f.dist.table, w, h);
+    std::vector<double> prob(K);
+    for (int R = 0; R < K; ++R)
+        prob[R] = (R % 5 == 0) ? 0.0 : std::pow(double(U(rng)), 4.0);
+    double total = 0.0;
+    for (double x : prob)
+        total += x;
+    f.cells.assign(K + 1, 0.0f);
+    double run = 0.0;
+    for (int R = 0; R < K; ++R) {
+        run += prob[R];
+        f.cells[R + 1] = static_cast<float>(run / total);
+    }
+    f.cells[K] = 1.0f;
+    f.S.env_dist = f.dist.table.data();
+    f.S.guide_regions = f.regions.data();
+    f.S.guide_cells = f.cells.data();
+    f.p.env.tex_w = f.p.env.dist_w = w;
+    f.p.env.tex_h = f.p.env.dist_h = h;
+    f.p.env.scale = 1.0f;
+    f.p.env.rot_cos = 1.0f;
+    f.p.env.has_light = 1;
+    f.p.guide_slots = 1;
+    f.p.guide_alpha = 0.25f;
+    f.p.guide_ready = 1;
+}
+
+// The mixture's density in the lat-long square, constant over each distribution cell.
+double uv_density(const Fixture& f, int row, int col) {
+    const int w = f.p.env.dist_w, h = f.p.env.dist_h;
+    const double pmap = double(f.dist.table[row]) *
+                        f.dist.table[etk::etk_dist2d_conditional_pdf(h) + row * w + col];
+    const etk::float2 uv = etk::make_float2((col + 0.5f) / float(w), (row + 0.5f) / float(h));
+    return pmap * etk::etk_guide_factor(f.S, f.p, 0, uv);
+}
+
+class VisibilityGuide : public ::testing::TestWithParam<std::pair<int, int>> {};
+
+TEST_P(VisibilityGuide, SamplesMatchTheirDensity) {
+    const auto [w, h] = GetParam();
+    Fixture f;
+    make(f, w, h, 7u + w);
+    const int n = 1 << 20;
+    std::mt19937 rng(2024u + w);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    std::vector<double> observed(static_cast<size_t>(w) * h, 0.0);
+    double inv_pdf = 0.0, inv_pdf2 = 0.0;
+    int bad = 0, mismatched = 0;
+    for (int i = 0; i < n; ++i) {
+        const etk::float2 u =
+            etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
+        const etk::float2 sel =
+            etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
+        const etk::EtkEnvSample s = etk::etk_guide_sample(f.S, f.p, 0, u, sel);
+        if (!(s.pdf > 0.0f) || !std::isfinite(s.pdf)) {
+            ++bad;
+            continue;
+        }
+        const int row = etk::etk_cell_of(s.uv.y, h), col = etk::etk_cell_of(s.uv.x, w);
+        observed[static_cast<size_t>(row) * w + col] += 1.0;
+        // The density reported is the one evaluated for MIS at the same direction.
+        const float again = etk::etk_env_pdf_uv(f.S.env_dist, f.p.env, s.uv) *
+                            etk::etk_guide_factor(f.S, f.p, 0, s.uv);
+        mismatched += again != s.pdf;
+        inv_pdf += 1.0 / s.pdf;
+        inv_pdf2 += 1.0 / (double(s.pdf) * s.pdf);
+    }
+    EXPECT_EQ(bad, 0);
+    EXPECT_EQ(mismatched, 0);
+    std::vector<double> expected(observed.size());
+    double integral = 0.0;
+    for (int r = 0; r < h; ++r)
+        for (int c = 0; c < w; ++c) {
+            const double d = uv_density(f, r, c) / (double(w) * h);
+            integral += d;
+            expected[static_cast<size_t>(r) * w + c] = n * d;
+        }
+    EXPECT_NEAR(integral, 1.0, 1e-4) << "the mixture's density does not integrate to one";
+    const ett::Chi2Result chi =
+        ett::chi2_test(observed, expected, w, h, ett::sidak_alpha(0.01, kTests));
+    EXPECT_TRUE(chi.passed) << chi.report;
+    // E[1 / pdf] = the sphere's area where the density is positive everywhere (this map).
+    const double mean = inv_pdf / n, var = inv_pdf2 / n - mean * mean;
+    EXPECT_NEAR(mean, 4.0 * M_PI, 5.0 * std::sqrt(var / n)) << "sd " << std::sqrt(var / n);
+}
+
+// 64 x 32: regions of 4 x 4 cells; 50 x 27: regions of unequal sizes (floor boundaries).
+INSTANTIATE_TEST_SUITE_P(Sizes, VisibilityGuide,
+                         ::testing::Values(std::make_pair(64, 32), std::make_pair(50, 27)));
+
+// Before anything is learned the strategy is the paper's map sampling.
+TEST(VisibilityGuideTables, PriorIsTheMap) {
+    Fixture f;
+    make(f, 64, 32, 3u);
+    f.cells = et::guide_prior_cells(f.regions, 1);
+    f.S.guide_cells = f.cells.data();
+    for (int r = 0; r < 32; ++r)
+        for (int c = 0; c < 64; ++c) {
+            const etk::float2 uv = etk::make_float2((c + 0.5f) / 64.0f, (r + 0.5f) / 32.0f);
+            EXPECT_NEAR(etk::etk_guide_factor(f.S, f.p, 0, uv), 1.0, 1e-4);
+        }
+}
+
+// The sums are fixed point: any order of the same records gives the same tables, bit for bit.
+TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
+    Fixture f;
+    make(f, 64, 32, 5u);
+    et::VisibilityOptions o;
+    o.slots = 64;
+    std::mt19937 rng(9u);
+    std::vector<int> keys(5000);
+    std::vector<float> values(5000);
+    for (size_t i = 0; i < keys.size(); ++i) {
+        keys[i] = static_cast<int>(rng() % (o.slots * K));
+        values[i] = (rng() % 3 == 0) ? 0.0f : std::ldexp(float(rng() % 1000 + 1), -int(rng() % 20));
+    }
+    et::VisibilityCache a(o, f.regions, 3.0), b(o, f.regions, 3.0);
+    a.add(keys.data(), values.data(), static_cast<int>(keys.size()));
+    std::vector<size_t> order(keys.size());
+    for (size_t i = 0; i < order.size(); ++i)
+        order[i] = i;
+    std::shuffle(order.begin(), order.end(), rng);
+    for (size_t k = 0; k < order.size(); k += 37) { // in uneven batches
+        std::vector<int> kk;
+        std::vector<float> vv;
+        for (size_t j = k; j < std::min(order.size(), k + 37); ++j) {
+            kk.push_back(keys[order[j]]);
+            vv.push_back(values[order[j]]);
+        }
+        b.add(kk.data(), vv.data(), static_cast<int>(kk.size()));
+    }
+    const std::vector<float> ta = a.tables(), tb = b.tables();
+    ASSERT_EQ(ta.size(), tb.size());
+    EXPECT_TRUE(ta == tb);
+    // Every cell's table is a CDF from 0 to 1.
+    for (int s = 0; s < o.slots; ++s) {
+        EXPECT_EQ(ta[static_cast<size_t>(s) * (K + 1)], 0.0f);
+        EXPECT_EQ(ta[static_cast<size_t>(s) * (K + 1) + K], 1.0f);
+        for (int R = 0; R < K; ++R)
+            EXPECT_LE(ta[s * (K + 1) + R], ta[s * (K + 1) + R + 1]);
+    }
+}
+
+} // namespace
