@@ -18,7 +18,7 @@ TEST(RenderSettings, NamesRoundTrip) {
         EXPECT_EQ(et::name_of(et::parse_backend(n, "t")), n);
     for (const auto& n : et::bsdf_sampling_names())
         EXPECT_EQ(et::name_of(et::parse_bsdf_sampling(n, "t")), n);
-    EXPECT_EQ(et::strategy_names().size(), 7u); // "lights" is chosen by --lights only
+    EXPECT_EQ(et::strategy_names().size(), 8u); // "lights" is chosen by --lights only
 }
 
 TEST(RenderSettings, ValuesAreTheKernelCodes) {
@@ -27,6 +27,7 @@ TEST(RenderSettings, ValuesAreTheKernelCodes) {
     EXPECT_EQ(static_cast<int>(et::Strategy::lights), ETK_STRATEGY_LIGHTS);
     EXPECT_EQ(static_cast<int>(et::parse_strategy("compensated", "t")), ETK_STRATEGY_COMPENSATED);
     EXPECT_EQ(static_cast<int>(et::parse_strategy("adaptive", "t")), ETK_STRATEGY_ADAPTIVE);
+    EXPECT_EQ(static_cast<int>(et::parse_strategy("visibility", "t")), ETK_STRATEGY_VISIBILITY);
     // auto: visible normals for the compensated strategy, the paper's sampling for mis.
     et::RenderSettings st;
     st.strategy = et::Strategy::mis;
