@@ -417,6 +417,19 @@ TEST_F(MeshFormats, GltfMaterialsMapAndOverride) {
     EXPECT_EQ(g.materials[0].albedo, glm::vec3(0.1f, 0.2f, 0.7f));
     EXPECT_EQ(g.materials[0].specular, glm::vec3(0.04f));
     EXPECT_NEAR(g.materials[0].roughness, 0.04f, 1e-6f);
+    // Between the two, F0 and the Lambertian base are blended by metallic.
+    const std::string half =
+        R"({"pbrMetallicRoughness": {"baseColorFactor": [0.5, 1, 0, 1], "metallicFactor": 0.25}})";
+    write_file(dir + "/half.gltf",
+               tet_gltf(data_uri(tet_buffer()), R"([{"mesh": 0}])", "[0]", 4, half));
+    g = load(dir + "/half.gltf");
+    ASSERT_EQ(g.materials.size(), 1u);
+    EXPECT_NEAR(g.materials[0].specular.x, 0.75f * 0.04f + 0.25f * 0.5f, 1e-6f);
+    EXPECT_NEAR(g.materials[0].specular.y, 0.75f * 0.04f + 0.25f * 1.0f, 1e-6f);
+    EXPECT_NEAR(g.materials[0].specular.z, 0.75f * 0.04f, 1e-6f);
+    EXPECT_NEAR(g.materials[0].albedo.x, 0.375f, 1e-6f);
+    EXPECT_NEAR(g.materials[0].albedo.y, 0.75f, 1e-6f);
+    EXPECT_FLOAT_EQ(g.materials[0].roughness, 1.0f); // glTF's default roughness, 1
     g = load(dir + "/metal.gltf", glm::mat4(1.0f), 3);
     EXPECT_EQ(g.materials.size(), 4u);
     for (int m : g.soup.material)
@@ -448,6 +461,16 @@ TEST_F(MeshFormats, GltfHostileFilesAreErrors) {
     // An external buffer goes through the same check: a FIFO is refused, not read.
     ASSERT_EQ(mkfifo((dir + "/fifo.bin").c_str(), 0600), 0);
     expect_error("fifobuf.gltf", tet_gltf("fifo.bin"), "a FIFO (named pipe), not a regular file");
+    // An external buffer is looked for beside the glTF only, not in the working folder.
+    std::filesystem::create_directories(dir + "/sub");
+    write_file(dir + "/cwd.bin", tet_buffer());
+    write_file(dir + "/sub/cwd.gltf", tet_gltf("cwd.bin"));
+    const auto cwd = std::filesystem::current_path();
+    std::filesystem::current_path(dir);
+    EXPECT_THROW(load(dir + "/sub/cwd.gltf"), et::Error);
+    std::filesystem::current_path(cwd);
+    write_file(dir + "/sub/cwd.bin", tet_buffer()); // beside it: found
+    EXPECT_EQ(load(dir + "/sub/cwd.gltf").soup.size(), 4u);
     // Declared buffer sizes beyond the cap are refused before tinygltf allocates anything.
     std::string huge = tet_gltf(uri);
     huge.replace(huge.find("\"byteLength\": 72"), 16, "\"byteLength\": 3e9");

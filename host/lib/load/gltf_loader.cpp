@@ -29,7 +29,13 @@ namespace {
 // File access for tinygltf: external buffers and images go through the regular-file check and
 // size cap like every input; paths are used as written (tinygltf's own ExpandFilePath runs
 // wordexp on them, a shell expansion a scene file must not trigger).
-bool fs_exists(const std::string& path, void*) {
+// tinygltf looks for an external file beside the glTF, then in the working folder ("./uri"):
+// the second is refused (user data: the glTF's folder), so a scene never depends on where
+// envtrace was started.
+bool fs_exists(const std::string& path, void* gltf_dir) {
+    const std::string& dir = *static_cast<const std::string*>(gltf_dir);
+    if (path.compare(0, 2, "./") == 0 && !dir.empty() && dir != ".")
+        return false;
     std::error_code ec;
     return std::filesystem::exists(path, ec);
 }
@@ -299,11 +305,12 @@ void load_gltf(const std::string& path, const glm::mat4& transform, int override
         throw Error(path + ": glTF: the file is more than 4 GiB");
 
     tinygltf::TinyGLTF loader;
-    loader.SetFsCallbacks({fs_exists, fs_expand, fs_read, fs_write, nullptr});
     loader.SetImageLoader(skip_image, nullptr);
     tinygltf::Model model;
     std::string err, warning;
     const std::string dir = std::filesystem::path(path).parent_path().string();
+    loader.SetFsCallbacks({fs_exists, fs_expand, fs_read, fs_write,
+                           const_cast<void*>(static_cast<const void*>(&dir))});
     bool ok = false;
     try {
         ok = binary ? loader.LoadBinaryFromMemory(
@@ -367,20 +374,19 @@ void load_gltf(const std::string& path, const glm::mat4& transform, int override
                 base[k] = std::isfinite(pbr.baseColorFactor[k])
                               ? std::clamp(float(pbr.baseColorFactor[k]), 0.0f, 1.0f)
                               : 0.0f;
-        const float metallic = std::isfinite(pbr.metallicFactor) ? float(pbr.metallicFactor) : 0.0f;
+        const float metallic = std::isfinite(pbr.metallicFactor)
+                                   ? std::clamp(float(pbr.metallicFactor), 0.0f, 1.0f)
+                                   : 0.0f;
         const float rough = std::isfinite(pbr.roughnessFactor)
                                 ? std::clamp(float(pbr.roughnessFactor), 0.0f, 1.0f)
                                 : 1.0f;
         Material m;
         m.name = g.name.empty() ? path + ":material" + std::to_string(gm) : g.name;
+        // The glTF BRDF's usual split: F0 runs from 0.04 (a dielectric, envtrace's "plastic")
+        // to the base colour (a metal), and the Lambertian base fades out as metallic grows.
         m.type = ETK_MAT_MICROFACET;
-        if (metallic > 0.5f) { // a metal: the base colour is its F0
-            m.specular = base;
-            m.albedo = glm::vec3(0.0f);
-        } else { // a dielectric: a Lambertian base under F0 = 0.04 (envtrace's "plastic")
-            m.specular = glm::vec3(0.04f);
-            m.albedo = base;
-        }
+        m.specular = glm::mix(glm::vec3(0.04f), base, metallic);
+        m.albedo = base * (1.0f - metallic);
         m.roughness = rough * rough; // glTF's perceptual roughness squared is the GGX alpha
         if (pbr.baseColorTexture.index >= 0 || pbr.metallicRoughnessTexture.index >= 0 ||
             g.normalTexture.index >= 0)
