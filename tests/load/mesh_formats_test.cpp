@@ -523,4 +523,22 @@ TEST_F(MeshFormats, SceneLoadsEachFormat) {
     EXPECT_FLOAT_EQ(max_x, 4.0f);
 }
 
+// The shipped scenes/mesh_formats.json: a PLY octahedron (8 faces) and a glTF gold cube (12
+// triangles, rotated by its node) on a floor quad (2).
+TEST(MeshFormatsScene, ShippedSceneLoads) {
+    ett::WarningCapture warnings;
+    const et::Scene s =
+        et::load_scene(std::string(ENVTRACE_SOURCE_DIR) + "/scenes/mesh_formats.json");
+    EXPECT_EQ(s.triangles.size(), 2u + 8u + 12u);
+    EXPECT_TRUE(warnings.messages().empty()) << warnings.messages().front();
+    bool gold = false;
+    for (const auto& m : s.materials)
+        if (m.name == "gold") {
+            gold = true;
+            EXPECT_EQ(m.type, ETK_MAT_MICROFACET);
+            EXPECT_EQ(m.specular, glm::vec3(1.0f, 0.78f, 0.34f));
+        }
+    EXPECT_TRUE(gold);
+}
+
 } // namespace
