@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <filesystem>
+#include <random>
 #include <sys/stat.h>
 
 namespace {
@@ -461,6 +462,13 @@ TEST_F(MeshFormats, GltfHostileFilesAreErrors) {
     // An external buffer goes through the same check: a FIFO is refused, not read.
     ASSERT_EQ(mkfifo((dir + "/fifo.bin").c_str(), 0600), 0);
     expect_error("fifobuf.gltf", tet_gltf("fifo.bin"), "a FIFO (named pipe), not a regular file");
+    std::string draco = tet_gltf(uri);
+    draco.insert(1, R"("extensionsRequired": ["KHR_draco_mesh_compression"], )");
+    expect_error("draco.gltf", draco, "requires the extension 'KHR_draco_mesh_compression'");
+    std::string quantized = tet_gltf(uri);
+    quantized.insert(1, R"("extensionsRequired": ["KHR_mesh_quantization"], )");
+    write_file(dir + "/quantized.gltf", quantized);
+    EXPECT_EQ(load(dir + "/quantized.gltf").soup.size(), 4u);
     // An external buffer is looked for beside the glTF only, not in the working folder.
     std::filesystem::create_directories(dir + "/sub");
     write_file(dir + "/cwd.bin", tet_buffer());
@@ -521,6 +529,54 @@ TEST_F(MeshFormats, SceneLoadsEachFormat) {
     for (const auto& p : s.triangles.positions)
         max_x = std::max(max_x, p.x);
     EXPECT_FLOAT_EQ(max_x, 4.0f);
+}
+
+// Damaged files, many of them: each either loads or is refused with an et::Error naming it; a
+// crash, a hang, a huge allocation (std::bad_alloc) or any other exception fails the test. Digits
+// are changed into longer numbers (counts, offsets, indices past everything), bytes overwritten,
+// files cut short. Fixed seed.
+TEST_F(MeshFormats, DamagedFilesLoadOrAreRefused) {
+    const std::vector<std::pair<std::string, std::string>> seeds = {
+        {"d.ply", tet_ply_ascii()},
+        {"d.ply", tet_ply_binary(false)},
+        {"d.ply", tet_ply_binary(true)},
+        {"d.gltf", tet_gltf(data_uri(tet_buffer()))},
+        {"d.glb", glb(tet_gltf(""), tet_buffer())}};
+    std::mt19937 rng(14);
+    ett::WarningCapture quiet;
+    size_t loaded = 0, refused = 0;
+    for (const auto& [name, seed] : seeds)
+        for (int i = 0; i < 300; ++i) {
+            std::string b = seed;
+            for (int k = 1 + rng() % 3; k > 0 && !b.empty(); --k) {
+                const size_t at = rng() % b.size();
+                switch (rng() % 4) {
+                case 0: // a number grows: "4" -> "4999999999"
+                    if (std::isdigit(static_cast<unsigned char>(b[at])))
+                        b.insert(at, std::string(1 + rng() % 12, char('0' + rng() % 10)));
+                    break;
+                case 1:
+                    b[at] = char(rng());
+                    break;
+                case 2:
+                    b[at] = char(rng() % 2 ? 0xff : 0x7f);
+                    break;
+                default:
+                    b.resize(at);
+                }
+            }
+            const std::string p = dir + "/" + name;
+            write_file(p, b);
+            try {
+                load(p);
+                ++loaded;
+            } catch (const et::Error& e) {
+                ++refused;
+                EXPECT_EQ(std::string(e.what()).rfind(p, 0), 0u) << e.what();
+            }
+        }
+    EXPECT_GT(loaded, 0u);
+    EXPECT_GT(refused, 0u);
 }
 
 // The shipped scenes/mesh_formats.json: a PLY octahedron (8 faces) and a glTF gold cube (12

@@ -329,6 +329,13 @@ void load_gltf(const std::string& path, const glm::mat4& transform, int override
     if (!warning.empty())
         warn(path + ": " + one_line(warning));
     const GltfReader r(path, model);
+    // A required extension changes what the data means (Draco or meshopt compression leaves the
+    // accessors without a bufferView); those whose meaning envtrace keeps or may ignore pass.
+    for (const std::string& e : model.extensionsRequired)
+        if (e != "KHR_mesh_quantization" && e != "KHR_texture_transform" &&
+            e.rfind("KHR_materials_", 0) != 0)
+            r.fail("it requires the extension '" + excerpt(e, 60) +
+                   "', which envtrace does not read");
 
     // The default scene's root nodes; without a scene, every node that is no other's child.
     std::vector<int> roots;
