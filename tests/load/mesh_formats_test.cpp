@@ -236,7 +236,8 @@ TEST_F(MeshFormats, PlyAsciiAndBinaryMatchObj) {
     write_file(dir + "/a.ply", tet_ply_ascii());
     write_file(dir + "/le.ply", tet_ply_binary(false));
     write_file(dir + "/be.ply", tet_ply_binary(true));
-    for (const char* name : {"a.ply", "le.ply", "be.ply"}) {
+    write_file(dir + "/UPPER.PLY", tet_ply_binary(true)); // the extension in any case
+    for (const char* name : {"a.ply", "le.ply", "be.ply", "UPPER.PLY"}) {
         const Loaded ply = load(dir + "/" + name);
         expect_same_geometry(ply, obj, name);
         ASSERT_EQ(ply.materials.size(), 1u); // the default grey

@@ -15,6 +15,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -298,7 +299,8 @@ void load_gltf(const std::string& path, const glm::mat4& transform, int override
                std::vector<Material>& materials, TriangleSoup& out) {
     const std::string bytes = read_regular_file(path, kMaxMeshBytes, "glTF file");
     std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    for (char& c : ext) // ASCII only: std::tolower of a negative char is undefined
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     const bool binary = ext == ".glb" || bytes.compare(0, 4, "glTF") == 0;
     const std::string prepared = binary ? prepare_glb(path, bytes) : prepare_json(path, bytes);
     if (prepared.size() > std::numeric_limits<unsigned int>::max())

@@ -2,7 +2,6 @@
 // (scenes/README.md lists them).
 #include "load/scene.h"
 
-#include <algorithm>
 #include <cctype>
 #include <filesystem>
 
@@ -11,7 +10,8 @@ namespace et {
 void load_mesh(const std::string& path, const glm::mat4& transform, int override_material,
                std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures) {
     std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    for (char& c : ext) // ASCII only: std::tolower of a negative char is undefined
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext == ".ply")
         load_ply(path, transform, override_material, materials, out);
     else if (ext == ".gltf" || ext == ".glb")
