@@ -1,8 +1,9 @@
 // glTF 2.0 meshes (.gltf with embedded or external buffers, and .glb) through tinygltf (Debian's
 // libtinygltf-dev): the triangle primitives of the default scene with the node hierarchy's
 // transforms, POSITION, NORMAL and TEXCOORD_0, and the metallic-roughness material mapped onto
-// envtrace's (scenes/README.md). tinygltf parses the JSON and the GLB container and decodes
-// buffers; every accessor is bounds-checked here before it is read, since tinygltf 2.7 does not.
+// envtrace's (scenes/README.md). The JSON is parsed and checked here first (prepare_json,
+// prepare_glb), then tinygltf parses it and the GLB container and decodes the buffers; every
+// accessor is bounds-checked here before it is read, since tinygltf 2.7 does not.
 #include "util/error.h"
 #include "util/file_check.h"
 #include "util/json_file.h"
@@ -27,12 +28,12 @@ namespace et {
 
 namespace {
 
-// File access for tinygltf: external buffers and images go through the regular-file check and
-// size cap like every input; paths are used as written (tinygltf's own ExpandFilePath runs
-// wordexp on them, a shell expansion a scene file must not trigger).
-// tinygltf looks for an external file beside the glTF, then in the working folder ("./uri"):
-// the second is refused (user data: the glTF's folder), so a scene never depends on where
-// envtrace was started.
+// File access for tinygltf: external buffers go through the regular-file check and size cap
+// like every input (images never reach tinygltf: prepare_json removes them); paths are used as
+// written (tinygltf's own ExpandFilePath runs wordexp on them, a shell expansion a scene file
+// must not trigger). tinygltf looks for an external file beside the glTF, then in the working
+// folder ("./uri"): the second is refused (user data: the glTF's folder), so a scene never
+// depends on where envtrace was started.
 bool fs_exists(const std::string& path, void* gltf_dir) {
     const std::string& dir = *static_cast<const std::string*>(gltf_dir);
     if (path.compare(0, 2, "./") == 0 && !dir.empty() && dir != ".")
