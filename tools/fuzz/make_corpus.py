@@ -7,6 +7,7 @@ here (PFM, Radiance HDR, PNG by hand; EXR, TIFF, JPEG with oiiotool when it is i
 from a few hand-written light sets. Nothing is copied into the repository.
 """
 import argparse
+import base64
 import json
 import os
 import re
@@ -111,6 +112,78 @@ def obj_corpus(data_dir, out):
           b"vn 0 0 1\nvt 0 0\nusemtl m\nf 1/1/1 2/1/1 3/1/1\nf 1 2 4\nf -1 -2 -3\n"
           b"f 1 3 4 2\n" + MTL_SEPARATOR + b"newmtl m\nKd 0.5 0.2 0.1\nKs 0.1 0.1 0.1\nNs 50\n")
     return n
+
+
+# ---------------------------------------------------------------- PLY, glTF, GLB
+MESH_BIN_SEPARATOR = b"\n#---bin---\n"
+TET_V = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+TET_F = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+
+
+def ply_binary(order):
+    e = "<" if order == "binary_little_endian" else ">"
+    head = ("ply\nformat %s 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+            "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+            "property float s\nproperty float t\nelement face 5\n"
+            "property list uchar uint vertex_indices\nend_header\n" % order).encode()
+    body = b"".join(struct.pack(e + "8f", *v, 0, 0, 1, v[0], v[1]) for v in TET_V)
+    faces = [f for f in TET_F] + [(0, 1, 2, 3)]  # and a quad, fanned
+    body += b"".join(struct.pack(e + "B%dI" % len(f), len(f), *f) for f in faces)
+    return head + body
+
+
+def gltf_tet(uri, material=True):
+    buf = b"".join(struct.pack("<3f", *v) for v in TET_V)
+    buf += b"".join(struct.pack("<3H", *f) for f in TET_F)
+    g = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+         "nodes": [{"children": [1], "translation": [1, 0, 0]},
+                   {"mesh": 0, "rotation": [0, 0.7071068, 0, 0.7071068], "scale": [2, 2, 2]}],
+         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+         "buffers": [{"byteLength": len(buf)}],
+         "bufferViews": [{"buffer": 0, "byteLength": 48},
+                         {"buffer": 0, "byteOffset": 48, "byteLength": 24}],
+         "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+                       {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}]}
+    if material:
+        g["meshes"][0]["primitives"][0]["material"] = 0
+        g["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.6, 0.3, 1],
+                                                    "metallicFactor": 0.5,
+                                                    "roughnessFactor": 0.4}}]
+    if uri == "data":
+        g["buffers"][0]["uri"] = ("data:application/octet-stream;base64," +
+                                  base64.b64encode(buf).decode())
+    elif uri:
+        g["buffers"][0]["uri"] = uri
+    return g, buf
+
+
+def glb(g, buf):
+    j = json.dumps(g).encode()
+    j += b" " * (-len(j) % 4)
+    buf += b"\0" * (-len(buf) % 4)
+    return (b"glTF" + struct.pack("<II", 2, 28 + len(j) + len(buf)) +
+            struct.pack("<I", len(j)) + b"JSON" + j + struct.pack("<I", len(buf)) + b"BIN\0" + buf)
+
+
+def mesh_corpus(scenes_dir, out):
+    # First byte: 0 .ply, 1 .gltf, 2 .glb (fuzz_mesh.cpp).
+    for f in sorted((Path(scenes_dir) / "formats").glob("*")):
+        kind = {".ply": 0, ".gltf": 1, ".glb": 2}.get(f.suffix.lower())
+        if kind is not None:
+            write(out, "scene_" + f.name, bytes([kind]) + f.read_bytes())
+    write(out, "hand_ascii.ply", b"\0ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+          b"property float y\nproperty float z\nelement face 2\n"
+          b"property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+          b"4 0 1 2 3\n3 0 2 3\n")
+    for order in ("binary_little_endian", "binary_big_endian"):
+        write(out, "hand_%s.ply" % order, b"\0" + ply_binary(order))
+    g, buf = gltf_tet("data")
+    write(out, "hand_embedded.gltf", b"\1" + json.dumps(g, indent=1).encode())
+    g, buf = gltf_tet("fuzz.bin", material=False)
+    write(out, "hand_external.gltf", b"\1" + json.dumps(g, indent=1).encode() +
+          MESH_BIN_SEPARATOR + buf)
+    g, buf = gltf_tet(None)
+    write(out, "hand_tet.glb", b"\2" + glb(g, buf))
 
 
 # ---------------------------------------------------------------- images
@@ -263,6 +336,7 @@ def main():
     n_obj = obj_corpus(data, out / "fuzz_obj_mtl")
     n_img = envmap_corpus(data, out / "fuzz_envmap")
     light_corpus(out / "fuzz_light_set")
+    mesh_corpus(a.scenes, out / "fuzz_mesh")
     if n_obj == 0:
         print("make_corpus.py: no edge-cases under %s; OBJ seeds are the hand-written one" % data)
     (out / "stamp").write_text("")

@@ -10,7 +10,7 @@
 #                  add coverage are kept in DIR/HARNESS/corpus and reused by the next run
 #   --keep-going   libFuzzer's fork mode: record crashes, out-of-memory and timeouts under
 #                  DIR/HARNESS/artifacts and go on instead of stopping at the first
-#   HARNESS        fuzz_scene_json fuzz_obj_mtl fuzz_envmap fuzz_light_set (default: all four)
+#   HARNESS        fuzz_scene_json fuzz_obj_mtl fuzz_envmap fuzz_light_set fuzz_mesh (default: all five)
 # Exit status 0 when no harness found anything. Extra libFuzzer flags: ENVTRACE_FUZZ_FLAGS.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -31,7 +31,7 @@ while [ $# -gt 0 ]; do
     *) harnesses+=("$1"); shift ;;
   esac
 done
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(fuzz_scene_json fuzz_obj_mtl fuzz_envmap fuzz_light_set)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(fuzz_scene_json fuzz_obj_mtl fuzz_envmap fuzz_light_set fuzz_mesh)
 out=${out:-$build/fuzz/runs}
 
 # Sanitizer settings shared with the test suite; leak suppressions name third-party code only.

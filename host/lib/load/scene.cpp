@@ -285,10 +285,10 @@ Scene load_scene(const std::string& path) {
             if (type == "mesh") {
                 rs.warn_unknown_keys(s, {"type", "file", "material", "transform"});
                 if (!s.contains("file"))
-                    rs.fail("a mesh needs \"file\" (an OBJ file)");
+                    rs.fail("a mesh needs \"file\" (an OBJ, PLY, glTF or GLB file)");
                 const glm::mat4 transform = read_transform(s, rs);
                 std::string file = resolve_data_file(rs.string(s, "file", ""), dir);
-                load_obj(file, transform, mat, scene.materials, scene.triangles, &scene.textures);
+                load_mesh(file, transform, mat, scene.materials, scene.triangles, &scene.textures);
             } else if (type == "sphere") {
                 rs.warn_unknown_keys(
                     s, {"type", "center", "radius", "material", "segments", "smooth"});

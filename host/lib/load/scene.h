@@ -59,6 +59,21 @@ Scene load_scene(const std::string& path);
 void load_obj(const std::string& path, const glm::mat4& transform, int override_material,
               std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures = nullptr);
 
+// Appends a PLY file (ASCII or binary; polygons triangulated as fans; normals and u/v or s/t
+// when present). Material: `override_material`, or a default grey one appended to `materials`.
+void load_ply(const std::string& path, const glm::mat4& transform, int override_material,
+              std::vector<Material>& materials, TriangleSoup& out);
+
+// Appends the triangle primitives of a glTF 2.0 file's default scene (.gltf or .glb), with the
+// node transforms applied before `transform`; its metallic-roughness materials become envtrace
+// materials (scenes/README.md) unless `override_material` >= 0. Textures are not read (a warning).
+void load_gltf(const std::string& path, const glm::mat4& transform, int override_material,
+               std::vector<Material>& materials, TriangleSoup& out);
+
+// Appends a mesh file by its extension: .ply, .gltf / .glb, else OBJ (load_obj).
+void load_mesh(const std::string& path, const glm::mat4& transform, int override_material,
+               std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures = nullptr);
+
 // Appends the triangle (a, b, c) unless it is degenerate or not finite; returns whether it did.
 // `uv`: its corners' texture coordinates, or nullptr for (0, 0).
 bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material,

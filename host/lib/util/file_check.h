@@ -12,7 +12,7 @@ constexpr uint64_t kGiB = uint64_t(1) << 30;
 
 // Size caps of the inputs, by kind.
 constexpr uint64_t kMaxJsonBytes = 256 * kMiB; // scene files, light sets
-constexpr uint64_t kMaxMeshBytes = 2 * kGiB;   // OBJ
+constexpr uint64_t kMaxMeshBytes = 2 * kGiB;   // OBJ, PLY, glTF/GLB (and its buffers in all)
 constexpr uint64_t kMaxMtlBytes = 64 * kMiB;   // MTL
 constexpr uint64_t kMaxImageBytes = 4 * kGiB;  // maps, images to compare
 

@@ -110,7 +110,10 @@ std::string json_excerpt(const json& v) {
 }
 
 json read_json_file(const std::string& path, const char* what) {
-    const std::string text = read_regular_file(path, kMaxJsonBytes, what);
+    return parse_json_text(path, read_regular_file(path, kMaxJsonBytes, what));
+}
+
+json parse_json_text(const std::string& path, const std::string& text) {
     prescan(path, text);
     try {
         return json::parse(text);

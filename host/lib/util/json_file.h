@@ -19,6 +19,9 @@ constexpr int kMaxJsonDepth = 64;
 // numbers outside the range of a double (1e999); `what` names the kind of file in messages.
 nlohmann::json read_json_file(const std::string& path, const char* what = "JSON file");
 
+// The same for JSON text already read (a glTF's JSON chunk); `path` names it in messages.
+nlohmann::json parse_json_text(const std::string& path, const std::string& text);
+
 // Writes `j` (indented by `indent`) all-or-nothing (util/output_batch.h): to a temporary beside
 // `path`, renamed into place; on failure throws et::Error naming `path`.
 void write_json_file(const std::string& path, const nlohmann::json& j, int indent = 2);

@@ -1,0 +1,23 @@
+// The scene's "mesh" shape: one loader per file format, chosen by the file's extension
+// (scenes/README.md lists them).
+#include "load/scene.h"
+
+#include <cctype>
+#include <filesystem>
+
+namespace et {
+
+void load_mesh(const std::string& path, const glm::mat4& transform, int override_material,
+               std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) // ASCII only: std::tolower of a negative char is undefined
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == ".ply")
+        load_ply(path, transform, override_material, materials, out);
+    else if (ext == ".gltf" || ext == ".glb")
+        load_gltf(path, transform, override_material, materials, out);
+    else // .obj, and any other name as before
+        load_obj(path, transform, override_material, materials, out, textures);
+}
+
+} // namespace et
