@@ -81,12 +81,16 @@ ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n, ETK_GLOB
     int K = etk_guide_cells(n);
     int k = clamp((int)(u * (float)K), 0, K - 1);
     int lo = (int)guide[k], hi = (int)guide[k + 1]; // invariant: cdf[lo] <= u, answer <= hi
-    while (lo < hi) {
-        int mid = (lo + hi + 1) >> 1;
-        if (cdf[mid] <= u)
-            lo = mid;
-        else
-            hi = mid - 1;
+    // Binary lifting over [lo, hi] from the largest power of two <= hi - lo, with selects rather
+    // than branches (the comparisons are unpredictable; only the trip count varies, and it is
+    // 0 or 1 for most cells).
+    int step = 1;
+    while (2 * step <= hi - lo)
+        step *= 2;
+    for (; step > 0; step >>= 1) {
+        int mid = lo + step;
+        float c = cdf[min(mid, hi)];
+        lo = (mid <= hi && c <= u) ? mid : lo;
     }
     return lo;
 }
