@@ -273,14 +273,19 @@ void check_distribution_size(int w, int h) {
 }
 
 void build_cdf_guide(const float* cdf, int n, float* guide) {
+    // guide[k] = the largest i < n with cdf[i] <= k / K, what etk_find_interval returns.
+    // cdf[i] <= k / K exactly when ceil(cdf[i] K) <= k (K a power of two: the product is exact),
+    // so entry i is written into cell ceil(cdf[i] K) in increasing i (the largest i of a cell
+    // stays) and a running maximum fills the cells no entry starts in. Stores only and a max
+    // chain: no data-dependent branch and no load after store to the same cell (a walk with a
+    // comparison per step, or counting into the cells, doubled the distribution build).
     const int K = etk::etk_guide_cells(n);
-    int i = 0; // the largest i < n with cdf[i] <= k / K, as etk_find_interval finds it
-    for (int k = 0; k < K; ++k) {
-        const float u = static_cast<float>(k) / static_cast<float>(K); // exact: K a power of 2
-        while (i + 1 < n && cdf[i + 1] <= u)
-            ++i;
-        guide[k] = static_cast<float>(i);
-    }
+    const float scale = static_cast<float>(K);
+    std::fill(guide, guide + K + 1, 0.0f);
+    for (int i = 1; i < n; ++i)
+        guide[static_cast<int>(std::ceil(cdf[i] * scale))] = static_cast<float>(i); // cdf <= 1
+    for (int k = 1; k < K; ++k)
+        guide[k] = std::max(guide[k], guide[k - 1]);
     guide[K] = static_cast<float>(n - 1);
 }
 
