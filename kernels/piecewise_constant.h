@@ -76,8 +76,8 @@ ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
 // monotone), and a binary search over that short range (about two intervals) finishes it. The
 // same index as the plain search, so the same sample (tests/kernels/cdf_guide_test.cpp); the
 // win is memory traffic: one guide line and one CDF line rather than log2(n) scattered reads.
-ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n, ETK_GLOBAL const float* guide,
-                                    float u) {
+ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n,
+                                    ETK_GLOBAL const float* guide, float u) {
     int K = etk_guide_cells(n);
     int k = clamp((int)(u * (float)K), 0, K - 1);
     int lo = (int)guide[k], hi = (int)guide[k + 1]; // invariant: cdf[lo] <= u, answer <= hi
@@ -116,8 +116,8 @@ ETK_FN float etk_cell_coordinate(int i, float t, int n) {
 
 // The point of interval i (found for u) of a 1D piecewise-constant density over [0,1]: returns
 // x, its density and its cell.
-ETK_FN float etk_sample_1d_in(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* cdf, int n, int i,
-                              float u, float* density, int* cell) {
+ETK_FN float etk_sample_1d_in(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* cdf, int n,
+                              int i, float u, float* density, int* cell) {
     float width = cdf[i + 1] - cdf[i];
     float t = width > 0.0f ? (u - cdf[i]) / width : 0.5f;
     // t > 0: x is never exactly 0, where the lat-long density has its zero at the pole.
@@ -134,7 +134,8 @@ ETK_FN float etk_sample_1d(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* 
 }
 
 // Row r's conditional CDF and its guide table.
-ETK_FN ETK_GLOBAL const float* etk_dist2d_row_cdf(ETK_GLOBAL const float* dist, int w, int h, int r) {
+ETK_FN ETK_GLOBAL const float* etk_dist2d_row_cdf(ETK_GLOBAL const float* dist, int w, int h,
+                                                  int r) {
     return dist + etk_dist2d_conditional_cdf(w, h) + r * (w + 1);
 }
 ETK_FN ETK_GLOBAL const float* etk_dist2d_row_guide(ETK_GLOBAL const float* dist, int w, int h,

@@ -33,10 +33,10 @@ const Fixture& fixture(const std::string& name) {
     auto& f = cache[name];
     if (!f) {
         f = std::make_unique<Fixture>();
-        const et::RgbImage& img = name == "royal_esplanade_1k"
-                                      ? et::bench::real_map("royal_esplanade_1k.hdr")
-                                      : et::bench::sky_map(std::stoi(name.substr(4)),
-                                                           std::stoi(name.substr(4)) / 2);
+        const et::RgbImage& img =
+            name == "royal_esplanade_1k"
+                ? et::bench::real_map("royal_esplanade_1k.hdr")
+                : et::bench::sky_map(std::stoi(name.substr(4)), std::stoi(name.substr(4)) / 2);
         et::DistributionOptions o;
         o.threads = 1;
         f->dist = et::build_env_distribution(img, o);
@@ -59,10 +59,11 @@ const Fixture& fixture(const std::string& name) {
 etk::float2 sample_2d_plain(const float* dist, int w, int h, etk::float2 xi, float* density) {
     float pv, pu;
     int row, col;
-    const float v = etk::etk_sample_1d(dist, dist + etk::etk_dist2d_marginal_cdf(h), h, xi.y, &pv,
-                                       &row);
-    const float u = etk::etk_sample_1d(dist + etk::etk_dist2d_conditional_pdf(h) + row * w,
-                                       etk::etk_dist2d_row_cdf(dist, w, h, row), w, xi.x, &pu, &col);
+    const float v =
+        etk::etk_sample_1d(dist, dist + etk::etk_dist2d_marginal_cdf(h), h, xi.y, &pv, &row);
+    const float u =
+        etk::etk_sample_1d(dist + etk::etk_dist2d_conditional_pdf(h) + row * w,
+                           etk::etk_dist2d_row_cdf(dist, w, h, row), w, xi.x, &pu, &col);
     *density = pv * pu;
     return etk::make_float2(u, v);
 }
@@ -129,10 +130,10 @@ void BM_EnvSample(benchmark::State& st, std::string map, bool guided) {
 
 // The distribution build (one thread) with its guides; counters: the table and the guides' bytes.
 void BM_Build(benchmark::State& st, std::string map) {
-    const et::RgbImage& img = map == "royal_esplanade_1k"
-                                  ? et::bench::real_map("royal_esplanade_1k.hdr")
-                                  : et::bench::sky_map(std::stoi(map.substr(4)),
-                                                       std::stoi(map.substr(4)) / 2);
+    const et::RgbImage& img =
+        map == "royal_esplanade_1k"
+            ? et::bench::real_map("royal_esplanade_1k.hdr")
+            : et::bench::sky_map(std::stoi(map.substr(4)), std::stoi(map.substr(4)) / 2);
     et::DistributionOptions o;
     o.threads = 1;
     size_t bytes = 0;
@@ -149,8 +150,8 @@ void BM_Build(benchmark::State& st, std::string map) {
     st.counters["guides_MB"] = static_cast<double>(guide) / 1e6;
 }
 
-const std::vector<std::string> kSampleMaps = {"royal_esplanade_1k", "sky_256",  "sky_1024",
-                                              "sky_4096",           "sky_8192"};
+const std::vector<std::string> kSampleMaps = {"royal_esplanade_1k", "sky_256", "sky_1024",
+                                              "sky_4096", "sky_8192"};
 
 int register_all() {
     for (const std::string& m : kSampleMaps) {

@@ -193,7 +193,8 @@ void build_rows(const Plan& p, const float* rgb, int o0, int o1) {
         float* cdf = p.cond_cdf + static_cast<size_t>(o) * (dw + 1);
         p.row_mass[o] = build_1d(fr, dw, fr, cdf, scratch.data());
         // The row's guide while its CDF is still in cache.
-        build_cdf_guide(cdf, dw, p.cond_guide + static_cast<size_t>(o) * (etk::etk_guide_cells(dw) + 1));
+        build_cdf_guide(cdf, dw,
+                        p.cond_guide + static_cast<size_t>(o) * (etk::etk_guide_cells(dw) + 1));
     };
 
     int o_next = o0; // resampled case: first output row not yet finished
