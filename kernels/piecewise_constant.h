@@ -5,6 +5,11 @@
 //   [h, 2h+1)                   marginal CDF, h+1 entries, 0 ... 1
 //   [2h+1, 2h+1+h*w)            conditional densities p(u|v), one row of w after another
 //   [2h+1+h*w, 2h+1+h*(2w+1))   conditional CDFs, w+1 entries per row
+//   then the guide tables (cutpoint method, issue 12): Kh+1 entries for the marginal CDF, then
+//   Kw+1 per conditional CDF, K = etk_guide_cells(n). Entry k is the interval
+//   etk_find_interval returns for u = k/K (entry K: n-1), stored as a float holding an exact
+//   integer (n <= 65536), so one flat float table still holds the whole distribution and a
+//   guide can never be paired with another table's CDFs (plain and MIS-compensated twins).
 // Densities are over the unit interval (they average to one over a row with any light), so the
 // joint density on the unit square is p(u,v) = p(v) p(u|v). A function that sums to zero keeps a
 // linear CDF and zero densities: it is never chosen and evaluates to zero, without a division by 0.
@@ -26,8 +31,23 @@ ETK_FN int etk_dist2d_conditional_pdf(int h) {
 ETK_FN int etk_dist2d_conditional_cdf(int w, int h) {
     return 2 * h + 1 + h * w;
 }
-ETK_FN int etk_dist2d_size(int w, int h) {
+// Guide cells of a CDF over n intervals: the largest power of two <= n/2 (at least 1), so u*K
+// and k/K are exact in float and a cell holds about two intervals on average; the guides add about
+// a quarter to the table (a 1024-wide row: 513 guide entries next to 2,049 density and CDF ones).
+ETK_FN int etk_guide_cells(int n) {
+    int k = 1;
+    while (4 * k <= n)
+        k *= 2;
+    return k;
+}
+ETK_FN int etk_dist2d_marginal_guide(int w, int h) {
     return 2 * h + 1 + h * (2 * w + 1);
+}
+ETK_FN int etk_dist2d_conditional_guide(int w, int h) {
+    return etk_dist2d_marginal_guide(w, h) + etk_guide_cells(h) + 1;
+}
+ETK_FN int etk_dist2d_size(int w, int h) {
+    return etk_dist2d_conditional_guide(w, h) + h * (etk_guide_cells(w) + 1);
 }
 
 // Largest i in [0, n-1] with cdf[i] <= u, for a CDF of n+1 entries. Cells of zero width are
@@ -46,6 +66,31 @@ ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
         int mid = lo + step;
         float c = cdf[min(mid, n - 1)];
         lo = (mid < n && c <= u) ? mid : lo;
+    }
+    return lo;
+}
+
+// etk_find_interval's result, from the CDF's guide table (guide[k] = etk_find_interval(cdf, n,
+// k/K) for k < K, guide[K] = n-1), for u in [0, 1]. K is a power of two, so the cell k =
+// floor(u K) is exact: k/K <= u < (k+1)/K, hence guide[k] <= answer <= guide[k+1] (the CDF is
+// monotone), and a binary search over that short range (about two intervals) finishes it. The
+// same index as the plain search, so the same sample (tests/kernels/cdf_guide_test.cpp); the
+// win is memory traffic: one guide line and one CDF line rather than log2(n) scattered reads.
+ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n,
+                                    ETK_GLOBAL const float* guide, float u) {
+    int K = etk_guide_cells(n);
+    int k = clamp((int)(u * (float)K), 0, K - 1);
+    int lo = (int)guide[k], hi = (int)guide[k + 1]; // invariant: cdf[lo] <= u, answer <= hi
+    // Binary lifting over [lo, hi] from the largest power of two <= hi - lo, with selects rather
+    // than branches (the comparisons are unpredictable; only the trip count varies, and it is
+    // 0 or 1 for most cells).
+    int step = 1;
+    while (2 * step <= hi - lo)
+        step *= 2;
+    for (; step > 0; step >>= 1) {
+        int mid = lo + step;
+        float c = cdf[min(mid, hi)];
+        lo = (mid <= hi && c <= u) ? mid : lo;
     }
     return lo;
 }
@@ -69,10 +114,10 @@ ETK_FN float etk_cell_coordinate(int i, float t, int n) {
     return x;
 }
 
-// Samples a 1D piecewise-constant density over [0,1]: returns x, its density and its cell.
-ETK_FN float etk_sample_1d(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* cdf, int n, float u,
-                           float* density, int* cell) {
-    int i = etk_find_interval(cdf, n, u);
+// The point of interval i (found for u) of a 1D piecewise-constant density over [0,1]: returns
+// x, its density and its cell.
+ETK_FN float etk_sample_1d_in(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* cdf, int n,
+                              int i, float u, float* density, int* cell) {
     float width = cdf[i + 1] - cdf[i];
     float t = width > 0.0f ? (u - cdf[i]) / width : 0.5f;
     // t > 0: x is never exactly 0, where the lat-long density has its zero at the pole.
@@ -82,14 +127,34 @@ ETK_FN float etk_sample_1d(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* 
     return etk_cell_coordinate(i, t, n);
 }
 
-// Samples (u, v) on the unit square: row from the marginal, column from that row's conditional.
+// Samples a 1D piecewise-constant density over [0,1]: returns x, its density and its cell.
+ETK_FN float etk_sample_1d(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* cdf, int n, float u,
+                           float* density, int* cell) {
+    return etk_sample_1d_in(pdf, cdf, n, etk_find_interval(cdf, n, u), u, density, cell);
+}
+
+// Row r's conditional CDF and its guide table.
+ETK_FN ETK_GLOBAL const float* etk_dist2d_row_cdf(ETK_GLOBAL const float* dist, int w, int h,
+                                                  int r) {
+    return dist + etk_dist2d_conditional_cdf(w, h) + r * (w + 1);
+}
+ETK_FN ETK_GLOBAL const float* etk_dist2d_row_guide(ETK_GLOBAL const float* dist, int w, int h,
+                                                    int r) {
+    return dist + etk_dist2d_conditional_guide(w, h) + r * (etk_guide_cells(w) + 1);
+}
+
+// Samples (u, v) on the unit square: row from the marginal, column from that row's conditional,
+// both by inversion of the CDF (the guide tables only find the interval faster).
 ETK_FN float2 etk_sample_2d(ETK_GLOBAL const float* dist, int w, int h, float2 xi, float* density,
                             int* row, int* col) {
     float pv, pu;
-    float v = etk_sample_1d(dist, dist + etk_dist2d_marginal_cdf(h), h, xi.y, &pv, row);
-    ETK_GLOBAL const float* cpdf = dist + etk_dist2d_conditional_pdf(h) + *row * w;
-    ETK_GLOBAL const float* ccdf = dist + etk_dist2d_conditional_cdf(w, h) + *row * (w + 1);
-    float u = etk_sample_1d(cpdf, ccdf, w, xi.x, &pu, col);
+    ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
+    int r = etk_find_interval_guided(mcdf, h, dist + etk_dist2d_marginal_guide(w, h), xi.y);
+    float v = etk_sample_1d_in(dist, mcdf, h, r, xi.y, &pv, row);
+    ETK_GLOBAL const float* cpdf = dist + etk_dist2d_conditional_pdf(h) + r * w;
+    ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(dist, w, h, r);
+    int c = etk_find_interval_guided(ccdf, w, etk_dist2d_row_guide(dist, w, h, r), xi.x);
+    float u = etk_sample_1d_in(cpdf, ccdf, w, c, xi.x, &pu, col);
     *density = pv * pu;
     return make_float2(u, v);
 }

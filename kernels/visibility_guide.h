@@ -102,10 +102,11 @@ ETK_FN float2 etk_guide_sample_region(EtkScene S, EtkEnvMap env, int R, float2 u
     int row = r0 + i;
     float v = etk_cell_coordinate(row, clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS), h);
     // The column: the row's conditional CDF, its span over columns [c0, c1).
-    ETK_GLOBAL const float* ccdf = S.env_dist + etk_dist2d_conditional_cdf(w, h) + row * (w + 1);
+    ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(S.env_dist, w, h, row);
     float a = ccdf[c0], b = ccdf[c1];
     float x = a + clamp(u.x, 0.0f, ETK_ONE_MINUS_EPS) * (b - a);
-    int c = clamp(etk_find_interval(ccdf, w, x), c0, c1 - 1);
+    int c = clamp(etk_find_interval_guided(ccdf, w, etk_dist2d_row_guide(S.env_dist, w, h, row), x),
+                  c0, c1 - 1);
     float cw = ccdf[c + 1] - ccdf[c];
     float tc = cw > 0.0f ? (x - ccdf[c]) / cw : 0.5f;
     float uu = etk_cell_coordinate(c, clamp(tc, 5.9604645e-8f, ETK_ONE_MINUS_EPS), w);

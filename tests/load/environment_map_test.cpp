@@ -387,7 +387,9 @@ TEST(EnvmapBadInput, PfmReadWriteAndCorruption) {
 // Distribution sizes in 64 bits: what the device cannot index is an error, not a 32-bit overflow
 // and a read past the table; the blur is bounded.
 TEST(EnvmapBadInput, DistributionSizeAndBlurBounds) {
-    EXPECT_EQ(et::distribution_table_entries(65536, 65536), 2ull * 65536 + 1 + 65536ull * 131073);
+    // Densities and CDFs, then the guide tables: 32768 + 1 for the marginal and for each row.
+    EXPECT_EQ(et::distribution_table_entries(65536, 65536),
+              2ull * 65536 + 1 + 65536ull * 131073 + 32769ull * 65537);
     EXPECT_THROW(et::check_distribution_size(65536, 65536), et::Error);
     EXPECT_THROW(et::check_distribution_size(46341, 46341), et::Error);
     EXPECT_THROW(et::check_distribution_size(65537, 1), et::Error);

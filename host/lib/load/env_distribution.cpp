@@ -136,6 +136,7 @@ struct Plan {
     std::vector<Span> sx, sy;
     float* cond_pdf;
     float* cond_cdf;
+    float* cond_guide;
     double* row_mass; // double: a float would round a row of denormal densities to 0
 };
 
@@ -189,8 +190,11 @@ void build_rows(const Plan& p, const float* rgb, int o0, int o1) {
         const float sin_theta = std::sin(static_cast<float>(M_PI) * (o + 0.5f) / dh);
         for (int x = 0; x < dw; ++x)
             fr[x] = std::max(0.0f, fr[x]) * sin_theta; // max: filters never go negative, NaN-safe
-        p.row_mass[o] =
-            build_1d(fr, dw, fr, p.cond_cdf + static_cast<size_t>(o) * (dw + 1), scratch.data());
+        float* cdf = p.cond_cdf + static_cast<size_t>(o) * (dw + 1);
+        p.row_mass[o] = build_1d(fr, dw, fr, cdf, scratch.data());
+        // The row's guide while its CDF is still in cache.
+        build_cdf_guide(cdf, dw,
+                        p.cond_guide + static_cast<size_t>(o) * (etk::etk_guide_cells(dw) + 1));
     };
 
     int o_next = o0; // resampled case: first output row not yet finished
@@ -244,10 +248,12 @@ void build_rows(const Plan& p, const float* rgb, int o0, int o1) {
 } // namespace
 
 uint64_t distribution_table_entries(int w, int h) {
-    // 2h + 1 + h (2w + 1), as etk_dist2d_size but without 32-bit overflow.
+    // 2h + 1 + h (2w + 1) + guides, as etk_dist2d_size but without 32-bit overflow.
     const uint64_t W = static_cast<uint64_t>(std::max(w, 0)),
                    H = static_cast<uint64_t>(std::max(h, 0));
-    return 2 * H + 1 + H * (2 * W + 1);
+    const uint64_t KW = static_cast<uint64_t>(etk::etk_guide_cells(std::max(w, 0))),
+                   KH = static_cast<uint64_t>(etk::etk_guide_cells(std::max(h, 0)));
+    return 2 * H + 1 + H * (2 * W + 1) + (KH + 1) + H * (KW + 1);
 }
 
 void check_distribution_size(int w, int h) {
@@ -265,6 +271,23 @@ void check_distribution_size(int w, int h) {
         throw Error("distribution resolution " + res + " needs " + byte_text(bytes) +
                     ", more than the memory budget of " + byte_text(kMaxBufferBytes) +
                     " per buffer; use fewer cells");
+}
+
+void build_cdf_guide(const float* cdf, int n, float* guide) {
+    // guide[k] = the largest i < n with cdf[i] <= k / K, what etk_find_interval returns.
+    // cdf[i] <= k / K exactly when ceil(cdf[i] K) <= k (K a power of two: the product is exact),
+    // so entry i is written into cell ceil(cdf[i] K) in increasing i (the largest i of a cell
+    // stays) and a running maximum fills the cells no entry starts in. Stores only and a max
+    // chain: no data-dependent branch and no load after store to the same cell (a walk with a
+    // comparison per step, or counting into the cells, doubled the distribution build).
+    const int K = etk::etk_guide_cells(n);
+    const float scale = static_cast<float>(K);
+    std::fill(guide, guide + K + 1, 0.0f);
+    for (int i = 1; i < n; ++i)
+        guide[static_cast<int>(std::ceil(cdf[i] * scale))] = static_cast<float>(i); // cdf <= 1
+    for (int k = 1; k < K; ++k)
+        guide[k] = std::max(guide[k], guide[k - 1]);
+    guide[K] = static_cast<float>(n - 1);
 }
 
 double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf) {
@@ -309,6 +332,7 @@ DistributionBuilder::DistributionBuilder(int width, int height, const Distributi
     d.table = prefaulted_vector<float>(distribution_table_entries(p.dw, p.dh));
     p.cond_pdf = d.table.data() + etk::etk_dist2d_conditional_pdf(p.dh);
     p.cond_cdf = d.table.data() + etk::etk_dist2d_conditional_cdf(p.dw, p.dh);
+    p.cond_guide = d.table.data() + etk::etk_dist2d_conditional_guide(p.dw, p.dh);
     s_->row_mass.assign(p.dh, 0.0);
     p.row_mass = s_->row_mass.data();
 
@@ -345,6 +369,8 @@ EnvDistribution DistributionBuilder::finish() {
     std::vector<double> scratch(static_cast<size_t>(p.dh) + 1);
     d.total = build_1d(s_->row_mass.data(), p.dh, d.table.data(),
                        d.table.data() + etk::etk_dist2d_marginal_cdf(p.dh), scratch.data());
+    build_cdf_guide(d.table.data() + etk::etk_dist2d_marginal_cdf(p.dh), p.dh,
+                    d.table.data() + etk::etk_dist2d_marginal_guide(p.dw, p.dh));
     s_.reset();
     return d;
 }

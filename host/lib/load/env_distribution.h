@@ -15,7 +15,8 @@ constexpr int kMaxDistributionSide = 65536;
 constexpr float kMaxBlurSigma = 64.0f;
 constexpr float kMinDistributionExponent = 0.05f;
 
-// Entries of the table of a w x h distribution (kernels/piecewise_constant.h), in 64 bits.
+// Entries of the table of a w x h distribution (kernels/piecewise_constant.h), guide tables
+// included, in 64 bits.
 uint64_t distribution_table_entries(int w, int h);
 
 // Throws et::Error "WxH: problem" when a w x h table is out of range, larger than the device can
@@ -81,5 +82,10 @@ inline float luminance(const float* rgb) {
 // The 1D building block: density and CDF (n+1 entries) of f, as in the paper's Figure 2.
 // Returns the sum of f.
 double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf);
+
+// The guide table (cutpoint method) of a CDF of n intervals: etk_guide_cells(n) + 1 entries,
+// entry k the interval etk_find_interval returns for u = k / K, the last n - 1. One pass over
+// the CDF. Every 2D table's builder calls it for the marginal and each conditional CDF.
+void build_cdf_guide(const float* cdf, int n, float* guide);
 
 } // namespace et

@@ -49,6 +49,9 @@ EnvDistribution compensate_distribution(const EnvDistribution& full) {
         float* cdf = c.table.data() + etk::etk_dist2d_conditional_cdf(w, h) +
                      static_cast<size_t>(r) * (w + 1);
         const double mass = build_piecewise_constant_1d(g.data(), w, pdf, cdf);
+        build_cdf_guide(cdf, w,
+                        c.table.data() + etk::etk_dist2d_conditional_guide(w, h) +
+                            static_cast<size_t>(r) * (etk::etk_guide_cells(w) + 1));
         row_mass[r] = static_cast<float>(mass);
         total += mass;
     }
@@ -56,6 +59,8 @@ EnvDistribution compensate_distribution(const EnvDistribution& full) {
         return full; // nothing above the mean: keep the full distribution (see the header)
     c.total = build_piecewise_constant_1d(row_mass.data(), h, c.table.data(),
                                           c.table.data() + etk::etk_dist2d_marginal_cdf(h));
+    build_cdf_guide(c.table.data() + etk::etk_dist2d_marginal_cdf(h), h,
+                    c.table.data() + etk::etk_dist2d_marginal_guide(w, h));
     return c;
 }
 
