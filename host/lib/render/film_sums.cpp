@@ -178,9 +178,13 @@ std::vector<float> FilmSums::variance_of_mean() const {
 }
 
 bool FilmSums::operator==(const FilmSums& o) const {
-    return width_ == o.width_ && height_ == o.height_ && aovs_.size() == o.aovs_.size() &&
-           std::memcmp(pixels_.data(), o.pixels_.data(), pixels_.size() * sizeof(Pixel)) == 0 &&
-           std::memcmp(aovs_.data(), o.aovs_.data(), aovs_.size() * sizeof(AovPixel)) == 0;
+    // memcmp of an empty vector's data() (nullptr) is undefined even for 0 bytes (UBSan).
+    return width_ == o.width_ && height_ == o.height_ && pixels_.size() == o.pixels_.size() &&
+           aovs_.size() == o.aovs_.size() &&
+           (pixels_.empty() ||
+            std::memcmp(pixels_.data(), o.pixels_.data(), pixels_.size() * sizeof(Pixel)) == 0) &&
+           (aovs_.empty() ||
+            std::memcmp(aovs_.data(), o.aovs_.data(), aovs_.size() * sizeof(AovPixel)) == 0);
 }
 
 } // namespace et
