@@ -5,34 +5,44 @@
 #include "util/timer.h"
 
 #include <algorithm>
+#include <memory>
 #include <string>
 
 namespace et {
+namespace {
+
+// Path state and queues start as a device's do: unwritten (default-initialised, not zeroed), so
+// a stage that reads a field no earlier stage wrote reads garbage here too, and Valgrind's
+// memcheck (tests/portability/memcheck_test.cpp) reports it instead of seeing a zero.
+template <typename T>
+std::unique_ptr<T[]> uninitialised(int n) {
+    return std::unique_ptr<T[]>(new T[static_cast<size_t>(n)]);
+}
+
+} // namespace
 
 // One thread's wavefront: path state and queues for `wave` paths, expanded from
 // kernels/path_state.h.
 class CpuDevice::Lane : public StageExecutor {
   public:
     Lane(const DeviceScene& scene, Film& film, int wave)
-        : scene_(scene.view()), film_(film.view()), queue_a_(wave), queue_b_(wave) {
-#define ET_LANE_ALLOC(type, name) name##_.resize(wave);
+        : scene_(scene.view()), film_(film.view()), queue_a_(uninitialised<int>(wave)),
+          queue_b_(uninitialised<int>(wave)), escaped_(uninitialised<int>(wave)),
+          shade_(uninitialised<int>(wave)), shadow_(uninitialised<int>(wave)) {
+#define ET_LANE_ALLOC(type, name)                                                                  \
+    name##_ = uninitialised<type>(wave);                                                           \
+    paths_.name = name##_.get();
         ETK_PATH_FIELDS(ET_LANE_ALLOC)
 #undef ET_LANE_ALLOC
-#define ET_LANE_VIEW(type, name) paths_.name = name##_.data();
-        ETK_PATH_FIELDS(ET_LANE_VIEW)
-#undef ET_LANE_VIEW
-        escaped_.resize(wave);
-        shade_.resize(wave);
-        shadow_.resize(wave);
-        queues_.escaped = escaped_.data();
-        queues_.shade = shade_.data();
-        queues_.shadow = shadow_.data();
+        queues_.escaped = escaped_.get();
+        queues_.shade = shade_.get();
+        queues_.shadow = shadow_.get();
         queues_.counters = counters_;
     }
 
     void bind_queues(bool swapped) override {
-        queues_.ray_in = swapped ? queue_b_.data() : queue_a_.data();
-        queues_.ray_out = swapped ? queue_a_.data() : queue_b_.data();
+        queues_.ray_in = swapped ? queue_b_.get() : queue_a_.get();
+        queues_.ray_out = swapped ? queue_a_.get() : queue_b_.get();
     }
     void reset_counters() override {
         std::fill(counters_, counters_ + etk::ETK_Q_COUNT, 0u);
@@ -41,11 +51,11 @@ class CpuDevice::Lane : public StageExecutor {
         std::copy(counters_, counters_ + etk::ETK_Q_COUNT, out);
     }
     void read_learning(int n, int* bins) override {
-        std::copy(learn_bin_.begin(), learn_bin_.begin() + n, bins);
+        std::copy(learn_bin_.get(), learn_bin_.get() + n, bins);
     }
     void read_guide(int n, int* keys, float* values) override {
-        std::copy(guide_key_.begin(), guide_key_.begin() + n, keys);
-        std::copy(guide_val_.begin(), guide_val_.begin() + n, values);
+        std::copy(guide_key_.get(), guide_key_.get() + n, keys);
+        std::copy(guide_val_.get(), guide_val_.get() + n, values);
     }
     // The cells' tables live in the device, not the (read-only) prepared scene.
     void set_guide_cells(const float* cells) {
@@ -79,10 +89,10 @@ class CpuDevice::Lane : public StageExecutor {
     etk::EtkFilm film_;
     etk::EtkPaths paths_{};
     etk::EtkQueues queues_{};
-#define ET_LANE_VECTOR(type, name) std::vector<type> name##_;
-    ETK_PATH_FIELDS(ET_LANE_VECTOR)
-#undef ET_LANE_VECTOR
-    std::vector<int> queue_a_, queue_b_, escaped_, shade_, shadow_;
+#define ET_LANE_ARRAY(type, name) std::unique_ptr<type[]> name##_;
+    ETK_PATH_FIELDS(ET_LANE_ARRAY)
+#undef ET_LANE_ARRAY
+    std::unique_ptr<int[]> queue_a_, queue_b_, escaped_, shade_, shadow_;
     uint32_t counters_[etk::ETK_Q_COUNT] = {};
 };
 
