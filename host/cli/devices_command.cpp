@@ -1,12 +1,18 @@
 #include "commands.h"
 #include "opencl/opencl_runtime.h"
+#include "render/executor_cl.h"
 
+#include <cstdio>
 #include <iostream>
 
 namespace et::cli {
 
 void add_devices_command(CLI::App& app, Globals&) {
     auto* cmd = app.add_subcommand("devices", "List OpenCL platforms and devices");
+    static bool kernels = false;
+    cmd->add_flag("--kernels", kernels,
+                  "Also build wavefront.cl on each device and list, per stage kernel, what the "
+                  "device reports and the work-group size envtrace launches it with");
     cmd->callback([] {
         auto devices = list_devices();
         for (size_t i = 0; i < devices.size(); ++i) {
@@ -15,6 +21,16 @@ void add_devices_command(CLI::App& app, Globals&) {
                       << "    platform: " << d.platform_name << "\n"
                       << "    device:   " << d.device_version << ", driver " << d.driver_version
                       << ", " << d.compute_units << " compute units\n";
+            if (!kernels)
+                continue;
+            ClRuntime rt(static_cast<int>(i));
+            std::cout << "    kernel          max group  preferred multiple  private bytes  "
+                         "launched with\n";
+            for (const StageKernelInfo& k : stage_kernel_info(rt)) {
+                std::printf("    %-15s %9zu  %18zu  %13llu  %13zu\n", k.name.c_str(),
+                            k.work_group_size, k.preferred_multiple,
+                            static_cast<unsigned long long>(k.private_bytes), k.local);
+            }
         }
     });
 }

@@ -182,3 +182,28 @@ TEST(DeviceLimits, EventsAreReleasedWithinABounce) {
 }
 
 } // namespace
+
+namespace {
+
+// `envtrace devices --kernels`: every stage kernel of wavefront.cl (and zero_words) with what
+// the device reports and a launch size the device accepts.
+TEST(DeviceLimits, StageKernelInfoCoversEveryStageWithAValidLaunchSize) {
+    et::ClRuntime rt(0);
+    const std::vector<et::StageKernelInfo> info = et::stage_kernel_info(rt);
+    ASSERT_EQ(info.size(), static_cast<size_t>(etk::ETK_STAGE_COUNT) + 1);
+    for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s)
+        EXPECT_EQ(info[s].name, et::stage_name(s));
+    EXPECT_EQ(info.back().name, "zero_words");
+    for (const et::StageKernelInfo& k : info) {
+        SCOPED_TRACE(k.name);
+        EXPECT_GE(k.local, 1u);
+        EXPECT_LE(k.local, et::kStageLocalTarget);
+        EXPECT_LE(k.local, k.work_group_size);
+        EXPECT_LE(k.local, rt.limits().max_work_group);
+        if (k.preferred_multiple > 1 && k.local >= k.preferred_multiple) {
+            EXPECT_EQ(k.local % k.preferred_multiple, 0u);
+        }
+    }
+}
+
+} // namespace

@@ -8,11 +8,6 @@
 namespace et {
 namespace {
 
-// The work-group size asked for; each kernel gets the largest size up to it that the kernel and
-// the device allow (choose_local_size). Fixed per kernel for the whole render: PoCL compiles a
-// work-group function per distinct local size.
-constexpr size_t kTargetLocal = 64;
-
 // Device bytes per path in flight: the path fields and the queues (ray_in and ray_out are two
 // buffers that swap).
 #define ET_FIELD_BYTES(type, name) +sizeof(type)
@@ -37,6 +32,25 @@ cl::Buffer upload(cl::Context& ctx, const std::vector<T>& v, bool host_unified) 
 }
 
 } // namespace
+
+std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt) {
+    const cl::Device& dev = rt.device().device;
+    cl::Program program = rt.build("wavefront.cl");
+    std::vector<StageKernelInfo> out;
+    for (int s = 0; s <= etk::ETK_STAGE_COUNT; ++s) {
+        const char* name = s < etk::ETK_STAGE_COUNT ? stage_name(s) : "zero_words";
+        cl::Kernel k(program, name);
+        StageKernelInfo info;
+        info.name = name;
+        info.work_group_size = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev);
+        info.preferred_multiple =
+            k.getWorkGroupInfo<CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE>(dev);
+        info.private_bytes = k.getWorkGroupInfo<CL_KERNEL_PRIVATE_MEM_SIZE>(dev);
+        info.local = choose_local_size(k, dev, rt.limits(), kStageLocalTarget);
+        out.push_back(info);
+    }
+    return out;
+}
 
 ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, int paths,
                    ProgramBuildInfo* build)
@@ -76,10 +90,10 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
         program_ = rt.build("wavefront.cl", "", build);
         for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s) {
             kernels_.emplace_back(program_, stage_name(s));
-            local_.push_back(choose_local_size(kernels_.back(), dev, lim, kTargetLocal));
+            local_.push_back(choose_local_size(kernels_.back(), dev, lim, kStageLocalTarget));
         }
         zero_ = cl::Kernel(program_, "zero_words");
-        zero_local_ = choose_local_size(zero_, dev, lim, kTargetLocal);
+        zero_local_ = choose_local_size(zero_, dev, lim, kStageLocalTarget);
         seconds_.assign(etk::ETK_STAGE_COUNT, 0.0);
         auto& ctx = rt.context();
         args_.resize(etk::ETK_ARG_COUNT);

@@ -8,8 +8,26 @@
 #include "render/schedule.h"
 
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace et {
+
+// The work-group size asked for; each kernel gets the largest size up to it that the kernel and
+// the device allow (choose_local_size). Fixed per kernel for the whole render: PoCL compiles a
+// work-group function per distinct local size.
+constexpr size_t kStageLocalTarget = 64;
+
+// What the device reports for each stage kernel of wavefront.cl and the work-group size the
+// renderer will launch it with (`envtrace devices --kernels`).
+struct StageKernelInfo {
+    std::string name;
+    size_t work_group_size = 0;    // CL_KERNEL_WORK_GROUP_SIZE
+    size_t preferred_multiple = 0; // CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE
+    uint64_t private_bytes = 0;    // CL_KERNEL_PRIVATE_MEM_SIZE
+    size_t local = 0;              // what the renderer launches it with
+};
+std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt);
 
 class ClDevice : public WavefrontDevice, public StageExecutor {
   public:
