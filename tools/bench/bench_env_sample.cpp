@@ -6,7 +6,7 @@
 // beforehand so that only the sampling is timed. Plain and guided run in one process, on the
 // same values and the same table, interleaved with --benchmark_enable_random_interleaving.
 // Also: the distribution build (with its guides) and the guides' share of the table, per map size
-// (procedural sky from 256x128 to 8192x4096, and royal_esplanade_1k), for "How cost grows".
+// (procedural sky from 256x128 to 16384x8192, and royal_esplanade_1k), for "How cost grows".
 #include "bench_maps.h"
 #include "load/env_distribution.h"
 #include "kernels/envmap.h"
@@ -151,7 +151,7 @@ void BM_Build(benchmark::State& st, std::string map) {
 }
 
 const std::vector<std::string> kSampleMaps = {"royal_esplanade_1k", "sky_256", "sky_1024",
-                                              "sky_4096", "sky_8192"};
+                                              "sky_4096", "sky_8192", "sky_16384"};
 
 int register_all() {
     for (const std::string& m : kSampleMaps) {

@@ -47,7 +47,7 @@ def main():
     a.loglog(texels, col(m, "build_ms_cpu"), "o-", label="distribution build, 1 core (ms)")
     a.loglog(texels, col(m, "env_sample_plain_ns"), "s--", label="etk_env_sample, plain search (ns)")
     a.loglog(texels, col(m, "env_sample_guided_ns"), "s-", label="etk_env_sample, guide tables (ns)")
-    a.set_xlabel("map texels (sky, 256x128 ... 8192x4096)")
+    a.set_xlabel("map texels (sky, 256x128 ... 16384x8192)")
     a.set_title("Environment map size")
     a.legend(fontsize=8)
     rp = rows("resolution_paths.csv")
@@ -66,7 +66,7 @@ def main():
     for row in ax:
         for a in row:
             a.grid(alpha=0.3, which="both")
-    fig.suptitle("envtrace: how cost grows (2 shared cores, loaded machine: see README)")
+    fig.suptitle("envtrace: how cost grows (2 cores; triangle rows idle, the others loaded: see README)")
     fig.tight_layout()
     out = os.path.join(HERE, "scaling.png")
     fig.savefig(out, dpi=90)
