@@ -45,26 +45,39 @@ ETK_FN uint etk_reverse_bits(uint x) {
            (etk_reverse_byte((x >> 16) & 0xffu) << 8) | etk_reverse_byte(x >> 24);
 }
 
-// Second Sobol' dimension (the first is the bit-reversed index).
-ETK_FN uint etk_sobol_dim1(uint i) {
-    // A fixed 32-step loop without branches (unrolled, vectorisable across work-items).
-    uint v = 0x80000000u, r = 0u;
-    for (int k = 0; k < 32; ++k) {
-        r ^= v & (0u - ((i >> k) & 1u));
-        v ^= v >> 1;
-    }
-    return r;
+// The second Sobol' dimension of the index whose bits, reversed, are y: etk_sobol_dim1 without
+// the reversal. That dimension's generator matrix is Pascal's triangle mod 2: output bit 31 - j
+// is the parity of the index bits k with (k & j) == j (Lucas' theorem), i.e. a superset-sum
+// (zeta) transform over the 5-bit bit positions, done here as five shift-mask-xor steps on the
+// whole word instead of 32 conditional xors of direction numbers. Exactly the same bits
+// (Sampler.SobolDimensionOneEqualsTheDirectionNumbers checks it).
+ETK_FN uint etk_sobol_dim1_reversed(uint y) {
+    y ^= (y << 1) & 0xaaaaaaaau;
+    y ^= (y << 2) & 0xccccccccu;
+    y ^= (y << 4) & 0xf0f0f0f0u;
+    y ^= (y << 8) & 0xff00ff00u;
+    y ^= (y << 16) & 0xffff0000u;
+    return y;
 }
 
-// Laine-Karras style hash on reversed bits: a nested uniform scramble of the index.
-ETK_FN uint etk_shuffle_index(uint i, uint seed) {
+// Second Sobol' dimension (the first is the bit-reversed index).
+ETK_FN uint etk_sobol_dim1(uint i) {
+    return etk_sobol_dim1_reversed(etk_reverse_bits(i));
+}
+
+// Laine-Karras style hash on reversed bits: a nested uniform scramble of the index, returned
+// with its bits reversed (what the (0,2)-sequence needs: see etk_sample_pair).
+ETK_FN uint etk_shuffle_index_reversed(uint i, uint seed) {
     uint x = etk_reverse_bits(i);
     x += seed;
     x ^= x * 0x6c50b47cu;
     x ^= x * 0xb82f1e52u;
     x ^= x * 0xc7afe638u;
     x ^= x * 0x8d22f6e6u;
-    return etk_reverse_bits(x);
+    return x;
+}
+ETK_FN uint etk_shuffle_index(uint i, uint seed) {
+    return etk_reverse_bits(etk_shuffle_index_reversed(i, seed));
 }
 
 // 24 bits to [0,1): exactly representable, never 1.
@@ -84,11 +97,13 @@ ETK_FN uint etk_sobol02_y(uint index, uint scramble) {
 ETK_FN float2 etk_sample_pair(int sampler, uint seed, uint stream, uint index, uint pair) {
     uint key = etk_hash_combine(etk_hash_combine(seed, stream), pair);
     if (sampler == ETK_SAMPLER_SOBOL) {
-        uint i = etk_shuffle_index(index, etk_hash(key ^ 0x5bd1e995u));
+        // r: the shuffled index i with its bits reversed, so etk_sobol02_x(i, sx) = r ^ sx and
+        // etk_sobol02_y(i, sy) = etk_sobol_dim1_reversed(r) ^ sy, without reversing i back and
+        // forth (the same bits; Sampler.PairEqualsTheSequenceFunctions checks it).
+        uint r = etk_shuffle_index_reversed(index, etk_hash(key ^ 0x5bd1e995u));
         uint sx = etk_hash(key ^ 0x68e31da4u);
         uint sy = etk_hash(key ^ 0xb5297a4du);
-        return make_float2(etk_unit_float(etk_sobol02_x(i, sx)),
-                           etk_unit_float(etk_sobol02_y(i, sy)));
+        return make_float2(etk_unit_float(r ^ sx), etk_unit_float(etk_sobol_dim1_reversed(r) ^ sy));
     }
     uint h = etk_hash_combine(key, index);
     return make_float2(etk_unit_float(etk_hash(h ^ 0x1b873593u)),

@@ -197,3 +197,52 @@ TEST(Sampler, KernelMatchesHostBitForBit) {
 }
 
 } // namespace
+
+namespace {
+
+// The second Sobol' dimension by its definition: direction numbers v_0 = 2^31, v_k = v_(k-1) ^
+// (v_(k-1) >> 1), xored for every set bit of the index (what etk_sobol_dim1 computed before
+// its zeta-transform form).
+uint32_t sobol_dim1_by_direction_numbers(uint32_t i) {
+    uint32_t v = 0x80000000u, r = 0u;
+    for (int k = 0; k < 32; ++k, v ^= v >> 1)
+        if ((i >> k) & 1u)
+            r ^= v;
+    return r;
+}
+
+TEST(Sampler, SobolDimensionOneEqualsTheDirectionNumbers) {
+    std::mt19937 rng(7);
+    std::vector<uint32_t> idx = {0u, 1u, 2u, 3u, 0x80000000u, 0xffffffffu, 0x7fffffffu};
+    for (uint32_t i = 0; i < 70000; ++i)
+        idx.push_back(i);
+    for (int k = 0; k < 200000; ++k)
+        idx.push_back(rng());
+    for (uint32_t i : idx) {
+        ASSERT_EQ(etk::etk_sobol_dim1(i), sobol_dim1_by_direction_numbers(i)) << i;
+        ASSERT_EQ(etk::etk_sobol_dim1_reversed(etk::etk_reverse_bits(i)),
+                  sobol_dim1_by_direction_numbers(i))
+            << i;
+    }
+}
+
+// etk_sample_pair's Sobol' branch works on the reversed shuffled index; it must equal the
+// composition of the sequence functions it stands for.
+TEST(Sampler, PairEqualsTheSequenceFunctions) {
+    for (const Key& k : kKeys)
+        for (uint32_t first : {0u, 1000u, 0xfffff000u})
+            for (uint32_t index = first; index < first + 2048u; ++index) {
+                const uint32_t key = etk::etk_hash_combine(etk::etk_hash_combine(k.seed, k.stream),
+                                                           k.pair);
+                const uint32_t i = etk::etk_shuffle_index(index, etk::etk_hash(key ^ 0x5bd1e995u));
+                const etk::float2 want = etk::make_float2(
+                    etk::etk_unit_float(etk::etk_sobol02_x(i, etk::etk_hash(key ^ 0x68e31da4u))),
+                    etk::etk_unit_float(etk::etk_sobol02_y(i, etk::etk_hash(key ^ 0xb5297a4du))));
+                const etk::float2 got =
+                    etk::etk_sample_pair(ETK_SAMPLER_SOBOL, k.seed, k.stream, index, k.pair);
+                ASSERT_EQ(etk::as_uint(got.x), etk::as_uint(want.x)) << index;
+                ASSERT_EQ(etk::as_uint(got.y), etk::as_uint(want.y)) << index;
+            }
+}
+
+} // namespace
