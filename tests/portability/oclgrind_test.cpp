@@ -54,9 +54,25 @@ class ScopedPlatform {
     std::string old_;
 };
 
+// The two runtimes, kept for the whole program (building a context per test would be slow).
+std::unique_ptr<et::ClRuntime> g_oclgrind, g_pocl;
+
+// Releases them while the program still runs, not in static destruction at exit: one CI run of
+// oclgrind_control_reports_errors was aborted by glibc ("corrupted double-linked list") after
+// every test had passed (not reproduced in 27 further runs). Releasing the contexts before
+// exit takes them out of the unordered teardown of static objects across libraries
+// (Oclgrind's, the ICD loader's), the likeliest cause.
+class ReleaseRuntimes : public ::testing::Environment {
+  public:
+    void TearDown() override {
+        g_oclgrind.reset();
+        g_pocl.reset();
+    }
+};
+const auto* const kReleaseRuntimes = ::testing::AddGlobalTestEnvironment(new ReleaseRuntimes);
+
 et::ClRuntime& runtime_on(const char* platform) {
-    static std::unique_ptr<et::ClRuntime> oclgrind, pocl;
-    std::unique_ptr<et::ClRuntime>& rt = platform == kOclgrind ? oclgrind : pocl;
+    std::unique_ptr<et::ClRuntime>& rt = platform == kOclgrind ? g_oclgrind : g_pocl;
     if (!rt) {
         ScopedPlatform p(platform);
         rt = std::make_unique<et::ClRuntime>(0);
