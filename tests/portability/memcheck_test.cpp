@@ -10,10 +10,9 @@
 // bounds, races and the API only; this test covers uninitialised reads in those stages.
 #include "load/scene.h"
 #include "prepare/device_scene.h"
-#include "prepare/light_set.h"
-#include "prepare/sis.h"
 #include "render/executor_cpu.h"
 #include "render/renderer.h"
+#include "render_util.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -106,18 +105,12 @@ TEST(Memcheck, MeshSceneRendersNatively) {
 
 TEST(Memcheck, LightSetAndSisRenderNatively) {
     const et::Scene s = load_small(write_scene());
-    const et::LightSet set = et::make_lights_ours(s.env, 12, 1, false);
-    et::SisOptions so;
-    so.samples = 6;
-    const et::SisResult sis = et::build_sis(s.env, so);
-    for (et::Strategy strategy : {et::Strategy::lights, et::Strategy::sis}) {
+    et::RenderSettings st = s.settings;
+    st.backend = et::Backend::cpu;
+    st.threads = 1;
+    for (const auto& [strategy, ds] : ett::light_set_and_sis_scenes(s, st)) {
         SCOPED_TRACE(et::name_of(strategy));
-        et::RenderSettings st = s.settings;
-        st.strategy = strategy;
-        st.max_depth = 1;
-        st.backend = et::Backend::cpu;
-        st.threads = 1;
-        render_tiny(et::prepare_device_scene(s, st, &set.lights, &sis.strata), false);
+        render_tiny(ds, false);
     }
 }
 

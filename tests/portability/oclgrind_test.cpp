@@ -12,10 +12,9 @@
 #include "load/scene.h"
 #include "opencl/opencl_runtime.h"
 #include "prepare/device_scene.h"
-#include "prepare/light_set.h"
-#include "prepare/sis.h"
 #include "render/env_sampling.h"
 #include "render/renderer.h"
+#include "render_util.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -304,17 +303,10 @@ TEST(Oclgrind, LightSetAndSisRenderEqualPocl) {
     et::Scene s;
     const std::string file = std::string(ENVTRACE_SOURCE_DIR) + "/scenes/default.json";
     prepare(file, 8, 6, &s);
-    const et::LightSet set = et::make_lights_ours(s.env, 12, 1, false);
-    et::SisOptions so;
-    so.samples = 6;
-    const et::SisResult sis = et::build_sis(s.env, so);
-    for (et::Strategy strategy : {et::Strategy::lights, et::Strategy::sis}) {
+    et::RenderSettings st = s.settings;
+    st.backend = et::Backend::opencl;
+    for (const auto& [strategy, ds] : ett::light_set_and_sis_scenes(s, st)) {
         SCOPED_TRACE(et::name_of(strategy));
-        et::RenderSettings st = s.settings;
-        st.strategy = strategy;
-        st.max_depth = 1;
-        st.backend = et::Backend::opencl;
-        const et::DeviceScene ds = et::prepare_device_scene(s, st, &set.lights, &sis.strata);
         expect_same_films(ds, 2);
     }
 }

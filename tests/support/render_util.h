@@ -9,12 +9,15 @@
 #include "render/renderer.h"
 #include "load/scene.h"
 #include "prepare/device_scene.h"
+#include "prepare/light_set.h"
+#include "prepare/sis.h"
 #include "test_data.h"
 
 #include <glm/glm.hpp>
 
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ett {
@@ -150,6 +153,24 @@ inline Agreement agreement(const RenderResult& a, const RenderResult& b) {
     g.mean_b = image_mean(b.mean);
     g.mean_z = (g.mean_a - g.mean_b) / (std::sqrt(var_sum) / n + 1e-9);
     return g;
+}
+
+// Device scenes of `s` for the two strategies whose lights the host makes: a directional light
+// set (12 lights) and SIS strata (6), direct lighting only, on `st`'s back end and threads.
+inline std::vector<std::pair<et::Strategy, et::DeviceScene>>
+light_set_and_sis_scenes(const et::Scene& s, const et::RenderSettings& st) {
+    const et::LightSet set = et::make_lights_ours(s.env, 12, 1, false);
+    et::SisOptions so;
+    so.samples = 6;
+    const et::SisResult sis = et::build_sis(s.env, so);
+    std::vector<std::pair<et::Strategy, et::DeviceScene>> out;
+    for (et::Strategy strategy : {et::Strategy::lights, et::Strategy::sis}) {
+        et::RenderSettings t = st;
+        t.strategy = strategy;
+        t.max_depth = 1;
+        out.emplace_back(strategy, et::prepare_device_scene(s, t, &set.lights, &sis.strata));
+    }
+    return out;
 }
 
 } // namespace ett
