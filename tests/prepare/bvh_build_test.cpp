@@ -18,6 +18,7 @@
 #include <glm/gtc/random.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 namespace {
@@ -407,6 +408,34 @@ TEST(Bvh, EmptySceneMissesEverything) {
                                                etk::make_float3(0, 0, 0), f3(d), 3e38f, any, &h));
             EXPECT_EQ(h.prim, -1);
         }
+}
+
+} // namespace
+
+namespace {
+
+// Subtrees are built on several threads where a split has 2^14 triangles on each side: the tree
+// must be the serial one, bit for bit (node layout, boxes, triangle order), whatever the count.
+TEST(Bvh, SameTreeOnAnyThreadCount) {
+    std::mt19937 rng(5);
+    et::TriangleSoup big;
+    add_random(big, rng, 40000, 1.0f, 1e-3f, 0.2f);
+    std::vector<et::TriangleSoup> soups = {std::move(big)};
+    if (bunny().size() > 0)
+        soups.push_back(bunny());
+    for (const et::TriangleSoup& soup : soups) {
+        const et::Bvh one = et::build_bvh(soup, 4, 1);
+        ASSERT_GT(one.node_count(), 1000);
+        for (int threads : {2, 3, 8}) {
+            const et::Bvh many = et::build_bvh(soup, 4, threads);
+            ASSERT_EQ(one.nodes.size(), many.nodes.size()) << threads;
+            EXPECT_EQ(0, std::memcmp(one.nodes.data(), many.nodes.data(),
+                                     one.nodes.size() * sizeof(one.nodes[0])))
+                << threads;
+            EXPECT_EQ(one.order, many.order) << threads;
+            EXPECT_EQ(one.sah_cost, many.sah_cost) << threads;
+        }
+    }
 }
 
 } // namespace

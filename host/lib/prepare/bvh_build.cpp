@@ -2,6 +2,7 @@
 
 #include "kernels/bvh.h"
 #include "util/error.h"
+#include "util/parallel.h"
 #include "util/timer.h"
 
 #include <algorithm>
@@ -31,6 +32,9 @@ constexpr int kBins = 32;
 // Binary depth limit: the 4-wide tree then has at most 31 levels, and traversal needs at most
 // 1 + 3 x 31 stack entries (kernels/bvh.h).
 constexpr int kMaxDepth = 60;
+// A split's two subtrees are built on two threads when both have at least this many triangles
+// (and neither more than three times the other).
+constexpr int kParallelTriangles = 1 << 14;
 
 float as_float_bits(uint32_t u) {
     float f;
@@ -44,6 +48,20 @@ struct Builder {
     std::vector<int>& order;
     std::vector<BvhTreeNode>& nodes;
     int max_leaf;
+    int threads; // for subtrees: split between the two sides of a split (emit_inner)
+
+    // Appends a subtree built on its own (root at index 0); returns its root's index here.
+    int append(const std::vector<BvhTreeNode>& sub) {
+        const int base = static_cast<int>(nodes.size());
+        for (BvhTreeNode t : sub) {
+            if (t.left >= 0) {
+                t.left += base;
+                t.right += base;
+            }
+            nodes.push_back(t);
+        }
+        return base;
+    }
     void set_leaf(int n, const Box& b, int first, int count) {
         nodes[n].lo = b.lo;
         nodes[n].hi = b.hi;
@@ -140,12 +158,31 @@ struct Builder {
     }
 
     void emit_inner(int node, const Box& bounds, int begin, int mid, int end, int level) {
-        const int left = static_cast<int>(nodes.size());
-        nodes.emplace_back();
-        build(left, begin, mid, level + 1);
-        const int right = static_cast<int>(nodes.size());
-        nodes.emplace_back();
-        build(right, mid, end, level + 1);
+        int left, right;
+        const int small = std::min(mid - begin, end - mid);
+        if (threads > 1 && small >= kParallelTriangles && 4 * small >= end - begin) {
+            // The first split whose sides are both large and within 1:3 of each other (the root's
+            // often peels a ground plane or a small object off the rest, and a thread given the
+            // small side would idle): its subtrees on two threads, each into a tree of its own,
+            // then appended
+            // the way the serial recursion lays them out (left subtree, then right): the same
+            // tree, bit for bit, for any thread count. They partition disjoint ranges of order.
+            std::vector<BvhTreeNode> sub[2] = {std::vector<BvhTreeNode>(1),
+                                               std::vector<BvhTreeNode>(1)};
+            run_on_threads(2, [&](int t) {
+                Builder b{boxes, centroids, order, sub[t], max_leaf, threads / 2};
+                b.build(0, t == 0 ? begin : mid, t == 0 ? mid : end, level + 1);
+            });
+            left = append(sub[0]);
+            right = append(sub[1]);
+        } else {
+            left = static_cast<int>(nodes.size());
+            nodes.emplace_back();
+            build(left, begin, mid, level + 1);
+            right = static_cast<int>(nodes.size());
+            nodes.emplace_back();
+            build(right, mid, end, level + 1);
+        }
         nodes[node].lo = bounds.lo;
         nodes[node].hi = bounds.hi;
         nodes[node].left = left;
@@ -239,7 +276,7 @@ struct Flattener {
 
 } // namespace
 
-Bvh build_bvh(const TriangleSoup& soup, int max_leaf) {
+Bvh build_bvh(const TriangleSoup& soup, int max_leaf, int threads) {
     Timer timer;
     const int n = static_cast<int>(soup.size());
     std::vector<Box> boxes(n);
@@ -254,7 +291,7 @@ Bvh build_bvh(const TriangleSoup& soup, int max_leaf) {
         order[t] = t;
     std::vector<BvhTreeNode> tree(1);
     if (n > 0) {
-        Builder b{boxes, centroids, order, tree, std::max(1, max_leaf)};
+        Builder b{boxes, centroids, order, tree, std::max(1, max_leaf), thread_count(threads)};
         b.build(0, 0, n, 0);
     }
     Bvh bvh = flatten_bvh(std::move(tree), std::move(order));

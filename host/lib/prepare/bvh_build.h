@@ -19,7 +19,8 @@ struct Bvh {
 };
 
 // Leaves hold at most `max_leaf` triangles; depth stays below the kernels' stack size.
-Bvh build_bvh(const TriangleSoup& soup, int max_leaf = 4);
+// threads: 0 for all cores; the tree is the same, bit for bit, for any count.
+Bvh build_bvh(const TriangleSoup& soup, int max_leaf = 4, int threads = 0);
 
 // A binary tree as a builder makes it, before flattening into the kernels' layout. Node 0 is the
 // root; a leaf (left < 0) holds triangles order[first .. first + count).
