@@ -1,6 +1,7 @@
 // Pearson's chi-square goodness-of-fit test in the style of Mitsuba 3's chi2.py: cells with an
-// expected count below a threshold are pooled (smallest first) until the pool reaches it, any
-// observation in a cell of zero expected count is a failure, and the p-value comes from the
+// expected count below a threshold are pooled (smallest first) until the pool reaches it, an
+// observation in a cell of zero expected count is a failure (beyond `zero_cell_slack`, which
+// a caller sets only where its quadrature can miss a sliver of support, and says why), and the p-value comes from the
 // chi-square distribution with (cells after pooling - 1) degrees of freedom.
 #pragma once
 #include <string>
@@ -22,7 +23,8 @@ struct Chi2Result {
 // observed and expected are counts over a grid of `width` x `height` cells (row-major), used
 // only to name cells in the report.
 Chi2Result chi2_test(const std::vector<double>& observed, const std::vector<double>& expected,
-                     int width, int height, double alpha, double min_expected = 5.0);
+                     int width, int height, double alpha, double min_expected = 5.0,
+                     double zero_cell_slack = 0.0);
 
 // Per-test significance level keeping the family-wise rate at `alpha` over `tests` tests.
 double sidak_alpha(double alpha, int tests);

@@ -164,9 +164,9 @@ struct Builder {
             // The first split whose sides are both large and within 1:3 of each other (the root's
             // often peels a ground plane or a small object off the rest, and a thread given the
             // small side would idle): its subtrees on two threads, each into a tree of its own,
-            // then appended
-            // the way the serial recursion lays them out (left subtree, then right): the same
-            // tree, bit for bit, for any thread count. They partition disjoint ranges of order.
+            // then appended the way the serial recursion lays them out (left subtree, then
+            // right): the same tree, bit for bit, for any thread count. They partition disjoint
+            // ranges of order.
             std::vector<BvhTreeNode> sub[2] = {std::vector<BvhTreeNode>(1),
                                                std::vector<BvhTreeNode>(1)};
             run_on_threads(2, [&](int t) {
