@@ -99,9 +99,9 @@ ETK_FN int etk_leaf_hit(ETK_GLOBAL const float4* tris, int first, int count, flo
 // query that found one); an inner child it enters is pushed, in stack sorted order: entry
 // distances decrease towards the top, so the nearest is popped first. The host keeps the stack
 // within ETK_BVH_STACK (see the top); `base` is where this node's pushes began.
-ETK_FN int etk_bvh_lane(ETK_GLOBAL const float4* tris, int in, float t, float meta, float flags,
-                        float3 org, float3 dir, int any_hit, EtkHit* hit, int* stack,
-                        float* stack_t, int base, int* sp) {
+ETK_FORCE_INLINE_FN int etk_bvh_lane(ETK_GLOBAL const float4* tris, int in, float t, float meta,
+                                     float flags, float3 org, float3 dir, int any_hit, EtkHit* hit,
+                                     int* stack, float* stack_t, int base, int* sp) {
     if (!in || !(t <= hit->t * 1.0000005f)) // slack: tnear and t round differently
         return 0;
     uint f = as_uint(flags);

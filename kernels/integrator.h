@@ -25,8 +25,10 @@
 ETK_BEGIN
 
 // Every stage has this signature, so that one list (ETK_STAGES in path_state.h) generates the
-// OpenCL kernels and the native back end's dispatch. i: index into the stage's queue.
-#define ETK_STAGE_PARAMS EtkScene S, EtkPaths P, EtkQueues Q, EtkFilm F, EtkParams p, int i
+// OpenCL kernels and the native back end's dispatch. i: index into the stage's queue; out: the
+// queue pushes, which the caller makes after the stage returns (EtkPushes in path_state.h).
+#define ETK_STAGE_PARAMS                                                                           \
+    EtkScene S, EtkPaths P, EtkQueues Q, EtkFilm F, EtkParams p, int i, EtkPushes *out
 
 ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
     if (heuristic == ETK_HEURISTIC_POWER) {
@@ -107,6 +109,7 @@ ETK_FN EtkSurface etk_path_surface(EtkScene S, EtkPaths P, EtkParams p, int slot
 
 // Stage 1: a camera ray for slot i.
 ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
+    (void)out;
     (void)S;
     (void)F;
     int pixel = p.first_pixel + i;
@@ -128,17 +131,18 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
     float4 o = P.ray_o[slot], d = P.ray_d[slot];
     EtkHit h;
     if (!etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h)) {
-        Q.escaped[ETK_ATOMIC_INC(Q.counters + ETK_Q_ESCAPED)] = slot;
+        out->slot[ETK_Q_ESCAPED] = slot;
         return;
     }
     if ((int)o.w >= p.max_depth)
         return; // the path ends here: no more bounces allowed
     P.hit[slot] = make_float4(h.t, as_float((uint)h.prim), h.b1, h.b2);
-    Q.shade[ETK_ATOMIC_INC(Q.counters + ETK_Q_SHADE)] = slot;
+    out->slot[ETK_Q_SHADE] = slot;
 }
 
 // Stage 3: rays that left the scene see the environment, weighted against light sampling.
 ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
+    (void)out;
     (void)F;
     int slot = Q.escaped[i];
     float4 d = P.ray_d[slot];
@@ -279,13 +283,12 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             }
         }
         if (etk_max3(c) > 0.0f) {
-            int k = (int)ETK_ATOMIC_INC(Q.counters + ETK_Q_SHADOW);
             // Shadow rays stop at any surface, glass included: light through glass (caustics)
             // is the continuation's to find, as indirect light, never the light sample's.
             P.shadow_o[slot] = etk_f4(etk_surface_origin(s, wi_world), as_float((uint)learn_key));
             P.shadow_d[slot] = etk_f4(wi_world, 3.0e38f);
             P.shadow_L[slot] = etk_f4(c, learn_val);
-            Q.shadow[k] = slot;
+            out->slot[ETK_Q_SHADOW] = slot;
         }
     }
 
@@ -342,11 +345,12 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     P.ray_o[slot] = etk_f4(etk_surface_origin(s, wi_world), (float)(depth + 1));
     P.ray_d[slot] = etk_f4(normalize(wi_world), delta_sample ? -1.0f : pdf);
     P.beta[slot] = etk_f4(beta, guided ? (float)cell : etk_share_code(share, b_from_light, flags));
-    Q.ray_out[ETK_ATOMIC_INC(Q.counters + ETK_Q_RAY_OUT)] = slot;
+    out->slot[ETK_Q_RAY_OUT] = slot;
 }
 
 // Stage 5: shadow rays add their contribution when nothing blocks them.
 ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
+    (void)out;
     (void)F;
     int slot = Q.shadow[i];
     float4 o = P.shadow_o[slot], d = P.shadow_d[slot];
@@ -365,6 +369,7 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
 // Stage 4': the shade stage of a directional light set (ETK_STRATEGY_LIGHTS, direct lighting
 // only): every light of the set at every hit, one any-hit shadow ray each, summed in light order.
 ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
+    (void)out;
     int slot = Q.shade[i];
     EtkSurface s = etk_path_surface(S, P, p, slot);
     if ((int)P.ray_o[slot].w == 0) // the camera ray's hit: the AOVs
@@ -388,6 +393,7 @@ ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
 // Stage 6: the pass's path radiance into the film. A non-finite sample counts as zero rather
 // than poisoning the pixel, and is counted: the host reports any, and the tests require none.
 ETK_FN void etk_accumulate(ETK_STAGE_PARAMS) {
+    (void)out;
     (void)S;
     (void)p;
     int pixel = P.pixel[i];

@@ -8,7 +8,7 @@
 
 // Scene buffers, read-only, one element type each: X(type, name).
 #define ETK_SCENE_BUFFERS(X)                                                                       \
-    X(float4, nodes)        /* BVH: 4-wide nodes (bvh.h) */                                    \
+    X(float4, nodes)        /* BVH: 4-wide nodes (bvh.h) */                                        \
     X(float4, tris)         /* v0, e1, e2 per triangle */                                          \
     X(float4, normals)      /* three vertex normals per triangle */                                \
     X(int, tri_material)    /* material index per triangle */                                      \
@@ -82,6 +82,22 @@ ETK_BEGIN
 enum { ETK_COUNTERS(ETK_COUNTER_ENUM) ETK_Q_COUNT };
 #undef ETK_COUNTER_ENUM
 
+// A stage's queue pushes are collected in an EtkPushes and made after the stage function returns:
+// natively one at a time (etk_push_each: the lane's own counters), on OpenCL with one global
+// atomic per work-group and queue (wavefront.cl), since every work-item bumping the same global
+// counter makes its cache line travel between cores on a CPU device (issue 12: 4% of a frame
+// on PoCL). The pushing queues are those of the first ETK_PUSH_QUEUES counters.
+#define ETK_PUSH_QUEUES 4
+typedef struct {
+    int slot[ETK_PUSH_QUEUES]; // by counter (ETK_Q_RAY_OUT ... ETK_Q_SHADOW): the slot, or -1
+} EtkPushes;
+// EtkPushes indexes its slots by the first four counters.
+typedef char
+    etk_push_counters_come_first[((ETK_Q_RAY_OUT == 0) & (ETK_Q_ESCAPED == 1) & (ETK_Q_SHADE == 2) &
+                                  (ETK_Q_SHADOW == 3) & (ETK_PUSH_QUEUES == 4))
+                                     ? 1
+                                     : -1];
+
 #define ETK_STAGE_ENUM(kernel, fn) ETK_STAGE_##kernel,
 enum { ETK_STAGES(ETK_STAGE_ENUM) ETK_STAGE_COUNT };
 #undef ETK_STAGE_ENUM
@@ -105,6 +121,26 @@ typedef struct {
 #undef ETK_CONST_MEMBER
 #undef ETK_MEMBER
 #undef ETK_QUEUE_MEMBER
+
+ETK_FN EtkPushes etk_no_pushes(void) {
+    EtkPushes out;
+    for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
+        out.slot[q] = -1;
+    return out;
+}
+// Queue of counter q (q < ETK_PUSH_QUEUES).
+ETK_FN ETK_GLOBAL int* etk_push_queue(EtkQueues Q, int q) {
+    return q == ETK_Q_RAY_OUT   ? Q.ray_out
+           : q == ETK_Q_ESCAPED ? Q.escaped
+           : q == ETK_Q_SHADE   ? Q.shade
+                                : Q.shadow;
+}
+// The pushes, one atomic each, in counter order.
+ETK_FN void etk_push_each(EtkQueues Q, const EtkPushes* out) {
+    for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
+        if (out->slot[q] >= 0)
+            etk_push_queue(Q, q)[ETK_ATOMIC_INC(Q.counters + q)] = out->slot[q];
+}
 
 // Kernel arguments, in this order: scene buffers, path fields, queues, film, counters, params,
 // the queue length. ETK_KERNEL_ARGS (wavefront.cl) and EtkKernelArg (the host) both expand it.

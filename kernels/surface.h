@@ -22,7 +22,7 @@ ETK_FN float3 etk_p3(const float* p) {
     return make_float3(p[0], p[1], p[2]);
 }
 
-ETK_FN float2 etk_dims(EtkParams p, int pixel, uint pair) {
+ETK_FORCE_INLINE_FN float2 etk_dims(EtkParams p, int pixel, uint pair) {
     return etk_sample_pair(p.sampler, p.seed, (uint)pixel, p.sample_index, pair);
 }
 

@@ -1,5 +1,6 @@
-// Film accumulation (kernels/integrator.h, etk_accumulate; kernels/film.h): a non-finite path
-// radiance is left out of the pixel and counted, so renders report it instead of writing NaN.
+// Stage bookkeeping of the integrator (kernels/integrator.h, path_state.h): film accumulation
+// drops and counts a non-finite path radiance (renders report it instead of writing NaN), and a
+// stage's queue pushes land where the next stage reads them.
 #include "kernels/integrator.h"
 
 #include <gtest/gtest.h>
@@ -25,8 +26,12 @@ TEST(Integrator, AccumulateDropsAndCountsNonFiniteSamples) {
     etk::EtkFilm F{}; // accumulate writes the radiance sums only
     F.film_sum = film.data();
     F.film_sq = film_sq.data();
-    for (int i = 0; i < 4; ++i)
-        etk::etk_accumulate(etk::EtkScene{}, P, Q, F, etk::EtkParams{}, i);
+    for (int i = 0; i < 4; ++i) {
+        etk::EtkPushes out = etk::etk_no_pushes();
+        etk::etk_accumulate(etk::EtkScene{}, P, Q, F, etk::EtkParams{}, i, &out);
+        for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
+            EXPECT_EQ(out.slot[q], -1); // accumulating ends the path: nothing is queued
+    }
     EXPECT_EQ(counters[etk::ETK_Q_NONFINITE], 2u);
     EXPECT_FLOAT_EQ(film_sq[0].x, 1.25f); // 1^2 + 0.5^2: the sums of squares
     EXPECT_FLOAT_EQ(film_sq[0].z, 9.25f);
@@ -37,4 +42,36 @@ TEST(Integrator, AccumulateDropsAndCountsNonFiniteSamples) {
                     std::isfinite(film[p].z));
         EXPECT_EQ(film[p].w, 1.0f);
     }
+}
+
+// A stage's pushes land in the queue of their counter, each at the next free index, in counter
+// order; slots of -1 push nothing.
+TEST(Integrator, PushesLandInTheirCountersQueues) {
+    std::vector<int> ray_out(4, -7), escaped(4, -7), shade(4, -7), shadow(4, -7);
+    uint32_t counters[etk::ETK_Q_COUNT] = {};
+    etk::EtkQueues Q{};
+    Q.ray_out = ray_out.data();
+    Q.escaped = escaped.data();
+    Q.shade = shade.data();
+    Q.shadow = shadow.data();
+    Q.counters = counters;
+    etk::EtkPushes a = etk::etk_no_pushes();
+    a.slot[etk::ETK_Q_SHADE] = 5;
+    a.slot[etk::ETK_Q_SHADOW] = 6;
+    etk::etk_push_each(Q, &a);
+    etk::EtkPushes b = etk::etk_no_pushes();
+    b.slot[etk::ETK_Q_SHADE] = 9;
+    b.slot[etk::ETK_Q_RAY_OUT] = 0;
+    etk::etk_push_each(Q, &b);
+    etk::EtkPushes none = etk::etk_no_pushes();
+    etk::etk_push_each(Q, &none);
+    EXPECT_EQ(counters[etk::ETK_Q_RAY_OUT], 1u);
+    EXPECT_EQ(counters[etk::ETK_Q_ESCAPED], 0u);
+    EXPECT_EQ(counters[etk::ETK_Q_SHADE], 2u);
+    EXPECT_EQ(counters[etk::ETK_Q_SHADOW], 1u);
+    EXPECT_EQ(ray_out[0], 0);
+    EXPECT_EQ(escaped[0], -7);
+    EXPECT_EQ(shade[0], 5);
+    EXPECT_EQ(shade[1], 9);
+    EXPECT_EQ(shadow[0], 6);
 }

@@ -14,8 +14,7 @@ namespace {
 // Path state and queues start as a device's do: unwritten (default-initialised, not zeroed), so
 // a stage that reads a field no earlier stage wrote reads garbage here too, and Valgrind's
 // memcheck (tests/portability/memcheck_test.cpp) reports it instead of seeing a zero.
-template <typename T>
-std::unique_ptr<T[]> uninitialised(int n) {
+template <typename T> std::unique_ptr<T[]> uninitialised(int n) {
     return std::unique_ptr<T[]>(new T[static_cast<size_t>(n)]);
 }
 
@@ -73,8 +72,11 @@ class CpuDevice::Lane : public StageExecutor {
         switch (stage) { // one loop per stage, so each stage function inlines into its loop
 #define ET_STAGE_CASE(kernel, fn)                                                                  \
     case etk::ETK_STAGE_##kernel:                                                                  \
-        for (int i = 0; i < n; ++i)                                                                \
-            etk::fn(S, P, Q, F, p, i);                                                             \
+        for (int i = 0; i < n; ++i) {                                                              \
+            etk::EtkPushes out = etk::etk_no_pushes();                                             \
+            etk::fn(S, P, Q, F, p, i, &out);                                                       \
+            etk::etk_push_each(Q, &out);                                                           \
+        }                                                                                          \
         break;
             ETK_STAGES(ET_STAGE_CASE)
 #undef ET_STAGE_CASE
