@@ -41,8 +41,8 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     StageExecutor& lane(int) override { return *this; }
     void run_lanes(const std::function<void(int)>& f) override;
     void finish() override;
-    void download_film(Film& film) override;
-    void upload_film(const Film& film) override;
+    void clear_film(bool aovs) override;
+    void download_film(Film& film, bool aovs) override;
     std::vector<std::pair<std::string, double>> stage_seconds() override;
 
     void bind_queues(bool swapped) override;

@@ -23,8 +23,9 @@ class CpuDevice : public WavefrontDevice {
     StageExecutor& lane(int k) override;
     void run_lanes(const std::function<void(int)>& f) override;
     void finish() override {}
-    void download_film(Film&) override {} // the stages write the host film directly
-    void upload_film(const Film&) override {}
+    // The stages write the host film directly, which the renderer zeroes.
+    void clear_film(bool) override {}
+    void download_film(Film&, bool) override {}
     std::vector<std::pair<std::string, double>> stage_seconds() override;
     void upload_guide(const std::vector<float>& cells) override;
 

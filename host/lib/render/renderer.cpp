@@ -11,8 +11,8 @@
 namespace et {
 
 Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
-    : scene_(scene), film_(scene.width(), scene.height()), sums_(scene.width(), scene.height(), scene.settings.aovs),
-      device_(make_device(film_)) {
+    : scene_(scene), film_(scene.width(), scene.height()),
+      sums_(scene.width(), scene.height(), scene.settings.aovs), device_(make_device(film_)) {
     std::copy(scene.params.light_share, scene.params.light_share + ETK_SHARE_BINS, shares_.begin());
     std::copy(scene.params.bin_flags, scene.params.bin_flags + ETK_SHARE_BINS, flags_.begin());
     choices_.fill(-1);
@@ -70,9 +70,9 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
 #define ET_ZERO(type, name) std::fill(film_.name.begin(), film_.name.end(), type{});
     ETK_FILM_FIELDS(ET_ZERO)
 #undef ET_ZERO
-    device_->upload_film(film_);
+    device_->clear_film(sums_.has_aovs());
     const RayCounts c = run_pass(*device_, p, learner, p.guide_learn ? cache_.get() : nullptr);
-    device_->download_film(film_);
+    device_->download_film(film_, sums_.has_aovs());
     if (keep)
         sums_.add_pass(film_);
     if (learn && guide_) {

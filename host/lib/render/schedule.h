@@ -56,9 +56,11 @@ class WavefrontDevice {
     // Runs f(k) for every lane k, concurrently where the device can.
     virtual void run_lanes(const std::function<void(int)>& f) = 0;
     virtual void finish() = 0; // waits until the pass is done
-    // The device's film into `film` / from `film` (resuming); no-ops where they are one.
-    virtual void download_film(Film& film) = 0;
-    virtual void upload_film(const Film& film) = 0;
+    // A pass renders into a zeroed film: the device zeroes its own copy (clear_film) and hands
+    // the pass back (download_film): no-ops where the device writes the host's film. With
+    // aovs false the AOV fields may be left as they are: nobody reads them.
+    virtual void clear_film(bool aovs) = 0;
+    virtual void download_film(Film& film, bool aovs) = 0;
     // Time per stage so far: device time for OpenCL, summed thread time natively.
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
     // The visibility strategy's per-cell tables (EtkScene.guide_cells) for the passes to come.
