@@ -65,16 +65,18 @@
     X(LIGHT_RAYS) /* shadow rays traced inline by shade_lights */                                  \
     X(NONFINITE)  /* samples dropped by the film: should stay 0 */
 
-// The stages, in schedule order: X(kernel name, stage function). integrator.h defines the
+// The stages, in schedule order: X(kernel name, stage function, pushes). integrator.h defines the
 // functions, all with one signature; the schedule (host/lib/render/schedule.cpp) runs them.
+// pushes: 1 where the stage queues paths (EtkPushes below), which the OpenCL kernel then makes
+// per work-group, behind barriers; a stage marked 0 that pushes is still correct, only slower.
 #define ETK_STAGES(X)                                                                              \
-    X(generate, etk_generate)                                                                      \
-    X(intersect, etk_intersect)                                                                    \
-    X(escaped_rays, etk_escaped)                                                                   \
-    X(shade_hits, etk_shade)                                                                       \
-    X(shade_lights, etk_shade_lights)                                                              \
-    X(trace_shadows, etk_shadow)                                                                   \
-    X(accumulate, etk_accumulate)
+    X(generate, etk_generate, 0)                                                                   \
+    X(intersect, etk_intersect, 1)                                                                 \
+    X(escaped_rays, etk_escaped, 0)                                                                \
+    X(shade_hits, etk_shade, 1)                                                                    \
+    X(shade_lights, etk_shade_lights, 0)                                                           \
+    X(trace_shadows, etk_shadow, 0)                                                                \
+    X(accumulate, etk_accumulate, 0)
 
 ETK_BEGIN
 
@@ -98,7 +100,7 @@ typedef char
                                      ? 1
                                      : -1];
 
-#define ETK_STAGE_ENUM(kernel, fn) ETK_STAGE_##kernel,
+#define ETK_STAGE_ENUM(kernel, fn, pushes) ETK_STAGE_##kernel,
 enum { ETK_STAGES(ETK_STAGE_ENUM) ETK_STAGE_COUNT };
 #undef ETK_STAGE_ENUM
 

@@ -17,9 +17,8 @@
 // The pushes of a work-group's stage calls (path_state.h): counted per queue in local memory,
 // one global atomic per queue reserves the group's run, then each work-item writes its slot
 // there. Every work-item calls this (barriers), pushing or not.
-static inline __attribute__((always_inline)) void etk_push_group(EtkQueues Q, EtkPushes out,
-                                                                 __local uint* count,
-                                                                 __local uint* base) {
+static inline __attribute__((always_inline)) void
+etk_push_group(EtkQueues Q, EtkPushes out, __local uint* count, __local uint* base) {
     int lid = get_local_id(0), lsize = get_local_size(0);
     for (int q = lid; q < ETK_PUSH_QUEUES; q += lsize)
         count[q] = 0u;
@@ -36,24 +35,20 @@ static inline __attribute__((always_inline)) void etk_push_group(EtkQueues Q, Et
             etk_push_queue(Q, q)[base[q] + mine[q]] = out.slot[q];
 }
 
-// Whether a stage pushes to a queue: the others skip the group's barriers.
-#define ETK_STAGE_PUSHES(name)                                                                     \
-    (ETK_STAGE_##name == ETK_STAGE_intersect || ETK_STAGE_##name == ETK_STAGE_shade_hits)
-
 #define ETK_NAME(type, name) name,
 #define ETK_QUEUE_NAME(name) name,
-#define ETK_STAGE_KERNEL(name, fn)                                                                 \
+#define ETK_STAGE_KERNEL(name, fn, pushes)                                                         \
     __kernel void name(ETK_KERNEL_ARGS) {                                                          \
         EtkScene S = {ETK_SCENE_BUFFERS(ETK_NAME)};                                                \
         EtkPaths P = {ETK_PATH_FIELDS(ETK_NAME)};                                                  \
         EtkQueues Q = {ETK_QUEUES(ETK_QUEUE_NAME) counters};                                       \
         EtkFilm F = {ETK_FILM_FIELDS(ETK_NAME)};                                                   \
-        __local uint push_count[ETK_PUSH_QUEUES], push_base[ETK_PUSH_QUEUES];                     \
+        __local uint push_count[ETK_PUSH_QUEUES], push_base[ETK_PUSH_QUEUES];                      \
         EtkPushes out = etk_no_pushes();                                                           \
         int i = get_global_id(0);                                                                  \
         if (i < n)                                                                                 \
             fn(S, P, Q, F, params, i, &out);                                                       \
-        if (ETK_STAGE_PUSHES(name))                                                                \
+        if (pushes) /* the others skip the group's barriers */                                     \
             etk_push_group(Q, out, push_count, push_base);                                         \
         else                                                                                       \
             etk_push_each(Q, &out);                                                                \

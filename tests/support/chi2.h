@@ -1,8 +1,9 @@
 // Pearson's chi-square goodness-of-fit test in the style of Mitsuba 3's chi2.py: cells with an
 // expected count below a threshold are pooled (smallest first) until the pool reaches it, an
-// observation in a cell of zero expected count is a failure (beyond `zero_cell_slack`, which
-// a caller sets only where its quadrature can miss a sliver of support, and says why), and the p-value comes from the
-// chi-square distribution with (cells after pooling - 1) degrees of freedom.
+// observation in a cell of zero expected count is a failure (beyond `zero_cell_slack`, which a
+// caller sets only where its quadrature can miss a sliver of support, and says why), and the
+// p-value comes from the chi-square distribution with (cells after pooling - 1) degrees of
+// freedom.
 #pragma once
 #include <string>
 #include <vector>

@@ -216,13 +216,6 @@ void ClDevice::launch(int stage, int n, const etk::EtkParams& params) {
     pending_.emplace_back(stage, ev);
 }
 
-namespace {
-// Film fields only a render keeping AOVs reads (kernels/aov.h).
-bool film_field_is_aov(int arg) {
-    return arg == etk::ETK_ARG_film_albedo || arg == etk::ETK_ARG_film_normal;
-}
-} // namespace
-
 // Zeroed on the device rather than uploaded from the host's zeroed film: a 512x512 film is 16 MB
 // each way per pass, 3-4% of a pass on PoCL (issue 12).
 void ClDevice::clear_film(bool aovs) {

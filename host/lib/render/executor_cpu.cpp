@@ -71,7 +71,7 @@ class CpuDevice::Lane : public StageExecutor {
         const etk::EtkQueues Q = queues_;
         const etk::EtkFilm F = film_;
         switch (stage) { // one loop per stage, so each stage function inlines into its loop
-#define ET_STAGE_CASE(kernel, fn)                                                                  \
+#define ET_STAGE_CASE(kernel, fn, pushes)                                                          \
     case etk::ETK_STAGE_##kernel:                                                                  \
         for (int i = 0; i < n; ++i) {                                                              \
             etk::EtkPushes out = etk::etk_no_pushes();                                             \
@@ -100,12 +100,20 @@ class CpuDevice::Lane : public StageExecutor {
 };
 
 CpuDevice::CpuDevice(const DeviceScene& scene, Film& film, int threads, int wave)
-    : guide_cells_(scene.guide_cells), wave_(wave > 0 ? wave : 1024) {
+    : guide_cells_(scene.guide_cells), film_(film), wave_(wave > 0 ? wave : 1024) {
     const int n = thread_count(threads);
     for (int t = 0; t < n; ++t) {
         lanes_.push_back(std::make_unique<Lane>(scene, film, wave_));
         lanes_.back()->set_guide_cells(guide_cells_.data());
     }
+}
+
+void CpuDevice::clear_film(bool aovs) {
+#define ET_CLEAR(type, name)                                                                       \
+    if (aovs || !film_field_is_aov(etk::ETK_ARG_##name))                                           \
+        std::fill(film_.name.begin(), film_.name.end(), type{});
+    ETK_FILM_FIELDS(ET_CLEAR)
+#undef ET_CLEAR
 }
 
 void CpuDevice::upload_guide(const std::vector<float>& cells) {

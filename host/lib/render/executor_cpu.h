@@ -23,14 +23,16 @@ class CpuDevice : public WavefrontDevice {
     StageExecutor& lane(int k) override;
     void run_lanes(const std::function<void(int)>& f) override;
     void finish() override {}
-    // The stages write the host film directly, which the renderer zeroes.
-    void clear_film(bool) override {}
+    // The stages write the host film directly: zeroed here (element-wise: the lanes hold
+    // pointers into it), nothing to hand back.
+    void clear_film(bool aovs) override;
     void download_film(Film&, bool) override {}
     std::vector<std::pair<std::string, double>> stage_seconds() override;
     void upload_guide(const std::vector<float>& cells) override;
 
   private:
     std::vector<float> guide_cells_; // the visibility strategy's tables, read by every lane
+    Film& film_;
     class Lane;
     std::vector<std::unique_ptr<Lane>> lanes_;
     int wave_;

@@ -11,6 +11,12 @@ namespace et {
 
 using etk::float4;
 
+// Film fields (by kernel argument, etk::ETK_ARG_film_*) that only a render keeping AOVs reads
+// (kernels/aov.h): a pass neither zeroes nor hands them back otherwise.
+constexpr bool film_field_is_aov(int arg) {
+    return arg == etk::ETK_ARG_film_albedo || arg == etk::ETK_ARG_film_normal;
+}
+
 class Film {
   public:
     Film() = default;

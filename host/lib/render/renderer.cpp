@@ -65,11 +65,8 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         learner_->begin_pass();
         learner = learner_.get();
     }
-    // The pass renders into a zeroed film (element-wise: the native back end holds pointers
-    // into film_), whose one sample per pixel is then added exactly to the sums.
-#define ET_ZERO(type, name) std::fill(film_.name.begin(), film_.name.end(), type{});
-    ETK_FILM_FIELDS(ET_ZERO)
-#undef ET_ZERO
+    // The pass renders into a zeroed film, whose one sample per pixel is then added exactly to
+    // the sums.
     device_->clear_film(sums_.has_aovs());
     const RayCounts c = run_pass(*device_, p, learner, p.guide_learn ? cache_.get() : nullptr);
     device_->download_film(film_, sums_.has_aovs());

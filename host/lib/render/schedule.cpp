@@ -11,7 +11,7 @@
 namespace et {
 
 const char* stage_name(int stage) {
-#define ET_STAGE_NAME(kernel, fn) #kernel,
+#define ET_STAGE_NAME(kernel, fn, pushes) #kernel,
     static const char* const names[] = {ETK_STAGES(ET_STAGE_NAME)};
 #undef ET_STAGE_NAME
     return stage >= 0 && stage < etk::ETK_STAGE_COUNT ? names[stage] : "?";
