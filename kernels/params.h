@@ -74,12 +74,12 @@ typedef struct {
     float light_share[ETK_SHARE_BINS];
     int bin_flags[ETK_SHARE_BINS];
     // Visibility strategy (kernels/visibility_guide.h): the hash grid over surface positions
-    // (origin, 1 / cell size, slots: a power of two), the map's defensive share, whether the
-    // cells' tables hold anything learned yet, and whether this pass records shadow-ray outcomes.
+    // (origin, 1 / cell size, slots: a power of two), whether the cells' tables hold anything
+    // learned yet (they hold the map's defensive share too), and whether this pass records
+    // shadow-ray outcomes.
     float guide_origin[3];
     float guide_inv_cell;
     int guide_slots;
-    float guide_alpha;
     int guide_ready;
     int guide_learn;
 } EtkParams;

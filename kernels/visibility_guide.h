@@ -3,20 +3,26 @@
 // light, not what blocks it. A hash grid over surface positions (with the dominant axis and sign
 // of the geometric normal) holds per cell a distribution over ETK_GUIDE_REGIONS coarse lat-long
 // regions of the map, learned from the outcomes of earlier shadow rays
-// (host/lib/render/visibility_cache.h). A light sample draws
-//   with probability alpha     from the map's distribution (the paper's),
-//   otherwise                  a region R from the cell's table, then a direction inside R
-//                              proportionally to the map (the map's own 2D table restricted to
-//                              R's rows and columns, so the map's fine structure is kept),
-// so the density is p(w) = p_map(w) (alpha + (1 - alpha) P_cell(R(w)) / M_R(w)), M_R the map's
-// mass in R: positive wherever the map is (unbiased), and evaluated the same way for MIS by the
-// escaped stage. Collisions of the hash merge two cells' tables: the density stays the one
-// sampled, only less well fitted.
+// (host/lib/render/visibility_cache.h). The light sample's density is the mixture
+//   alpha x the map's distribution  +  (1 - alpha) x (region R from the cell's learned table P,
+//                                                     then a direction inside R in proportion
+//                                                     to the map),
+// p(w) = p_map(w) (alpha + (1 - alpha) P(R(w)) / M_R(w)), M_R the map's mass in R: positive
+// wherever the map is (unbiased), and evaluated the same way for MIS by the escaped stage. Both
+// parts are proportional to the map inside every region, so the mixture is one hierarchical
+// distribution: a region with probability Q(R) = alpha M_R + (1 - alpha) P(R) (the table a cell
+// holds), then the map inside it. It is sampled by inverting it -- the region's row band and
+// column from the two coordinates of the sample point, each rescaled to [0, 1) for the next
+// level, then the map's own CDFs restricted to the region -- so, like the paper's warp, it
+// keeps the stratification of the Sobol' points (a separate technique or region choice would
+// thin them at random). Collisions of the hash merge two cells' tables: the density stays the
+// one sampled, only less well fitted.
 //
 // guide_regions: [0, K) the map's mass per region, M_R (sum 1); then, per region column C and
 // row R, the CDF over the region's distribution rows of p(v_r) x the row's mass in C's columns:
 // rows(R) + 1 entries at K + C (h + ETK_GUIDE_ROWS) + row_start(R) + R.
-// guide_cells: per slot, K + 1 CDF entries over the regions (0 ... 1).
+// guide_cells: per slot, K + 1 CDF entries of Q over the regions (0 ... 1), row-major (R =
+// row band x ETK_GUIDE_COLS + column), so entry ETK_GUIDE_COLS x b is the CDF of the row bands.
 #ifndef ETK_VISIBILITY_GUIDE_H
 #define ETK_VISIBILITY_GUIDE_H
 #include "color.h"
@@ -29,8 +35,6 @@
 #define ETK_GUIDE_ROWS 8
 #define ETK_GUIDE_COLS 16
 #define ETK_GUIDE_REGIONS (ETK_GUIDE_ROWS * ETK_GUIDE_COLS)
-// The technique choice of the light sample at bounce d: (map or table, region).
-#define ETK_PAIR_GUIDE 0x50000000u
 
 ETK_BEGIN
 
@@ -76,15 +80,15 @@ ETK_FN int etk_guide_cell(EtkParams p, float3 pos, float3 n) {
     return (int)(h & (uint)(p.guide_slots - 1));
 }
 
-// p(w) / p_map(w) at map coordinates uv for a vertex in `cell`: alpha + (1 - alpha) P / M.
+// p(w) / p_map(w) at map coordinates uv for a vertex in `cell`: Q(R) / M_R (= alpha + (1 - alpha)
+// P / M). A region of no mass holds no direction of positive p_map: any factor serves there.
 ETK_FN float etk_guide_factor(EtkScene S, EtkParams p, int cell, float2 uv) {
     if (!p.guide_ready)
         return 1.0f;
     int R = etk_guide_region(p.env, uv);
     float M = S.guide_regions[R];
     ETK_GLOBAL const float* cdf = S.guide_cells + cell * (ETK_GUIDE_REGIONS + 1);
-    float P = cdf[R + 1] - cdf[R];
-    return p.guide_alpha + (1.0f - p.guide_alpha) * (M > 0.0f ? P / M : 0.0f);
+    return M > 0.0f ? (cdf[R + 1] - cdf[R]) / M : 1.0f;
 }
 
 // Map coordinates drawn inside region R (row band Rr, column band Rc) proportionally to the map,
@@ -113,33 +117,38 @@ ETK_FN float2 etk_guide_sample_region(EtkScene S, EtkEnvMap env, int R, float2 u
     return make_float2(uu, v);
 }
 
-// The region of a cell's table (ETK_GUIDE_REGIONS + 1 CDF entries) for u in [0,1): the largest R
-// with cdf[R] <= u, as etk_find_interval but in the 7 steps a 128-entry table needs.
-ETK_FN int etk_guide_find_region(ETK_GLOBAL const float* cdf, float u) {
-    int lo = 0;
-    for (int step = ETK_GUIDE_REGIONS / 2; step > 0; step >>= 1) {
-        int mid = lo + step;
-        lo = cdf[mid] <= u ? mid : lo;
-    }
-    return lo;
+// (u - a) / (b - a) in [0, 1): where u lies in [a, b), for the next level of a hierarchical warp.
+ETK_FN float etk_guide_rescale(float u, float a, float b) {
+    return b > a ? clamp((u - a) / (b - a), 0.0f, ETK_ONE_MINUS_EPS) : 0.5f;
 }
 
-// A light sample of the visibility strategy at a vertex in `cell`: u the direction's pair, sel
-// the technique's (map or table; region). pdf: the mixture's, 0 for no sample.
-ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u, float2 sel) {
+// A light sample of the visibility strategy at a vertex in `cell`, from u in [0,1)^2: the row
+// band by u.y over the bands' CDF, the column by u.x over the band's conditional, each rescaled,
+// then the map inside the region. pdf: the mixture's, 0 for no sample.
+ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
+    if (!p.guide_ready)
+        return etk_env_sample(S.env_dist, p.env, u);
+    ETK_GLOBAL const float* cdf = S.guide_cells + cell * (ETK_GUIDE_REGIONS + 1);
+    // The last band whose start is <= u.y (searching band starts cdf[COLS b]), then the last
+    // column of it whose start is <= the point u.x of the way through the band's mass: never a
+    // region of zero probability unless the whole table is (it is not: Q sums to one).
+    int band = 0;
+    for (int b = 1; b < ETK_GUIDE_ROWS; ++b)
+        band = cdf[b * ETK_GUIDE_COLS] <= u.y ? b : band;
+    int first = band * ETK_GUIDE_COLS;
+    float b0 = cdf[first], b1 = cdf[first + ETK_GUIDE_COLS];
+    float x = b0 + u.x * (b1 - b0);
+    int col = 0;
+    for (int c = 1; c < ETK_GUIDE_COLS; ++c)
+        col = cdf[first + c] <= x && cdf[first + c] < b1 ? c : col;
+    int R = first + col;
+    float2 t = make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(u.y, b0, b1));
     EtkEnvSample s;
-    if (!p.guide_ready || sel.x < p.guide_alpha) {
-        s = etk_env_sample(S.env_dist, p.env, u);
-    } else {
-        ETK_GLOBAL const float* cdf = S.guide_cells + cell * (ETK_GUIDE_REGIONS + 1);
-        int R = etk_guide_find_region(cdf, sel.y);
-        s.uv = etk_guide_sample_region(S, p.env, R, u);
-        s.dir = etk_env_to_world(p.env, etk_latlong_to_dir(s.uv));
-        s.row = etk_cell_of(s.uv.y, p.env.dist_h);
-        s.col = etk_cell_of(s.uv.x, p.env.dist_w);
-        s.pdf = etk_env_pdf_uv(S.env_dist, p.env, s.uv);
-    }
-    s.pdf *= etk_guide_factor(S, p, cell, s.uv);
+    s.uv = etk_guide_sample_region(S, p.env, R, t);
+    s.dir = etk_env_to_world(p.env, etk_latlong_to_dir(s.uv));
+    s.row = etk_cell_of(s.uv.y, p.env.dist_h);
+    s.col = etk_cell_of(s.uv.x, p.env.dist_w);
+    s.pdf = etk_env_pdf_uv(S.env_dist, p.env, s.uv) * etk_guide_factor(S, p, cell, s.uv);
     return s;
 }
 

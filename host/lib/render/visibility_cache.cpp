@@ -128,8 +128,12 @@ std::vector<float> VisibilityCache::tables() const {
             total += double(S[R]);
         const double n = counts_[s];
         const double own = total > 0.0 ? n / (n + opt_.prior) : 0.0;
-        for (int R = 0; R < K; ++R)
-            prob[R] = (own > 0.0 ? own * double(S[R]) / total : 0.0) + (1.0 - own) * mass_[R];
+        // P, then the mixture's region probabilities Q = alpha M + (1 - alpha) P.
+        for (int R = 0; R < K; ++R) {
+            const double P =
+                (own > 0.0 ? own * double(S[R]) / total : 0.0) + (1.0 - own) * mass_[R];
+            prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * P;
+        }
         write_cdf(prob, out.data() + static_cast<size_t>(s) * (K + 1));
     }
     return out;

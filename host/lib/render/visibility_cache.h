@@ -12,7 +12,9 @@
 // drawn; after passes 1, 2, 4, 8 ... L the host turns the sums into a CDF per cell:
 //   P(R) = n / (n + n0) S(R) / sum S  +  n0 / (n + n0) M_R        (n records in the cell)
 // -- shrinkage towards the map's own region masses M_R where a cell has few records, the map's
-// distribution where it has none or saw no light -- uploaded for the passes that follow.
+// distribution where it has none or saw no light -- and uploads the CDF of the mixture's region
+// probabilities Q(R) = alpha M_R + (1 - alpha) P(R) (alpha: the map's defensive share) for the
+// passes that follow.
 // Passes L and later render with the last table and record nothing.
 #pragma once
 #include "kernels/visibility_guide.h"
@@ -49,7 +51,7 @@ class VisibilityCache {
                     double scale);
     // One bounce's records (thread-safe).
     void add(const int* keys, const float* values, int n);
-    // The per-cell CDFs from everything recorded so far (slots x (K + 1) floats).
+    // The per-cell CDFs of Q from everything recorded so far (slots x (K + 1) floats).
     std::vector<float> tables() const;
     // Host memory of the sums, bytes.
     uint64_t bytes() const { return sums_.size() * sizeof(uint64_t) + counts_.size() * 4; }
