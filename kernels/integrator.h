@@ -260,8 +260,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 light_uv = etk_env_uv(p.env, wi_world);
                 pdf_light = 0.25f * ETK_INV_PI;
             } else {
-                EtkEnvSample ls = guided ? etk_guide_sample(S, p, cell, u)
-                                         : etk_env_sample(dist, p.env, u);
+                EtkEnvSample ls =
+                    guided ? etk_guide_sample(S, p, cell, u) : etk_env_sample(dist, p.env, u);
                 wi_world = ls.dir;
                 light_uv = ls.uv;
                 pdf_light = ls.pdf;

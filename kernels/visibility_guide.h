@@ -142,7 +142,8 @@ ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u
     for (int c = 1; c < ETK_GUIDE_COLS; ++c)
         col = cdf[first + c] <= x && cdf[first + c] < b1 ? c : col;
     int R = first + col;
-    float2 t = make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(u.y, b0, b1));
+    float2 t =
+        make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(u.y, b0, b1));
     EtkEnvSample s;
     s.uv = etk_guide_sample_region(S, p.env, R, t);
     s.dir = etk_env_to_world(p.env, etk_latlong_to_dir(s.uv));
