@@ -15,8 +15,9 @@
 // column from the two coordinates of the sample point, each rescaled to [0, 1) for the next
 // level, then the map's own CDFs restricted to the region -- so, like the paper's warp, it
 // keeps the stratification of the Sobol' points (a separate technique or region choice would
-// thin them at random). Collisions of the hash merge two cells' tables: the density stays the
-// one sampled, only less well fitted.
+// thin them at random; measured on window_room, that was not where the strategy loses to the
+// Sobol' points: docs/results.md, issue 11). Collisions of the hash merge two cells' tables: the
+// density stays the one sampled, only less well fitted.
 //
 // guide_regions: [0, K) the map's mass per region, M_R (sum 1); then, per region column C and
 // row R, the CDF over the region's distribution rows of p(v_r) x the row's mass in C's columns:

@@ -75,7 +75,7 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     high.settings.light_share = et::kMaxLightShare;
     const auto adaptive_low = ett::render(low, "cpu", spp);
     const auto adaptive_high = ett::render(high, "cpu", spp);
-    // Light samples guided by learned visibility (tables from the first 16 passes).
+    // Light samples guided by learned visibility (tables from the first passes).
     const auto visibility = ett::render(scene(env, "visibility", depth, 10), "cpu", spp);
     const std::string d = " depth " + std::to_string(depth);
     // The noise estimate itself: two seeds of one strategy.
