@@ -29,8 +29,10 @@ struct Fixture {
 };
 
 // A w x h map of random positive radiance with a bright spot, its distribution, the region
-// tables and one cell whose table is random (with some regions at zero).
-void make(Fixture& f, int w, int h, uint32_t seed) {
+// tables and one cell whose table is random (with some regions at zero). black_band: the map's
+// second row band of regions is black (so are its Q, as the host's tables would be: no light
+// sample lands there, so no record does).
+void make(Fixture& f, int w, int h, uint32_t seed, bool black_band = false) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> U(0.05f, 1.0f);
     et::RgbImage img;
@@ -41,6 +43,9 @@ void make(Fixture& f, int w, int h, uint32_t seed) {
         x = U(rng);
     for (int k = 0; k < 3; ++k) // a sun
         img.rgb[3 * (static_cast<size_t>(h / 3) * w + w / 5) + k] = 500.0f;
+    if (black_band)
+        for (int r = etk::etk_guide_row_start(1, h); r < etk::etk_guide_row_start(2, h); ++r)
+            std::fill_n(img.rgb.begin() + 3 * static_cast<size_t>(r) * w, 3 * w, 0.0f);
     et::DistributionOptions o;
     o.threads = 1;
     f.dist = et::build_env_distribution(img, o);
@@ -49,7 +54,9 @@ void make(Fixture& f, int w, int h, uint32_t seed) {
     // map's region masses M as the host does: Q = alpha M + (1 - alpha) P, alpha = 1/4.
     std::vector<double> prob(K);
     for (int R = 0; R < K; ++R)
-        prob[R] = (R % 5 == 0 || R / ETK_GUIDE_COLS == 2) ? 0.0 : std::pow(double(U(rng)), 4.0);
+        prob[R] = (R % 5 == 0 || R / ETK_GUIDE_COLS == 2 || (black_band && R / ETK_GUIDE_COLS == 1))
+                      ? 0.0
+                      : std::pow(double(U(rng)), 4.0);
     double total = 0.0;
     for (double x : prob)
         total += x;
@@ -138,10 +145,13 @@ INSTANTIATE_TEST_SUITE_P(Sizes, VisibilityGuide,
 // n x n grid of points puts into each region its probability's share n^2 Q(R) up to the
 // rounding of the grid -- within n (the row band's rows of points) + n B (B the band's mass, one
 // point per row) + 2. A region or technique chosen by a separate random number would miss
-// both: the stratification of the Sobol' points is what the hierarchy keeps.
-TEST(VisibilityGuide, WarpIsAnInversion) {
+// both: the stratification of the Sobol' points is what the hierarchy keeps. Also with a black
+// band of regions (probability zero), which the inversion must step over.
+class VisibilityWarp : public ::testing::TestWithParam<bool> {};
+
+TEST_P(VisibilityWarp, IsAnInversion) {
     Fixture f;
-    make(f, 64, 32, 11u);
+    make(f, 64, 32, 11u, GetParam());
     const int n = 256;
     std::vector<double> count(K, 0.0);
     int decreasing = 0;
@@ -163,8 +173,13 @@ TEST(VisibilityGuide, WarpIsAnInversion) {
         const double B =
             double(f.cells[(band + 1) * ETK_GUIDE_COLS]) - f.cells[band * ETK_GUIDE_COLS];
         EXPECT_NEAR(count[R], double(n) * n * Q, n + n * B + 2.0) << "region " << R;
+        if (Q == 0.0) {
+            EXPECT_EQ(count[R], 0.0) << "region " << R << " has probability zero";
+        }
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(BlackBand, VisibilityWarp, ::testing::Values(false, true));
 
 // Before anything is learned the strategy is the paper's map sampling.
 TEST(VisibilityGuideTables, PriorIsTheMap) {
