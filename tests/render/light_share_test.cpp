@@ -104,18 +104,11 @@ et::Scene glossy_scene(uint32_t seed) {
 std::vector<float> render(const et::Scene& s, int threads, int from, int to,
                           const et::FilmSums* resume = nullptr,
                           std::array<int, ETK_SHARE_BINS>* choices = nullptr) {
-    et::RenderSettings st = s.settings;
-    st.threads = threads;
-    const et::DeviceScene ds = et::prepare_device_scene(s, st);
-    auto r = et::make_renderer(ds);
-    if (resume)
-        r->resume(*resume);
-    for (int k = from; k < to; ++k)
-        r->render_sample(static_cast<uint32_t>(k));
+    const ett::SampleRun run = ett::render_samples(s, threads, from, to, resume);
     if (choices)
-        *choices = r->choices();
-    std::vector<float> out = r->sums().mean();
-    const std::vector<float> var = r->sums().variance_of_mean();
+        *choices = run.renderer->choices();
+    std::vector<float> out = run.renderer->sums().mean();
+    const std::vector<float> var = run.renderer->sums().variance_of_mean();
     out.insert(out.end(), var.begin(), var.end());
     return out;
 }
@@ -137,13 +130,7 @@ TEST(LightShare, ResumedRenderLearnsTheSameShares) {
     const auto full = render(s, 2, 0, 20, nullptr, &whole);
     // The first 6 samples, then a new renderer resumes their film at sample 6: it renders the
     // learning passes on a scratch film, and the rest is bit-identical.
-    et::RenderSettings st = s.settings;
-    st.threads = 2;
-    const et::DeviceScene ds = et::prepare_device_scene(s, st);
-    auto r = et::make_renderer(ds);
-    for (int k = 0; k < 6; ++k)
-        r->render_sample(static_cast<uint32_t>(k));
-    const et::FilmSums part = r->sums();
+    const et::FilmSums part = ett::render_samples(s, 2, 0, 6).renderer->sums();
     const auto second = render(s, 2, 6, 20, &part, &resumed);
     EXPECT_EQ(full, second);
     EXPECT_EQ(whole, resumed);

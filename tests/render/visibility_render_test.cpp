@@ -38,15 +38,8 @@ struct Result {
 // Samples [from, to) on `threads` threads, resuming `resume` if given.
 Result render(const et::Scene& s, int threads, int from, int to,
               const et::FilmSums* resume = nullptr) {
-    et::RenderSettings st = s.settings;
-    st.threads = threads;
-    const et::DeviceScene ds = et::prepare_device_scene(s, st);
-    auto r = et::make_renderer(ds);
-    if (resume)
-        r->resume(*resume);
-    for (int k = from; k < to; ++k)
-        r->render_sample(static_cast<uint32_t>(k));
-    return {r->sums().mean(), r->stats().guide_records};
+    const ett::SampleRun run = ett::render_samples(s, threads, from, to, resume);
+    return {run.renderer->sums().mean(), run.renderer->stats().guide_records};
 }
 
 TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
@@ -58,13 +51,7 @@ TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
     EXPECT_TRUE(one.mean == two.mean) << "the image depends on the thread count";
     // The first 7 samples, then a new renderer resumes their film at sample 7: it renders the
     // learning passes on a scratch film (recording the same outcomes), and the rest is the same.
-    et::RenderSettings st = s.settings;
-    st.threads = 2;
-    const et::DeviceScene ds = et::prepare_device_scene(s, st);
-    auto r = et::make_renderer(ds);
-    for (int k = 0; k < 7; ++k)
-        r->render_sample(static_cast<uint32_t>(k));
-    const et::FilmSums part = r->sums();
+    const et::FilmSums part = ett::render_samples(s, 2, 0, 7).renderer->sums();
     const Result resumed = render(s, 2, 7, spp, &part);
     EXPECT_TRUE(one.mean == resumed.mean) << "a resumed render differs from the uninterrupted one";
 }

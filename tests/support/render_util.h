@@ -16,6 +16,7 @@
 #include <glm/glm.hpp>
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -113,6 +114,27 @@ inline RenderResult render(const et::Scene& scene, const std::string& backend, i
         for (size_t i = 0; i < n; ++i)
             out.var[i] = std::max(0.0, (sum2[i] - sum[i] * sum[i] / spp) / (spp - 1));
     return out;
+}
+
+// A renderer that has rendered samples [from, to) of `s` on `threads` threads, after resuming
+// `resume` if given (the learning strategies' resume and thread-count tests). It keeps the
+// prepared scene it renders alive.
+struct SampleRun {
+    std::unique_ptr<et::DeviceScene> scene;
+    std::unique_ptr<et::Renderer> renderer;
+};
+inline SampleRun render_samples(const et::Scene& s, int threads, int from, int to,
+                                const et::FilmSums* resume = nullptr) {
+    et::RenderSettings st = s.settings;
+    st.threads = threads;
+    SampleRun run;
+    run.scene = std::make_unique<et::DeviceScene>(et::prepare_device_scene(s, st));
+    run.renderer = et::make_renderer(*run.scene);
+    if (resume)
+        run.renderer->resume(*resume);
+    for (int k = from; k < to; ++k)
+        run.renderer->render_sample(static_cast<uint32_t>(k));
+    return run;
 }
 
 inline double image_mean(const std::vector<float>& img) {
