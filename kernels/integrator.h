@@ -124,27 +124,28 @@ ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
     Q.ray_out[i] = i;
 }
 
-// Stage 2: closest hit; routes the path to the escaped or the shading queue.
+// Stage 2: closest hit, written with its mark: a surface to shade, escaped, or ended.
 ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
     (void)F;
+    (void)out;
     int slot = Q.ray_in[i];
     float4 o = P.ray_o[slot], d = P.ray_d[slot];
     EtkHit h;
-    if (!etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h)) {
-        out->slot[ETK_Q_ESCAPED] = slot;
-        return;
-    }
-    if ((int)o.w >= p.max_depth)
-        return; // the path ends here: no more bounces allowed
-    P.hit[slot] = make_float4(h.t, as_float((uint)h.prim), h.b1, h.b2);
-    out->slot[ETK_Q_SHADE] = slot;
+    if (!etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h))
+        P.hit[slot] = make_float4(ETK_HIT_ESCAPED, 0.0f, 0.0f, 0.0f);
+    else if ((int)o.w >= p.max_depth) // the path ends here: no more bounces allowed
+        P.hit[slot] = make_float4(ETK_HIT_ENDED, 0.0f, 0.0f, 0.0f);
+    else
+        P.hit[slot] = make_float4(h.t, as_float((uint)h.prim), h.b1, h.b2);
 }
 
 // Stage 3: rays that left the scene see the environment, weighted against light sampling.
 ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
     (void)out;
     (void)F;
-    int slot = Q.escaped[i];
+    int slot = Q.ray_in[i];
+    if (P.hit[slot].x != ETK_HIT_ESCAPED)
+        return; // a hit: the shade stage's
     float4 d = P.ray_d[slot];
     float2 uv = etk_env_uv(p.env, etk_xyz(d));
     float w = 1.0f;
@@ -176,7 +177,10 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
 // Stage 4: at a surface: one light sample (pushed as a shadow ray) and one BSDF sample (pushed as
 // the continuation ray); for the adaptive strategy, samples A and B chosen by the vertex's share.
 ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
-    int slot = Q.shade[i];
+    int slot = Q.ray_in[i];
+    if (!(P.hit[slot].x >= 0.0f))
+        return; // escaped (the escaped stage's) or ended
+    out->slot[ETK_Q_SHADED] = slot;
     int depth = (int)P.ray_o[slot].w;
     int pixel = P.pixel[slot];
     EtkSurface s = etk_path_surface(S, P, p, slot);
@@ -368,7 +372,10 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
 // only): every light of the set at every hit, one any-hit shadow ray each, summed in light order.
 ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
     (void)out;
-    int slot = Q.shade[i];
+    int slot = Q.ray_in[i];
+    if (!(P.hit[slot].x >= 0.0f))
+        return; // escaped (the escaped stage's) or ended
+    out->slot[ETK_Q_SHADED] = slot;
     EtkSurface s = etk_path_surface(S, P, p, slot);
     if ((int)P.ray_o[slot].w == 0) // the camera ray's hit: the AOVs
         etk_aov_first_hit(F, p, P.pixel[slot], s, etk_xyz(P.ray_d[slot]), P.hit[slot].x);

@@ -35,7 +35,7 @@
     X(float4, beta)     /* throughput; w: adaptive: share of the vertex that made the ray, +4 if a \
                            light sample */                                                         \
     X(float4, radiance) /* accumulated along the path */                                           \
-    X(float4, hit)      /* t, triangle (int bits), b1, b2 */                                       \
+    X(float4, hit)      /* t, triangle (int bits), b1, b2; t < 0: nothing to shade (ETK_HIT_*) */  \
     X(float4, shadow_o) /* shadow ray origin */                                                    \
     X(float4, shadow_d) /* shadow ray direction; w: its length */                                  \
     X(float4, shadow_L) /* tentative contribution of the shadow ray */                             \
@@ -46,8 +46,16 @@
     X(float, guide_val) /* visibility learning: its unoccluded L cos / pdf, 0 if blocked */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
-// buffers between bounces.
-#define ETK_QUEUES(X) X(ray_in) X(ray_out) X(escaped) X(shade) X(shadow)
+// buffers between bounces. The rays a bounce traced are not sorted into an escaped and a shading
+// queue: the escaped and shade stages both run over ray_in and each takes its own by the hit's
+// mark (below). Sorting them cost a work-group's barriers and atomics per ray on a CPU device,
+// ~20% of the intersect stage on PoCL (issue 12), and a ray is only read once more to skip it.
+#define ETK_QUEUES(X) X(ray_in) X(ray_out) X(shadow)
+
+// What intersect writes into hit.x when the ray hit nothing to shade: it left the scene (the
+// escaped stage's), or it hit a surface past the last bounce (the path ends there).
+#define ETK_HIT_ESCAPED (-1.0f)
+#define ETK_HIT_ENDED (-2.0f)
 
 // Film, one element per pixel: X(type, name).
 #define ETK_FILM_FIELDS(X)                                                                         \
@@ -59,9 +67,8 @@
 // Queue counters, bumped atomically: X(name).
 #define ETK_COUNTERS(X)                                                                            \
     X(RAY_OUT)    /* continuation rays pushed */                                                   \
-    X(ESCAPED)    /* rays that left the scene */                                                   \
-    X(SHADE)      /* rays that hit a surface to shade */                                           \
     X(SHADOW)     /* shadow rays pushed */                                                         \
+    X(SHADED)     /* hits shaded (counted like a push, no queue) */                                \
     X(LIGHT_RAYS) /* shadow rays traced inline by shade_lights */                                  \
     X(NONFINITE)  /* samples dropped by the film: should stay 0 */
 
@@ -71,10 +78,10 @@
 // per work-group, behind barriers; a stage marked 0 that pushes is still correct, only slower.
 #define ETK_STAGES(X)                                                                              \
     X(generate, etk_generate, 0)                                                                   \
-    X(intersect, etk_intersect, 1)                                                                 \
+    X(intersect, etk_intersect, 0)                                                                 \
     X(escaped_rays, etk_escaped, 0)                                                                \
     X(shade_hits, etk_shade, 1)                                                                    \
-    X(shade_lights, etk_shade_lights, 0)                                                           \
+    X(shade_lights, etk_shade_lights, 1)                                                           \
     X(trace_shadows, etk_shadow, 0)                                                                \
     X(accumulate, etk_accumulate, 0)
 
@@ -88,17 +95,20 @@ enum { ETK_COUNTERS(ETK_COUNTER_ENUM) ETK_Q_COUNT };
 // natively one at a time (etk_push_each: the lane's own counters), on OpenCL with one global
 // atomic per work-group and queue (wavefront.cl), since every work-item bumping the same global
 // counter makes its cache line travel between cores on a CPU device (issue 12: 4% of a frame
-// on PoCL). The pushing queues are those of the first ETK_PUSH_QUEUES counters.
-#define ETK_PUSH_QUEUES 4
+// on PoCL). The pushing queues are those of the first ETK_PUSH_QUEUES counters; ETK_Q_SHADED is
+// pushed to be counted only (no queue holds it).
+#define ETK_PUSH_QUEUES 3
+// The largest work-group the host launches stages with (wavefront.cl keeps a group's pushes in
+// local arrays of this size).
+#define ETK_STAGE_LOCAL_MAX 64
 typedef struct {
-    int slot[ETK_PUSH_QUEUES]; // by counter (ETK_Q_RAY_OUT ... ETK_Q_SHADOW): the slot, or -1
+    int slot[ETK_PUSH_QUEUES]; // by counter (ETK_Q_RAY_OUT ... ETK_Q_SHADED): the slot, or -1
 } EtkPushes;
-// EtkPushes indexes its slots by the first four counters.
-typedef char
-    etk_push_counters_come_first[((ETK_Q_RAY_OUT == 0) & (ETK_Q_ESCAPED == 1) & (ETK_Q_SHADE == 2) &
-                                  (ETK_Q_SHADOW == 3) & (ETK_PUSH_QUEUES == 4))
-                                     ? 1
-                                     : -1];
+// EtkPushes indexes its slots by the first three counters.
+typedef char etk_push_counters_come_first[((ETK_Q_RAY_OUT == 0) & (ETK_Q_SHADOW == 1) &
+                                           (ETK_Q_SHADED == 2) & (ETK_PUSH_QUEUES == 3))
+                                              ? 1
+                                              : -1];
 
 #define ETK_STAGE_ENUM(kernel, fn, pushes) ETK_STAGE_##kernel,
 enum { ETK_STAGES(ETK_STAGE_ENUM) ETK_STAGE_COUNT };
@@ -130,18 +140,20 @@ ETK_FN EtkPushes etk_no_pushes(void) {
         out.slot[q] = -1;
     return out;
 }
-// Queue of counter q (q < ETK_PUSH_QUEUES).
+// Queue of counter q (ETK_Q_RAY_OUT or ETK_Q_SHADOW).
 ETK_FN ETK_GLOBAL int* etk_push_queue(EtkQueues Q, int q) {
-    return q == ETK_Q_RAY_OUT   ? Q.ray_out
-           : q == ETK_Q_ESCAPED ? Q.escaped
-           : q == ETK_Q_SHADE   ? Q.shade
-                                : Q.shadow;
+    return q == ETK_Q_RAY_OUT ? Q.ray_out : Q.shadow;
+}
+// Store a push at index k of queue q (a counted-only push stores nothing).
+ETK_FN void etk_push_store(EtkQueues Q, int q, uint k, int slot) {
+    if (q != ETK_Q_SHADED)
+        etk_push_queue(Q, q)[k] = slot;
 }
 // The pushes, one atomic each, in counter order.
 ETK_FN void etk_push_each(EtkQueues Q, const EtkPushes* out) {
     for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
         if (out->slot[q] >= 0)
-            etk_push_queue(Q, q)[ETK_ATOMIC_INC(Q.counters + q)] = out->slot[q];
+            etk_push_store(Q, q, ETK_ATOMIC_INC(Q.counters + q), out->slot[q]);
 }
 
 // Kernel arguments, in this order: scene buffers, path fields, queues, film, counters, params,

@@ -14,25 +14,34 @@
     ETK_QUEUES(ETK_ARG_QUEUE)                                                                      \
     ETK_FILM_FIELDS(ETK_ARG) volatile __global uint *counters, EtkParams params, int n
 
-// The pushes of a work-group's stage calls (path_state.h): counted per queue in local memory,
-// one global atomic per queue reserves the group's run, then each work-item writes its slot
-// there. Every work-item calls this (barriers), pushing or not.
-static inline __attribute__((always_inline)) void
-etk_push_group(EtkQueues Q, EtkPushes out, __local uint* count, __local uint* base) {
+// The pushes of a work-group's stage calls (path_state.h): each work-item leaves its slots in
+// local memory; after one barrier, work-item 0 reserves the group's run of each queue with one
+// global atomic and writes the slots there in work-item order. One barrier and no local atomics:
+// on a CPU device each barrier splits the kernel into loops over the group with the live state
+// saved between them (PoCL), and the local atomics and a third barrier of the earlier
+// count-then-write scheme cost 20-35 ns per work-item there (issue 12); the group's 64 x 3 slots
+// are a short serial loop (on a GPU, one lane's loop over local memory). Every work-item calls
+// this (the barrier), pushing or not.
+static inline __attribute__((always_inline)) void etk_push_group(EtkQueues Q, EtkPushes out,
+                                                                 __local int* slots) {
     int lid = get_local_id(0), lsize = get_local_size(0);
-    for (int q = lid; q < ETK_PUSH_QUEUES; q += lsize)
-        count[q] = 0u;
-    barrier(CLK_LOCAL_MEM_FENCE);
-    uint mine[ETK_PUSH_QUEUES];
     for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
-        mine[q] = out.slot[q] >= 0 ? atomic_inc(count + q) : 0u;
+        slots[q * ETK_STAGE_LOCAL_MAX + lid] = out.slot[q];
     barrier(CLK_LOCAL_MEM_FENCE);
-    for (int q = lid; q < ETK_PUSH_QUEUES; q += lsize)
-        base[q] = count[q] > 0u ? atomic_add(Q.counters + q, count[q]) : 0u;
-    barrier(CLK_LOCAL_MEM_FENCE);
-    for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
-        if (out.slot[q] >= 0)
-            etk_push_queue(Q, q)[base[q] + mine[q]] = out.slot[q];
+    if (lid != 0)
+        return;
+    for (int q = 0; q < ETK_PUSH_QUEUES; ++q) {
+        __local const int* s = slots + q * ETK_STAGE_LOCAL_MAX;
+        uint count = 0u;
+        for (int k = 0; k < lsize; ++k)
+            count += s[k] >= 0 ? 1u : 0u;
+        if (count == 0u)
+            continue;
+        uint at = atomic_add(Q.counters + q, count);
+        for (int k = 0; k < lsize; ++k)
+            if (s[k] >= 0)
+                etk_push_store(Q, q, at++, s[k]);
+    }
 }
 
 #define ETK_NAME(type, name) name,
@@ -43,13 +52,13 @@ etk_push_group(EtkQueues Q, EtkPushes out, __local uint* count, __local uint* ba
         EtkPaths P = {ETK_PATH_FIELDS(ETK_NAME)};                                                  \
         EtkQueues Q = {ETK_QUEUES(ETK_QUEUE_NAME) counters};                                       \
         EtkFilm F = {ETK_FILM_FIELDS(ETK_NAME)};                                                   \
-        __local uint push_count[ETK_PUSH_QUEUES], push_base[ETK_PUSH_QUEUES];                      \
+        __local int push_slots[ETK_PUSH_QUEUES * ETK_STAGE_LOCAL_MAX];                             \
         EtkPushes out = etk_no_pushes();                                                           \
         int i = get_global_id(0);                                                                  \
         if (i < n)                                                                                 \
             fn(S, P, Q, F, params, i, &out);                                                       \
         if (pushes) /* the others skip the group's barriers */                                     \
-            etk_push_group(Q, out, push_count, push_base);                                         \
+            etk_push_group(Q, out, push_slots);                                                    \
         else                                                                                       \
             etk_push_each(Q, &out);                                                                \
     }
