@@ -191,6 +191,37 @@ TEST(FilmSums, AnyOrderAndPartitionGiveTheSameBits) {
     EXPECT_THROW(whole.add(et::FilmSums(2, 1)), et::Error);
 }
 
+// Large films are folded on several threads (add_pass splits the pixels): the same bits as one
+// thread, AOVs and special values included.
+TEST(FilmSums, FoldOnThreadsEqualsOneThread) {
+    const int w = 300, h = 250; // past kParallelFoldPixels
+    ASSERT_GE(size_t(w) * h, et::FilmSums::kParallelFoldPixels);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> exponent(-30.0f, 27.0f);
+    auto value = [&] {
+        const uint32_t k = rng() % 101;
+        if (k == 0)
+            return std::numeric_limits<float>::infinity();
+        if (k == 1)
+            return std::nanf("");
+        return std::exp2(exponent(rng)) * (k % 7 == 0 ? -1.0f : 1.0f);
+    };
+    et::FilmSums one(w, h, true), three(w, h, true);
+    for (int pass = 0; pass < 3; ++pass) {
+        et::Film f(w, h);
+        for (size_t i = 0; i < f.pixels(); ++i) {
+            const float r = value(), g = value(), b = value();
+            f.film_sum[i] = {r, g, b, 1.0f};
+            f.film_sq[i] = {r * r, g * g, b * b, 0.0f};
+            f.film_albedo[i] = {value(), value(), value(), float(rng() % 2)};
+            f.film_normal[i] = {value(), value(), value(), value()};
+        }
+        one.add_pass(f, 1);
+        three.add_pass(f, 3);
+    }
+    EXPECT_TRUE(one == three); // sums, counts, flags and AOVs, bytewise
+}
+
 TEST(FilmSums, MeanVarianceAndSpecialValues) {
     et::FilmSums f(1, 1);
     for (float v : {1.0f, 2.0f, 6.0f})

@@ -1,6 +1,7 @@
 #include "render/film_sums.h"
 
 #include "util/error.h"
+#include "util/parallel.h"
 
 #include <cmath>
 #include <cstring>
@@ -78,25 +79,34 @@ FilmSums::FilmSums(int width, int height, bool aovs)
         aovs_.assign(pixels_.size(), AovPixel{});
 }
 
-void FilmSums::add_pass(const Film& pass) {
+void FilmSums::add_pass(const Film& pass, int threads_wanted) {
     if (pass.width() != width_ || pass.height() != height_)
         throw Error("cannot add a " + std::to_string(pass.width()) + "x" +
                     std::to_string(pass.height()) + " pass to a " + std::to_string(width_) + "x" +
                     std::to_string(height_) + " film");
+    // Every pass of a render is folded here, on the host, while the device waits: ~7 ms for
+    // 512x512 on one core (a 112-byte sum per pixel read and written), 5% of a depth-1 pass
+    // (issue 12). Pixels are independent, so large films are split over the cores, which the
+    // renderer leaves idle between passes: the same sums.
     const size_t n = pixels_.size();
-    for (size_t i = 0; i < n; ++i) {
-        Pixel& p = pixels_[i];
-        const etk::float4 s = pass.film_sum[i], q = pass.film_sq[i];
-        add_sample(p.sum[0], p.special[0], s.x);
-        add_sample(p.sum[1], p.special[1], s.y);
-        add_sample(p.sum[2], p.special[2], s.z);
-        add_sample(p.sq[0], p.special[3], q.x);
-        add_sample(p.sq[1], p.special[4], q.y);
-        add_sample(p.sq[2], p.special[5], q.z);
-        p.count += static_cast<uint32_t>(s.w);
-    }
-    if (has_aovs())
-        add_aov_pass(aovs_.data(), pass.film_albedo.data(), pass.film_normal.data(), n);
+    const int threads = n >= kParallelFoldPixels ? thread_count(threads_wanted) : 1;
+    run_on_threads(threads, [&](int t) {
+        const size_t begin = n * t / threads, end = n * (t + 1) / threads;
+        for (size_t i = begin; i < end; ++i) {
+            Pixel& p = pixels_[i];
+            const etk::float4 s = pass.film_sum[i], q = pass.film_sq[i];
+            add_sample(p.sum[0], p.special[0], s.x);
+            add_sample(p.sum[1], p.special[1], s.y);
+            add_sample(p.sum[2], p.special[2], s.z);
+            add_sample(p.sq[0], p.special[3], q.x);
+            add_sample(p.sq[1], p.special[4], q.y);
+            add_sample(p.sq[2], p.special[5], q.z);
+            p.count += static_cast<uint32_t>(s.w);
+        }
+        if (has_aovs())
+            add_aov_pass(aovs_.data() + begin, pass.film_albedo.data() + begin,
+                         pass.film_normal.data() + begin, end - begin);
+    });
 }
 
 void FilmSums::add_pixels(Pixel* to, const Pixel* from, size_t n) {

@@ -48,7 +48,9 @@ class FilmSums {
 
     // Adds one pass: `pass` holds, per pixel, at most one sample (w = 1) or none (w = 0).
     // Films of several samples add too, but then their float sums were rounded already.
-    void add_pass(const Film& pass);
+    // Films of kParallelFoldPixels or more are split over `threads` (0: every core).
+    void add_pass(const Film& pass, int threads = 1);
+    static constexpr size_t kParallelFoldPixels = 65536;
     // Adds the sums of a disjoint sample set, exactly (throws et::Error for another size, or
     // when one holds AOVs and the other not).
     void add(const FilmSums& other);

@@ -71,7 +71,7 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     const RayCounts c = run_pass(*device_, p, learner, p.guide_learn ? cache_.get() : nullptr);
     device_->download_film(film_, sums_.has_aovs());
     if (keep)
-        sums_.add_pass(film_);
+        sums_.add_pass(film_, scene_.settings.threads); // the render's cores, idle now
     if (learn && guide_) {
         // The tables for the passes that follow: rebuilt after passes 1, 2, 4, ... L.
         if (VisibilityCache::update_after(next_learning_pass_, guide_options_.learning_passes)) {
