@@ -43,7 +43,7 @@ ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
 // The distribution light samples are drawn from, and weighted by in MIS. The compensated one
 // (Karlik et al. 2019) is used only where a BSDF sample can reach the same direction: the MIS
 // strategies at non-delta vertices (the adaptive strategy keeps a BSDF share, below). Delta
-// vertices draw no light sample, and rays they scatter count in full (escaped stage), so
+// vertices draw no light sample, and rays they scatter count in full (etk_escaped), so
 // nothing needs the full distribution in these strategies. A rough dielectric's BSDF sample
 // reaches every direction of either hemisphere where it transmits or reflects anything
 // (dielectric.h), so the compensated distribution serves it over the whole sphere too.
@@ -76,7 +76,7 @@ ETK_FN float etk_vertex_config(EtkScene S, EtkParams p, int prim, int pixel, int
     }
     return last ? s : fmin(s, 1.0f);
 }
-// The continuation's record of its vertex for the escaped stage (beta.w): the share, +4 if it
+// The continuation's record of its vertex for etk_escaped (beta.w): the share, +4 if it
 // is a light sample, +8 if the vertex sampled the compensated distribution.
 ETK_FN float etk_share_code(float s, int from_light, int flags) {
     return s + (from_light ? 4.0f : 0.0f) + ((flags & ETK_BIN_COMPENSATED) ? 8.0f : 0.0f);
@@ -124,28 +124,8 @@ ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
     Q.ray_out[i] = i;
 }
 
-// Stage 2: closest hit, written with its mark: a surface to shade, escaped, or ended.
-ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
-    (void)F;
-    (void)out;
-    int slot = Q.ray_in[i];
-    float4 o = P.ray_o[slot], d = P.ray_d[slot];
-    EtkHit h;
-    if (!etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h))
-        P.hit[slot] = make_float4(ETK_HIT_ESCAPED, 0.0f, 0.0f, 0.0f);
-    else if ((int)o.w >= p.max_depth) // the path ends here: no more bounces allowed
-        P.hit[slot] = make_float4(ETK_HIT_ENDED, 0.0f, 0.0f, 0.0f);
-    else
-        P.hit[slot] = make_float4(h.t, as_float((uint)h.prim), h.b1, h.b2);
-}
-
-// Stage 3: rays that left the scene see the environment, weighted against light sampling.
-ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
-    (void)out;
-    (void)F;
-    int slot = Q.ray_in[i];
-    if (P.hit[slot].x != ETK_HIT_ESCAPED)
-        return; // a hit: the shade stage's
+// A ray that left the scene sees the environment, weighted against light sampling.
+ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
     float4 d = P.ray_d[slot];
     float2 uv = etk_env_uv(p.env, etk_xyz(d));
     float w = 1.0f;
@@ -174,12 +154,31 @@ ETK_FN void etk_escaped(ETK_STAGE_PARAMS) {
     }
 }
 
-// Stage 4: at a surface: one light sample (pushed as a shadow ray) and one BSDF sample (pushed as
+// Stage 2: closest hit, written with its mark (a surface to shade, escaped, or ended); a ray that
+// escaped takes the environment's light here and then, rather than in a stage of its own that
+// would read every ray of the bounce again to find the escaped ones (issue 12).
+ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
+    (void)F;
+    (void)out;
+    int slot = Q.ray_in[i];
+    float4 o = P.ray_o[slot], d = P.ray_d[slot];
+    EtkHit h;
+    if (!etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h)) {
+        P.hit[slot] = make_float4(ETK_HIT_ESCAPED, 0.0f, 0.0f, 0.0f);
+        etk_escaped(S, P, p, slot);
+    } else if ((int)o.w >= p.max_depth) { // the path ends here: no more bounces allowed
+        P.hit[slot] = make_float4(ETK_HIT_ENDED, 0.0f, 0.0f, 0.0f);
+    } else {
+        P.hit[slot] = make_float4(h.t, as_float((uint)h.prim), h.b1, h.b2);
+    }
+}
+
+// Stage 3: at a surface: one light sample (pushed as a shadow ray) and one BSDF sample (pushed as
 // the continuation ray); for the adaptive strategy, samples A and B chosen by the vertex's share.
 ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     int slot = Q.ray_in[i];
     if (!(P.hit[slot].x >= 0.0f))
-        return; // escaped (the escaped stage's) or ended
+        return; // escaped (intersect took its light) or ended
     out->slot[ETK_Q_SHADED] = slot;
     int depth = (int)P.ray_o[slot].w;
     int pixel = P.pixel[slot];
@@ -350,7 +349,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     out->slot[ETK_Q_RAY_OUT] = slot;
 }
 
-// Stage 5: shadow rays add their contribution when nothing blocks them.
+// Stage 4: shadow rays add their contribution when nothing blocks them.
 ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
     (void)out;
     (void)F;
@@ -368,13 +367,13 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
     }
 }
 
-// Stage 4': the shade stage of a directional light set (ETK_STRATEGY_LIGHTS, direct lighting
+// Stage 3': the shade stage of a directional light set (ETK_STRATEGY_LIGHTS, direct lighting
 // only): every light of the set at every hit, one any-hit shadow ray each, summed in light order.
 ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
     (void)out;
     int slot = Q.ray_in[i];
     if (!(P.hit[slot].x >= 0.0f))
-        return; // escaped (the escaped stage's) or ended
+        return; // escaped (intersect took its light) or ended
     out->slot[ETK_Q_SHADED] = slot;
     EtkSurface s = etk_path_surface(S, P, p, slot);
     if ((int)P.ray_o[slot].w == 0) // the camera ray's hit: the AOVs
@@ -395,7 +394,7 @@ ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
     P.radiance[slot] = etk_f4(etk_xyz(r) + beta * L, 0.0f);
 }
 
-// Stage 6: the pass's path radiance into the film. A non-finite sample counts as zero rather
+// Stage 5: the pass's path radiance into the film. A non-finite sample counts as zero rather
 // than poisoning the pixel, and is counted: the host reports any, and the tests require none.
 ETK_FN void etk_accumulate(ETK_STAGE_PARAMS) {
     (void)out;

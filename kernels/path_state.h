@@ -47,13 +47,14 @@
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces. The rays a bounce traced are not sorted into an escaped and a shading
-// queue: the escaped and shade stages both run over ray_in and each takes its own by the hit's
-// mark (below). Sorting them cost a work-group's barriers and atomics per ray on a CPU device,
-// ~20% of the intersect stage on PoCL (issue 12), and a ray is only read once more to skip it.
+// queue: intersect takes the environment's light for the escaped ones itself, and the shade
+// stage runs over ray_in and takes the hits by their mark (below). Sorting them cost a
+// work-group's barriers and atomics per ray on a CPU device, ~20% of the intersect stage on PoCL
+// (issue 12), and a ray is only read once more to skip it.
 #define ETK_QUEUES(X) X(ray_in) X(ray_out) X(shadow)
 
-// What intersect writes into hit.x when the ray hit nothing to shade: it left the scene (the
-// escaped stage's), or it hit a surface past the last bounce (the path ends there).
+// What intersect writes into hit.x when the ray hit nothing to shade: it left the scene (and
+// intersect added the environment's light), or it hit a surface past the last bounce.
 #define ETK_HIT_ESCAPED (-1.0f)
 #define ETK_HIT_ENDED (-2.0f)
 
@@ -79,7 +80,6 @@
 #define ETK_STAGES(X)                                                                              \
     X(generate, etk_generate, 0)                                                                   \
     X(intersect, etk_intersect, 0)                                                                 \
-    X(escaped_rays, etk_escaped, 0)                                                                \
     X(shade_hits, etk_shade, 1)                                                                    \
     X(shade_lights, etk_shade_lights, 1)                                                           \
     X(trace_shadows, etk_shadow, 0)                                                                \

@@ -8,7 +8,7 @@
 //                                                     then a direction inside R in proportion
 //                                                     to the map),
 // p(w) = p_map(w) (alpha + (1 - alpha) P(R(w)) / M_R(w)), M_R the map's mass in R: positive
-// wherever the map is (unbiased), and evaluated the same way for MIS by the escaped stage. Both
+// wherever the map is (unbiased), and evaluated the same way for MIS by etk_escaped. Both
 // parts are proportional to the map inside every region, so the mixture is one hierarchical
 // distribution: a region with probability Q(R) = alpha M_R + (1 - alpha) P(R) (the table a cell
 // holds), then the map inside it. It is sampled by inverting it -- the region's row band and

@@ -73,13 +73,14 @@ TEST(Integrator, PushesLandInTheirCountersQueues) {
     EXPECT_EQ(shadow[1], -7);
 }
 
-// intersect marks the rays it finds nothing to shade for; the escaped and shade stages both run
-// over every ray of the bounce and each leaves the others' alone, before reading anything else.
-TEST(Integrator, EscapedAndShadeStagesTakeOnlyTheirOwnRays) {
+// intersect marks the rays it finds nothing to shade for (and lights the escaped ones itself);
+// the shade stages run over every ray of the bounce and leave those alone, before reading
+// anything else.
+TEST(Integrator, ShadeStagesTakeOnlyTheRaysMarkedAsHits) {
     using etk::float4;
-    std::vector<float4> hit = {{ETK_HIT_ESCAPED, 0, 0, 0}, {ETK_HIT_ENDED, 0, 0, 0}, {1, 0, 0, 0}};
-    std::vector<float4> radiance(3, float4{0.25f, 0.5f, 0.75f, 0});
-    std::vector<int> ray_in = {0, 1, 2};
+    std::vector<float4> hit = {{ETK_HIT_ESCAPED, 0, 0, 0}, {ETK_HIT_ENDED, 0, 0, 0}};
+    std::vector<float4> radiance(2, float4{0.25f, 0.5f, 0.75f, 0});
+    std::vector<int> ray_in = {0, 1};
     uint32_t counters[etk::ETK_Q_COUNT] = {};
     etk::EtkPaths P{}; // only the marks and the radiance: reading any other field would crash
     P.hit = hit.data();
@@ -87,16 +88,12 @@ TEST(Integrator, EscapedAndShadeStagesTakeOnlyTheirOwnRays) {
     etk::EtkQueues Q{};
     Q.ray_in = ray_in.data();
     Q.counters = counters;
-    for (int i : {0, 1}) { // escaped, ended: nothing to shade
+    for (int i : {0, 1}) {
         etk::EtkPushes out = etk::etk_no_pushes();
         etk::etk_shade(etk::EtkScene{}, P, Q, etk::EtkFilm{}, etk::EtkParams{}, i, &out);
         etk::etk_shade_lights(etk::EtkScene{}, P, Q, etk::EtkFilm{}, etk::EtkParams{}, i, &out);
         for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
             EXPECT_EQ(out.slot[q], -1) << "ray " << i;
-    }
-    for (int i : {1, 2}) { // ended, a hit: not the environment's
-        etk::EtkPushes out = etk::etk_no_pushes();
-        etk::etk_escaped(etk::EtkScene{}, P, Q, etk::EtkFilm{}, etk::EtkParams{}, i, &out);
         EXPECT_EQ(radiance[i].x, 0.25f) << "ray " << i;
         EXPECT_EQ(radiance[i].z, 0.75f) << "ray " << i;
     }

@@ -53,9 +53,8 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
             counts.continuation += rays;
         ex.bind_queues(swapped);
         ex.reset_counters();
-        // The escaped and shade stages each take their own of the rays intersect marked.
+        // intersect lights the escaped rays; shade takes the rays it marked as hits.
         ex.launch(etk::ETK_STAGE_intersect, rays, p);
-        ex.launch(etk::ETK_STAGE_escaped_rays, rays, p);
         if (bounce < p.max_depth) // past it, intersect marks every hit as the path's end
             ex.launch(shade, rays, p);
         ex.read_counters(c);

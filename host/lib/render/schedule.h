@@ -1,6 +1,6 @@
-// The bounce schedule, written once: generate -> (closest hit -> escaped rays -> shade -> shadow
-// rays) per bounce while rays remain -> film. It drives a StageExecutor, which the OpenCL and the
-// native back ends implement (executor_cl.h, executor_cpu.h), the way pbrt-v4's wavefront
+// The bounce schedule, written once: generate -> (closest hit, lighting escaped rays -> shade ->
+// shadow rays) per bounce while rays remain -> film. It drives a StageExecutor, which the OpenCL
+// and the native back ends implement (executor_cl.h, executor_cpu.h), the way pbrt-v4's wavefront
 // integrator drives its per-device launches.
 #pragma once
 #include "kernels/params.h"
