@@ -154,32 +154,28 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
     }
 }
 
-// Stage 2: closest hit, written with its mark (a surface to shade, escaped, or ended); a ray that
-// escaped takes the environment's light here and then, rather than in a stage of its own that
-// would read every ray of the bounce again to find the escaped ones (issue 12).
+// Stage 2: closest hit, queued for shading; a ray that escaped takes the environment's light here
+// and then, rather than through a queue and a stage of its own (issue 12: one launch and one
+// queue push fewer per bounce).
 ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
     (void)F;
-    (void)out;
     int slot = Q.ray_in[i];
     float4 o = P.ray_o[slot], d = P.ray_d[slot];
     EtkHit h;
     if (!etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h)) {
-        P.hit[slot] = make_float4(ETK_HIT_ESCAPED, 0.0f, 0.0f, 0.0f);
         etk_escaped(S, P, p, slot);
-    } else if ((int)o.w >= p.max_depth) { // the path ends here: no more bounces allowed
-        P.hit[slot] = make_float4(ETK_HIT_ENDED, 0.0f, 0.0f, 0.0f);
-    } else {
-        P.hit[slot] = make_float4(h.t, as_float((uint)h.prim), h.b1, h.b2);
+        return;
     }
+    if ((int)o.w >= p.max_depth)
+        return; // the path ends here: no more bounces allowed
+    P.hit[slot] = make_float4(h.t, as_float((uint)h.prim), h.b1, h.b2);
+    out->slot[ETK_Q_SHADE] = slot;
 }
 
 // Stage 3: at a surface: one light sample (pushed as a shadow ray) and one BSDF sample (pushed as
 // the continuation ray); for the adaptive strategy, samples A and B chosen by the vertex's share.
 ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
-    int slot = Q.ray_in[i];
-    if (!(P.hit[slot].x >= 0.0f))
-        return; // escaped (intersect took its light) or ended
-    out->slot[ETK_Q_SHADED] = slot;
+    int slot = Q.shade[i];
     int depth = (int)P.ray_o[slot].w;
     int pixel = P.pixel[slot];
     EtkSurface s = etk_path_surface(S, P, p, slot);
@@ -371,10 +367,7 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
 // only): every light of the set at every hit, one any-hit shadow ray each, summed in light order.
 ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
     (void)out;
-    int slot = Q.ray_in[i];
-    if (!(P.hit[slot].x >= 0.0f))
-        return; // escaped (intersect took its light) or ended
-    out->slot[ETK_Q_SHADED] = slot;
+    int slot = Q.shade[i];
     EtkSurface s = etk_path_surface(S, P, p, slot);
     if ((int)P.ray_o[slot].w == 0) // the camera ray's hit: the AOVs
         etk_aov_first_hit(F, p, P.pixel[slot], s, etk_xyz(P.ray_d[slot]), P.hit[slot].x);

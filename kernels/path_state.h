@@ -35,7 +35,7 @@
     X(float4, beta)     /* throughput; w: adaptive: share of the vertex that made the ray, +4 if a \
                            light sample */                                                         \
     X(float4, radiance) /* accumulated along the path */                                           \
-    X(float4, hit)      /* t, triangle (int bits), b1, b2; t < 0: nothing to shade (ETK_HIT_*) */  \
+    X(float4, hit)      /* t, triangle (int bits), b1, b2 */                                       \
     X(float4, shadow_o) /* shadow ray origin */                                                    \
     X(float4, shadow_d) /* shadow ray direction; w: its length */                                  \
     X(float4, shadow_L) /* tentative contribution of the shadow ray */                             \
@@ -46,17 +46,8 @@
     X(float, guide_val) /* visibility learning: its unoccluded L cos / pdf, 0 if blocked */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
-// buffers between bounces. The rays a bounce traced are not sorted into an escaped and a shading
-// queue: intersect takes the environment's light for the escaped ones itself, and the shade
-// stage runs over ray_in and takes the hits by their mark (below). Sorting them cost a
-// work-group's barriers and atomics per ray on a CPU device, ~20% of the intersect stage on PoCL
-// (issue 12), and a ray is only read once more to skip it.
-#define ETK_QUEUES(X) X(ray_in) X(ray_out) X(shadow)
-
-// What intersect writes into hit.x when the ray hit nothing to shade: it left the scene (and
-// intersect added the environment's light), or it hit a surface past the last bounce.
-#define ETK_HIT_ESCAPED (-1.0f)
-#define ETK_HIT_ENDED (-2.0f)
+// buffers between bounces. Escaped rays need no queue: intersect takes their light itself.
+#define ETK_QUEUES(X) X(ray_in) X(ray_out) X(shade) X(shadow)
 
 // Film, one element per pixel: X(type, name).
 #define ETK_FILM_FIELDS(X)                                                                         \
@@ -69,7 +60,7 @@
 #define ETK_COUNTERS(X)                                                                            \
     X(RAY_OUT)    /* continuation rays pushed */                                                   \
     X(SHADOW)     /* shadow rays pushed */                                                         \
-    X(SHADED)     /* hits shaded (counted like a push, no queue) */                                \
+    X(SHADE)      /* rays that hit a surface to shade */                                           \
     X(LIGHT_RAYS) /* shadow rays traced inline by shade_lights */                                  \
     X(NONFINITE)  /* samples dropped by the film: should stay 0 */
 
@@ -79,9 +70,9 @@
 // per work-group, behind barriers; a stage marked 0 that pushes is still correct, only slower.
 #define ETK_STAGES(X)                                                                              \
     X(generate, etk_generate, 0)                                                                   \
-    X(intersect, etk_intersect, 0)                                                                 \
+    X(intersect, etk_intersect, 1)                                                                 \
     X(shade_hits, etk_shade, 1)                                                                    \
-    X(shade_lights, etk_shade_lights, 1)                                                           \
+    X(shade_lights, etk_shade_lights, 0)                                                           \
     X(trace_shadows, etk_shadow, 0)                                                                \
     X(accumulate, etk_accumulate, 0)
 
@@ -95,18 +86,17 @@ enum { ETK_COUNTERS(ETK_COUNTER_ENUM) ETK_Q_COUNT };
 // natively one at a time (etk_push_each: the lane's own counters), on OpenCL with one global
 // atomic per work-group and queue (wavefront.cl), since every work-item bumping the same global
 // counter makes its cache line travel between cores on a CPU device (issue 12: 4% of a frame
-// on PoCL). The pushing queues are those of the first ETK_PUSH_QUEUES counters; ETK_Q_SHADED is
-// pushed to be counted only (no queue holds it).
+// on PoCL). The pushing queues are those of the first ETK_PUSH_QUEUES counters.
 #define ETK_PUSH_QUEUES 3
 // The largest work-group the host launches stages with (wavefront.cl keeps a group's pushes in
 // local arrays of this size).
 #define ETK_STAGE_LOCAL_MAX 64
 typedef struct {
-    int slot[ETK_PUSH_QUEUES]; // by counter (ETK_Q_RAY_OUT ... ETK_Q_SHADED): the slot, or -1
+    int slot[ETK_PUSH_QUEUES]; // by counter (ETK_Q_RAY_OUT ... ETK_Q_SHADE): the slot, or -1
 } EtkPushes;
 // EtkPushes indexes its slots by the first three counters.
 typedef char etk_push_counters_come_first[((ETK_Q_RAY_OUT == 0) & (ETK_Q_SHADOW == 1) &
-                                           (ETK_Q_SHADED == 2) & (ETK_PUSH_QUEUES == 3))
+                                           (ETK_Q_SHADE == 2) & (ETK_PUSH_QUEUES == 3))
                                               ? 1
                                               : -1];
 
@@ -140,14 +130,13 @@ ETK_FN EtkPushes etk_no_pushes(void) {
         out.slot[q] = -1;
     return out;
 }
-// Queue of counter q (ETK_Q_RAY_OUT or ETK_Q_SHADOW).
+// Queue of counter q (q < ETK_PUSH_QUEUES).
 ETK_FN ETK_GLOBAL int* etk_push_queue(EtkQueues Q, int q) {
-    return q == ETK_Q_RAY_OUT ? Q.ray_out : Q.shadow;
+    return q == ETK_Q_RAY_OUT ? Q.ray_out : q == ETK_Q_SHADOW ? Q.shadow : Q.shade;
 }
-// Store a push at index k of queue q (a counted-only push stores nothing).
+// Stores a push at index k of queue q.
 ETK_FN void etk_push_store(EtkQueues Q, int q, uint k, int slot) {
-    if (q != ETK_Q_SHADED)
-        etk_push_queue(Q, q)[k] = slot;
+    etk_push_queue(Q, q)[k] = slot;
 }
 // The pushes, one atomic each, in counter order.
 ETK_FN void etk_push_each(EtkQueues Q, const EtkPushes* out) {

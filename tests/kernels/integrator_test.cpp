@@ -1,7 +1,6 @@
 // Stage bookkeeping of the integrator (kernels/integrator.h, path_state.h): film accumulation
 // drops and counts a non-finite path radiance (renders report it instead of writing NaN), and a
-// stage's queue pushes land where the next stage reads them, and each stage takes only the
-// rays marked for it.
+// stage's queue pushes land where the next stage reads them.
 #include "kernels/integrator.h"
 
 #include <gtest/gtest.h>
@@ -46,57 +45,33 @@ TEST(Integrator, AccumulateDropsAndCountsNonFiniteSamples) {
 }
 
 // A stage's pushes land in the queue of their counter, each at the next free index, in counter
-// order; slots of -1 push nothing; a shaded hit is counted and stored nowhere.
+// order; slots of -1 push nothing.
 TEST(Integrator, PushesLandInTheirCountersQueues) {
-    std::vector<int> ray_out(4, -7), shadow(4, -7);
+    std::vector<int> ray_out(4, -7), shade(4, -7), shadow(4, -7);
     uint32_t counters[etk::ETK_Q_COUNT] = {};
     etk::EtkQueues Q{};
     Q.ray_out = ray_out.data();
+    Q.shade = shade.data();
     Q.shadow = shadow.data();
     Q.counters = counters;
     etk::EtkPushes a = etk::etk_no_pushes();
-    a.slot[etk::ETK_Q_SHADED] = 5;
+    a.slot[etk::ETK_Q_SHADE] = 5;
     a.slot[etk::ETK_Q_SHADOW] = 6;
     etk::etk_push_each(Q, &a);
     etk::EtkPushes b = etk::etk_no_pushes();
-    b.slot[etk::ETK_Q_SHADED] = 9;
+    b.slot[etk::ETK_Q_SHADE] = 9;
     b.slot[etk::ETK_Q_RAY_OUT] = 0;
     etk::etk_push_each(Q, &b);
     etk::EtkPushes none = etk::etk_no_pushes();
     etk::etk_push_each(Q, &none);
     EXPECT_EQ(counters[etk::ETK_Q_RAY_OUT], 1u);
-    EXPECT_EQ(counters[etk::ETK_Q_SHADED], 2u);
+    EXPECT_EQ(counters[etk::ETK_Q_SHADE], 2u);
     EXPECT_EQ(counters[etk::ETK_Q_SHADOW], 1u);
     EXPECT_EQ(ray_out[0], 0);
     EXPECT_EQ(ray_out[1], -7);
+    EXPECT_EQ(shade[0], 5);
+    EXPECT_EQ(shade[1], 9);
+    EXPECT_EQ(shade[2], -7);
     EXPECT_EQ(shadow[0], 6);
     EXPECT_EQ(shadow[1], -7);
-}
-
-// intersect marks the rays it finds nothing to shade for (and lights the escaped ones itself);
-// the shade stages run over every ray of the bounce and leave those alone, before reading
-// anything else.
-TEST(Integrator, ShadeStagesTakeOnlyTheRaysMarkedAsHits) {
-    using etk::float4;
-    std::vector<float4> hit = {{ETK_HIT_ESCAPED, 0, 0, 0}, {ETK_HIT_ENDED, 0, 0, 0}};
-    std::vector<float4> radiance(2, float4{0.25f, 0.5f, 0.75f, 0});
-    std::vector<int> ray_in = {0, 1};
-    uint32_t counters[etk::ETK_Q_COUNT] = {};
-    etk::EtkPaths P{}; // only the marks and the radiance: reading any other field would crash
-    P.hit = hit.data();
-    P.radiance = radiance.data();
-    etk::EtkQueues Q{};
-    Q.ray_in = ray_in.data();
-    Q.counters = counters;
-    for (int i : {0, 1}) {
-        etk::EtkPushes out = etk::etk_no_pushes();
-        etk::etk_shade(etk::EtkScene{}, P, Q, etk::EtkFilm{}, etk::EtkParams{}, i, &out);
-        etk::etk_shade_lights(etk::EtkScene{}, P, Q, etk::EtkFilm{}, etk::EtkParams{}, i, &out);
-        for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
-            EXPECT_EQ(out.slot[q], -1) << "ray " << i;
-        EXPECT_EQ(radiance[i].x, 0.25f) << "ray " << i;
-        EXPECT_EQ(radiance[i].z, 0.75f) << "ray " << i;
-    }
-    for (uint32_t c : counters)
-        EXPECT_EQ(c, 0u);
 }

@@ -168,7 +168,6 @@ TEST(DeviceLimits, EventsAreReleasedWithinABounce) {
         et::run_wave(watch, p, first, 2, counts);
     device.finish();
     EXPECT_GT(watch.launches, 30u);
-    // At most the launches before a bounce's counter read: generate, intersect, shade.
     EXPECT_LE(watch.most, 3u) << "events of finished launches must be released as the render goes";
     EXPECT_EQ(device.pending_events(), 0u);
     const auto times = device.stage_seconds();

@@ -14,8 +14,7 @@ namespace {
 // Path state and queues start as a device's do: unwritten (default-initialised, not zeroed), so
 // a stage that reads a field no earlier stage wrote reads garbage here too, and Valgrind's
 // memcheck (tests/portability/memcheck_test.cpp) reports it instead of seeing a zero.
-template <typename T>
-std::unique_ptr<T[]> uninitialised(int n) {
+template <typename T> std::unique_ptr<T[]> uninitialised(int n) {
     return std::unique_ptr<T[]>(new T[static_cast<size_t>(n)]);
 }
 
@@ -27,12 +26,14 @@ class CpuDevice::Lane : public StageExecutor {
   public:
     Lane(const DeviceScene& scene, Film& film, int wave)
         : scene_(scene.view()), film_(film.view()), queue_a_(uninitialised<int>(wave)),
-          queue_b_(uninitialised<int>(wave)), shadow_(uninitialised<int>(wave)) {
+          queue_b_(uninitialised<int>(wave)), shade_(uninitialised<int>(wave)),
+          shadow_(uninitialised<int>(wave)) {
 #define ET_LANE_ALLOC(type, name)                                                                  \
     name##_ = uninitialised<type>(wave);                                                           \
     paths_.name = name##_.get();
         ETK_PATH_FIELDS(ET_LANE_ALLOC)
 #undef ET_LANE_ALLOC
+        queues_.shade = shade_.get();
         queues_.shadow = shadow_.get();
         queues_.counters = counters_;
     }
@@ -92,7 +93,7 @@ class CpuDevice::Lane : public StageExecutor {
 #define ET_LANE_ARRAY(type, name) std::unique_ptr<type[]> name##_;
     ETK_PATH_FIELDS(ET_LANE_ARRAY)
 #undef ET_LANE_ARRAY
-    std::unique_ptr<int[]> queue_a_, queue_b_, shadow_;
+    std::unique_ptr<int[]> queue_a_, queue_b_, shade_, shadow_;
     uint32_t counters_[etk::ETK_Q_COUNT] = {};
 };
 

@@ -53,12 +53,11 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
             counts.continuation += rays;
         ex.bind_queues(swapped);
         ex.reset_counters();
-        // intersect lights the escaped rays; shade takes the rays it marked as hits.
-        ex.launch(etk::ETK_STAGE_intersect, rays, p);
-        if (bounce < p.max_depth) // past it, intersect marks every hit as the path's end
-            ex.launch(shade, rays, p);
+        ex.launch(etk::ETK_STAGE_intersect, rays, p); // lights the escaped rays itself
         ex.read_counters(c);
-        counts.shaded += c[etk::ETK_Q_SHADED];
+        ex.launch(shade, static_cast<int>(c[etk::ETK_Q_SHADE]), p);
+        counts.shaded += c[etk::ETK_Q_SHADE];
+        ex.read_counters(c);
         ex.launch(etk::ETK_STAGE_trace_shadows, static_cast<int>(c[etk::ETK_Q_SHADOW]), p);
         counts.shadow += c[etk::ETK_Q_SHADOW] + c[etk::ETK_Q_LIGHT_RAYS];
         if (guide && p.guide_learn && c[etk::ETK_Q_SHADOW] > 0) {
