@@ -14,7 +14,8 @@ namespace {
 // Path state and queues start as a device's do: unwritten (default-initialised, not zeroed), so
 // a stage that reads a field no earlier stage wrote reads garbage here too, and Valgrind's
 // memcheck (tests/portability/memcheck_test.cpp) reports it instead of seeing a zero.
-template <typename T> std::unique_ptr<T[]> uninitialised(int n) {
+template <typename T>
+std::unique_ptr<T[]> uninitialised(int n) {
     return std::unique_ptr<T[]>(new T[static_cast<size_t>(n)]);
 }
 
