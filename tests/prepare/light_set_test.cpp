@@ -1,7 +1,7 @@
-// Light sets and SIS strata (light_set.h, sis.h) and the renders that sum over them
-// (light_render.h): strata cover the sphere exactly once, every light set carries exactly the
-// map's power, the jitter inside a stratum is uniform in solid angle, and renders on an
-// unoccluded plane match their closed forms.
+// Light sets and SIS strata (light_set.h, sis.h) and the renders that sum over them (the
+// wavefront's shade_lights stage and SIS branch): strata cover the sphere exactly once, every
+// light set carries exactly the map's power, the jitter inside a stratum is uniform in solid
+// angle, and renders on an unoccluded plane match their closed forms.
 #include "image/image_metrics.h"
 #include "kernels/directional_lights.h"
 #include "render/renderer.h"
