@@ -134,15 +134,11 @@ ETK_FN EtkPushes etk_no_pushes(void) {
 ETK_FN ETK_GLOBAL int* etk_push_queue(EtkQueues Q, int q) {
     return q == ETK_Q_RAY_OUT ? Q.ray_out : q == ETK_Q_SHADOW ? Q.shadow : Q.shade;
 }
-// Stores a push at index k of queue q.
-ETK_FN void etk_push_store(EtkQueues Q, int q, uint k, int slot) {
-    etk_push_queue(Q, q)[k] = slot;
-}
 // The pushes, one atomic each, in counter order.
 ETK_FN void etk_push_each(EtkQueues Q, const EtkPushes* out) {
     for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
         if (out->slot[q] >= 0)
-            etk_push_store(Q, q, ETK_ATOMIC_INC(Q.counters + q), out->slot[q]);
+            etk_push_queue(Q, q)[ETK_ATOMIC_INC(Q.counters + q)] = out->slot[q];
 }
 
 // Kernel arguments, in this order: scene buffers, path fields, queues, film, counters, params,

@@ -37,10 +37,10 @@ static inline __attribute__((always_inline)) void etk_push_group(EtkQueues Q, Et
             count += s[k] >= 0 ? 1u : 0u;
         if (count == 0u)
             continue;
-        uint at = atomic_add(Q.counters + q, count);
+        __global int* queue = etk_push_queue(Q, q) + atomic_add(Q.counters + q, count);
         for (int k = 0; k < lsize; ++k)
             if (s[k] >= 0)
-                etk_push_store(Q, q, at++, s[k]);
+                *queue++ = s[k];
     }
 }
 

@@ -15,7 +15,8 @@ namespace et {
 
 // The work-group size asked for; each kernel gets the largest size up to it that the kernel and
 // the device allow (choose_local_size). Fixed per kernel for the whole render: PoCL compiles a
-// work-group function per distinct local size.
+// work-group function per distinct local size. Also the most a stage may get: wavefront.cl
+// sizes its work-group push arrays by ETK_STAGE_LOCAL_MAX.
 constexpr size_t kStageLocalTarget = ETK_STAGE_LOCAL_MAX;
 
 // What the device reports for each stage kernel of wavefront.cl and the work-group size the
