@@ -46,8 +46,10 @@
     X(float, guide_val) /* visibility learning: its unoccluded L cos / pdf, 0 if blocked */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
-// buffers between bounces. Escaped rays need no queue: intersect takes their light itself.
-#define ETK_QUEUES(X) X(ray_in) X(ray_out) X(shade) X(shadow)
+// buffers between bounces; the others keep one buffer each for the whole render (the back ends
+// allocate them from ETK_FIXED_QUEUES). Escaped rays need no queue: intersect takes their light.
+#define ETK_FIXED_QUEUES(X) X(shade) X(shadow)
+#define ETK_QUEUES(X) X(ray_in) X(ray_out) ETK_FIXED_QUEUES(X)
 
 // Film, one element per pixel: X(type, name).
 #define ETK_FILM_FIELDS(X)                                                                         \

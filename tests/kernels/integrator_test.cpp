@@ -1,7 +1,10 @@
 // Stage bookkeeping of the integrator (kernels/integrator.h, path_state.h): film accumulation
-// drops and counts a non-finite path radiance (renders report it instead of writing NaN), and a
-// stage's queue pushes land where the next stage reads them.
+// drops and counts a non-finite path radiance (renders report it instead of writing NaN), a
+// stage's queue pushes land where the next stage reads them, and intersect sends each ray its own
+// way: a hit to the shade queue, an escaped ray to the environment's light, a hit past the last
+// bounce nowhere.
 #include "kernels/integrator.h"
+#include "render_util.h"
 
 #include <gtest/gtest.h>
 
@@ -74,4 +77,52 @@ TEST(Integrator, PushesLandInTheirCountersQueues) {
     EXPECT_EQ(shade[2], -7);
     EXPECT_EQ(shadow[0], 6);
     EXPECT_EQ(shadow[1], -7);
+}
+
+// One square facing +z at z = 0 under a constant map of radiance 2, three rays from z = 1:
+// down onto the square (depth 0 of max 2: queued for shading, its hit written), up into the sky
+// (it takes beta x 2 at once, with no queue), and down again at depth 2 (the path ends: nothing
+// queued, nothing written, no light).
+TEST(Integrator, IntersectQueuesHitsLightsEscapesAndEndsAtTheLastBounce) {
+    using etk::float4;
+    et::Scene sc =
+        ett::base_scene(4, 4, et::make_envmap("sky", ett::constant_image(16, 8, 2.0f), {}));
+    sc.materials.push_back(ett::diffuse(0.5f));
+    ett::add_square(sc.triangles, glm::vec3(0.0f), glm::vec3(0, 0, 1), 1.0f, 0);
+    sc.settings.max_depth = 2;
+    const et::DeviceScene d = et::prepare_device_scene(sc, sc.settings);
+    std::vector<float4> ray_o = {{0, 0, 1, 0}, {0, 0, 1, 0}, {0, 0, 1, 2}};
+    std::vector<float4> ray_d = {{0, 0, -1, -1}, {0, 0, 1, -1}, {0, 0, -1, -1}};
+    std::vector<float4> beta(3, float4{0.5f, 0.25f, 1.0f, 0});
+    std::vector<float4> radiance(3, float4{0, 0, 0, 0}), hit(3, float4{-9, -9, -9, -9});
+    std::vector<int> ray_in = {0, 1, 2};
+    uint32_t counters[etk::ETK_Q_COUNT] = {};
+    etk::EtkPaths P{}; // what intersect and the escaped light read and write, nothing else
+    P.ray_o = ray_o.data();
+    P.ray_d = ray_d.data();
+    P.beta = beta.data();
+    P.radiance = radiance.data();
+    P.hit = hit.data();
+    etk::EtkQueues Q{};
+    Q.ray_in = ray_in.data();
+    Q.counters = counters;
+    etk::EtkPushes out[3];
+    for (int i = 0; i < 3; ++i) {
+        out[i] = etk::etk_no_pushes();
+        etk::etk_intersect(d.view(), P, Q, etk::EtkFilm{}, d.params, i, &out[i]);
+    }
+    EXPECT_EQ(out[0].slot[etk::ETK_Q_SHADE], 0);
+    EXPECT_FLOAT_EQ(hit[0].x, 1.0f);
+    EXPECT_EQ(radiance[0].x, 0.0f);
+    EXPECT_EQ(out[1].slot[etk::ETK_Q_SHADE], -1);
+    EXPECT_FLOAT_EQ(radiance[1].x, 1.0f); // beta x 2
+    EXPECT_FLOAT_EQ(radiance[1].y, 0.5f);
+    EXPECT_FLOAT_EQ(radiance[1].z, 2.0f);
+    EXPECT_EQ(hit[1].x, -9.0f);
+    EXPECT_EQ(out[2].slot[etk::ETK_Q_SHADE], -1);
+    EXPECT_EQ(hit[2].x, -9.0f);
+    EXPECT_EQ(radiance[2].x, 0.0f);
+    for (const etk::EtkPushes& o : out) // intersect queues nothing else
+        for (int q : {etk::ETK_Q_RAY_OUT, etk::ETK_Q_SHADOW})
+            EXPECT_EQ(o.slot[q], -1);
 }

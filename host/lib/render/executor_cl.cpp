@@ -109,8 +109,10 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * n);
         ETK_PATH_FIELDS(ET_ALLOC)
 #undef ET_ALLOC
-        for (int q : {etk::ETK_ARG_shade, etk::ETK_ARG_shadow})
-            args_[q] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
+#define ET_QUEUE(name)                                                                             \
+    args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
+        ETK_FIXED_QUEUES(ET_QUEUE)
+#undef ET_QUEUE
         queue_a_ = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
         queue_b_ = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
 #define ET_FILM(type, name)                                                                        \

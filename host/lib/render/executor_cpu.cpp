@@ -27,15 +27,17 @@ class CpuDevice::Lane : public StageExecutor {
   public:
     Lane(const DeviceScene& scene, Film& film, int wave)
         : scene_(scene.view()), film_(film.view()), queue_a_(uninitialised<int>(wave)),
-          queue_b_(uninitialised<int>(wave)), shade_(uninitialised<int>(wave)),
-          shadow_(uninitialised<int>(wave)) {
+          queue_b_(uninitialised<int>(wave)) {
 #define ET_LANE_ALLOC(type, name)                                                                  \
     name##_ = uninitialised<type>(wave);                                                           \
     paths_.name = name##_.get();
         ETK_PATH_FIELDS(ET_LANE_ALLOC)
 #undef ET_LANE_ALLOC
-        queues_.shade = shade_.get();
-        queues_.shadow = shadow_.get();
+#define ET_QUEUE_ALLOC(name)                                                                       \
+    name##_ = uninitialised<int>(wave);                                                            \
+    queues_.name = name##_.get();
+        ETK_FIXED_QUEUES(ET_QUEUE_ALLOC)
+#undef ET_QUEUE_ALLOC
         queues_.counters = counters_;
     }
 
@@ -94,7 +96,10 @@ class CpuDevice::Lane : public StageExecutor {
 #define ET_LANE_ARRAY(type, name) std::unique_ptr<type[]> name##_;
     ETK_PATH_FIELDS(ET_LANE_ARRAY)
 #undef ET_LANE_ARRAY
-    std::unique_ptr<int[]> queue_a_, queue_b_, shade_, shadow_;
+    std::unique_ptr<int[]> queue_a_, queue_b_;
+#define ET_QUEUE_ARRAY(name) std::unique_ptr<int[]> name##_;
+    ETK_FIXED_QUEUES(ET_QUEUE_ARRAY)
+#undef ET_QUEUE_ARRAY
     uint32_t counters_[etk::ETK_Q_COUNT] = {};
 };
 
