@@ -5,19 +5,23 @@
 // arrays, so that the four box tests are the same operation on four lanes: what PoCL's
 // work-item vectoriser and GCC's SLP vectoriser both handle): lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
 // meta, flags; integers are stored as float bits. An inner child has flags 0 and meta = its node
-// index. A leaf child has flags = 0x80000000 | count and meta = its first triangle; leaves are
-// intersected straight from their parent, so a leaf costs no node fetch. An unused lane is an
+// index. A leaf child has flags = 0x80000000 | count and meta = its first packet (below); leaves
+// are intersected straight from their parent, so a leaf costs no node fetch. An unused lane is an
 // empty leaf (count 0) with a point box. Node 0 is the root. Inner children that the ray enters
 // are pushed far-first with their entry distance, so the nearest is visited next and a popped
 // node that lies beyond the closest hit found meanwhile is skipped without a fetch. The host
 // keeps the tree shallow enough for ETK_BVH_STACK (at most 1 + 3 x depth entries).
-// Triangles are three float4 each: v0, edge1 = v1 - v0, edge2 = v2 - v0 (Moller-Trumbore).
+// A leaf's triangles lie in packets of four, ETK_BVH_PACKET float4 each, again one triangle per
+// lane: v0.x, v0.y, v0.z, e1.x, e1.y, e1.z, e2.x, e2.y, e2.z (edges e1 = v1 - v0, e2 = v2 - v0,
+// for Moller-Trumbore) and the triangle's index; an unused lane has index -1 and zero edges,
+// which no ray hits (determinant 0). The packets are the traversal's only triangle data.
 #ifndef ETK_BVH_H
 #define ETK_BVH_H
 #include "compat.h"
 
 #define ETK_BVH_STACK 96
-#define ETK_BVH_NODE 8 // float4 per node
+#define ETK_BVH_NODE 8    // float4 per node
+#define ETK_BVH_PACKET 10 // float4 per packet of four triangles
 
 ETK_BEGIN
 
@@ -45,37 +49,63 @@ ETK_FN void etk_box_hit4(ETK_GLOBAL const float4* nd, float4 ox, float4 oy, floa
             1.00000024f;
 }
 
-// Moller-Trumbore; updates hit when closer than hit->t. Written on scalar components: OpenCL
-// compilers otherwise do cross/dot as 3-wide vector shuffles, slower than scalar code on CPUs,
-// and both back ends then round the very same operations.
-ETK_FN int etk_triangle_hit(ETK_GLOBAL const float4* tris, int prim, float3 org, float3 dir,
-                            EtkHit* hit) {
-    float4 v0 = tris[3 * prim], e1 = tris[3 * prim + 1], e2 = tris[3 * prim + 2];
-    float px = dir.y * e2.z - dir.z * e2.y; // p = dir x e2
-    float py = dir.z * e2.x - dir.x * e2.z;
-    float pz = dir.x * e2.y - dir.y * e2.x;
-    float det = e1.x * px + e1.y * py + e1.z * pz;
-    if (det == 0.0f || !isfinite(det))
-        return 0;
-    float inv = 1.0f / det;
-    float sx = org.x - v0.x, sy = org.y - v0.y, sz = org.z - v0.z;
-    float b1 = (sx * px + sy * py + sz * pz) * inv;
-    if (b1 < 0.0f || b1 > 1.0f)
-        return 0;
-    float qx = sy * e1.z - sz * e1.y; // q = s x e1
-    float qy = sz * e1.x - sx * e1.z;
-    float qz = sx * e1.y - sy * e1.x;
-    float b2 = (dir.x * qx + dir.y * qy + dir.z * qz) * inv;
-    if (b2 < 0.0f || b1 + b2 > 1.0f)
-        return 0;
-    float t = (e2.x * qx + e2.y * qy + e2.z * qz) * inv;
-    if (!(t > 0.0f) || !(t < hit->t))
+// Whether a triangle test hit: non-degenerate (det non-zero and finite), inside the triangle,
+// at t in (0, tmax). One expression for a lane (floats: 0 or 1) and for four lanes at once
+// (etk_lanes: a mask per lane), so the two can never disagree.
+#define ETK_TRIANGLE_HIT(det, b1, b2, t, tmax, zero, one)                                          \
+    ((det != zero) & (det - det == zero) & (b1 >= zero) & (b1 <= one) & (b2 >= zero) &             \
+     (b1 + b2 <= one) & (t > zero) & (t < tmax))
+
+// One lane of a packet test: the hit is taken when closer than hit->t (so of two triangles at
+// the same distance the one tested first keeps it).
+ETK_FORCE_INLINE_FN int etk_triangle_lane(float det, float b1, float b2, float t, float prim,
+                                          EtkHit* hit) {
+    if (!ETK_TRIANGLE_HIT(det, b1, b2, t, hit->t, 0.0f, 1.0f))
         return 0;
     hit->t = t;
-    hit->prim = prim;
+    hit->prim = (int)as_uint(prim);
     hit->b1 = b1;
     hit->b2 = b2;
     return 1;
+}
+
+// Moller-Trumbore on the four triangles of a packet at once: each step one vector operation on
+// both back ends, every lane rounded as a test of its triangle alone would be. The lanes are
+// then taken in order, as one-by-one tests would take them. Returns 1 when any_hit and one was
+// hit. The ray is broadcast here rather than passed broadcast: fewer live vectors across the
+// traversal loop, which PoCL's code otherwise keeps on the stack.
+ETK_FORCE_INLINE_FN int etk_packet_hit(ETK_GLOBAL const float4* pk, float3 org, float3 dir,
+                                       int any_hit, EtkHit* hit) {
+    float4 ox = make_float4(org.x, org.x, org.x, org.x),
+           oy = make_float4(org.y, org.y, org.y, org.y);
+    float4 oz = make_float4(org.z, org.z, org.z, org.z);
+    float4 dx = make_float4(dir.x, dir.x, dir.x, dir.x),
+           dy = make_float4(dir.y, dir.y, dir.y, dir.y);
+    float4 dz = make_float4(dir.z, dir.z, dir.z, dir.z);
+    float4 e1x = pk[3], e1y = pk[4], e1z = pk[5], e2x = pk[6], e2y = pk[7], e2z = pk[8];
+    float4 px = dy * e2z - dz * e2y; // p = d x e2
+    float4 py = dz * e2x - dx * e2z;
+    float4 pz = dx * e2y - dy * e2x;
+    float4 det = e1x * px + e1y * py + e1z * pz;
+    float4 inv = make_float4(1.0f, 1.0f, 1.0f, 1.0f) / det;
+    float4 sx = ox - pk[0], sy = oy - pk[1], sz = oz - pk[2];
+    float4 b1 = (sx * px + sy * py + sz * pz) * inv;
+    float4 qx = sy * e1z - sz * e1y; // q = s x e1
+    float4 qy = sz * e1x - sx * e1z;
+    float4 qz = sx * e1y - sy * e1x;
+    float4 b2 = (dx * qx + dy * qy + dz * qz) * inv;
+    float4 t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+    // Most packets are missed by every lane: one vector test decides that, without a branch
+    // per lane.
+    etk_lanes zero = etk_lanes_splat(0.0f), one = etk_lanes_splat(1.0f);
+    if (!etk_any_lane(ETK_TRIANGLE_HIT(etk_lanes_of(det), etk_lanes_of(b1), etk_lanes_of(b2),
+                                       etk_lanes_of(t), etk_lanes_splat(hit->t), zero, one)))
+        return 0;
+    float4 prim = pk[9];
+    return (etk_triangle_lane(det.x, b1.x, b2.x, t.x, prim.x, hit) && any_hit) ||
+           (etk_triangle_lane(det.y, b1.y, b2.y, t.y, prim.y, hit) && any_hit) ||
+           (etk_triangle_lane(det.z, b1.z, b2.z, t.z, prim.z, hit) && any_hit) ||
+           (etk_triangle_lane(det.w, b1.w, b2.w, t.w, prim.w, hit) && any_hit);
 }
 
 ETK_FN float3 etk_safe_inverse(float3 d) {
@@ -86,11 +116,12 @@ ETK_FN float3 etk_safe_inverse(float3 d) {
     return r;
 }
 
-// Intersects the triangles of a leaf; returns 1 when any_hit and one was hit.
-ETK_FN int etk_leaf_hit(ETK_GLOBAL const float4* tris, int first, int count, float3 org, float3 dir,
-                        int any_hit, EtkHit* hit) {
+// Intersects the packets of a leaf; returns 1 when any_hit and one was hit. Inlined: as a call,
+// GCC passes its vectors through memory (native traversal ~10% slower).
+ETK_FORCE_INLINE_FN int etk_leaf_hit(ETK_GLOBAL const float4* packets, int first, int count,
+                                     float3 org, float3 dir, int any_hit, EtkHit* hit) {
     for (int i = 0; i < count; ++i)
-        if (etk_triangle_hit(tris, first + i, org, dir, hit) && any_hit)
+        if (etk_packet_hit(packets + ETK_BVH_PACKET * (first + i), org, dir, any_hit, hit))
             return 1;
     return 0;
 }
@@ -99,14 +130,14 @@ ETK_FN int etk_leaf_hit(ETK_GLOBAL const float4* tris, int first, int count, flo
 // query that found one); an inner child it enters is pushed, in stack sorted order: entry
 // distances decrease towards the top, so the nearest is popped first. The host keeps the stack
 // within ETK_BVH_STACK (see the top); `base` is where this node's pushes began.
-ETK_FORCE_INLINE_FN int etk_bvh_lane(ETK_GLOBAL const float4* tris, int in, float t, float meta,
+ETK_FORCE_INLINE_FN int etk_bvh_lane(ETK_GLOBAL const float4* packets, int in, float t, float meta,
                                      float flags, float3 org, float3 dir, int any_hit, EtkHit* hit,
                                      int* stack, float* stack_t, int base, int* sp) {
     if (!in || !(t <= hit->t * 1.0000005f)) // slack: tnear and t round differently
         return 0;
     uint f = as_uint(flags);
     if (f & 0x80000000u)
-        return etk_leaf_hit(tris, (int)as_uint(meta), (int)(f & 0x7fffffffu), org, dir, any_hit,
+        return etk_leaf_hit(packets, (int)as_uint(meta), (int)(f & 0x7fffffffu), org, dir, any_hit,
                             hit);
     int j = *sp;
     if (j >= ETK_BVH_STACK) // never, for trees the host builds
@@ -123,7 +154,7 @@ ETK_FORCE_INLINE_FN int etk_bvh_lane(ETK_GLOBAL const float4* tris, int in, floa
 }
 
 // Closest hit with t in (0, tmax), or any hit when any_hit != 0. Returns whether it hit.
-ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const float4* tris,
+ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const float4* packets,
                             float3 org, float3 dir, float tmax, int any_hit, EtkHit* hit) {
     hit->t = tmax;
     hit->prim = -1;
@@ -149,14 +180,14 @@ ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const flo
         etk_box_hit4(nd, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
         float4 meta = nd[6], flags = nd[7];
         int base = sp;
-        if (etk_bvh_lane(tris, tn.x <= tf.x, tn.x, meta.x, flags.x, org, dir, any_hit, hit, stack,
-                         stack_t, base, &sp) ||
-            etk_bvh_lane(tris, tn.y <= tf.y, tn.y, meta.y, flags.y, org, dir, any_hit, hit, stack,
-                         stack_t, base, &sp) ||
-            etk_bvh_lane(tris, tn.z <= tf.z, tn.z, meta.z, flags.z, org, dir, any_hit, hit, stack,
-                         stack_t, base, &sp) ||
-            etk_bvh_lane(tris, tn.w <= tf.w, tn.w, meta.w, flags.w, org, dir, any_hit, hit, stack,
-                         stack_t, base, &sp))
+        if (etk_bvh_lane(packets, tn.x <= tf.x, tn.x, meta.x, flags.x, org, dir, any_hit, hit,
+                         stack, stack_t, base, &sp) ||
+            etk_bvh_lane(packets, tn.y <= tf.y, tn.y, meta.y, flags.y, org, dir, any_hit, hit,
+                         stack, stack_t, base, &sp) ||
+            etk_bvh_lane(packets, tn.z <= tf.z, tn.z, meta.z, flags.z, org, dir, any_hit, hit,
+                         stack, stack_t, base, &sp) ||
+            etk_bvh_lane(packets, tn.w <= tf.w, tn.w, meta.w, flags.w, org, dir, any_hit, hit,
+                         stack, stack_t, base, &sp))
             return 1;
     }
     return hit->prim >= 0;

@@ -3,7 +3,7 @@
 // Result: (t, triangle as int bits or -1, b1, b2).
 #include "bvh.h"
 
-__kernel void bvh_trace(__global const float4* nodes, __global const float4* tris,
+__kernel void bvh_trace(__global const float4* nodes, __global const float4* packets,
                         __global const float4* org, __global const float4* dir, int any_hit, int n,
                         __global float4* out) {
     int i = get_global_id(0);
@@ -11,7 +11,7 @@ __kernel void bvh_trace(__global const float4* nodes, __global const float4* tri
         return;
     float4 o = org[i], d = dir[i];
     EtkHit h;
-    int hit = etk_bvh_traverse(nodes, tris, (float3)(o.x, o.y, o.z), (float3)(d.x, d.y, d.z), o.w,
+    int hit = etk_bvh_traverse(nodes, packets, (float3)(o.x, o.y, o.z), (float3)(d.x, d.y, d.z), o.w,
                                any_hit, &h);
     out[i] = (float4)(h.t, as_float(hit ? h.prim : -1), h.b1, h.b2);
 }

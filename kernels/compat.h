@@ -34,6 +34,11 @@
 #define make_float3(a, b, c) ((float3)((a), (b), (c)))
 #define ETK_UINT_MAX 0xffffffffu
 #define make_float4(a, b, c, d) ((float4)((a), (b), (c), (d)))
+// Four lanes compared at once (bvh.h): comparisons give a mask per lane (-1 or 0).
+typedef float4 etk_lanes;
+#define etk_lanes_of(a) (a)
+#define etk_lanes_splat(s) ((float4)(s))
+#define etk_any_lane(m) any(m)
 // Reserves a slot in a work queue.
 #define ETK_ATOMIC_INC(p) atomic_inc(p)
 #define ETK_ATOMIC_ADD(p, v) atomic_add((p), (v))
@@ -143,9 +148,9 @@ inline float3& operator*=(float3& a, float s) {
     return a = a * s;
 }
 
-// Lane-wise float4 arithmetic, as OpenCL has it: the 4-wide BVH's box tests (bvh.h). Done on
-// GCC/Clang vector types, one SSE instruction per operation (the same arithmetic lane by lane
-// is left scalar by the SLP vectoriser).
+// Lane-wise float4 arithmetic, as OpenCL has it: the 4-wide BVH's box and triangle tests
+// (bvh.h). Done on GCC/Clang vector types, one SSE instruction per operation (the same
+// arithmetic lane by lane is left scalar by the SLP vectoriser).
 typedef float etk_v4 __attribute__((vector_size(16)));
 inline etk_v4 etk_to_v4(float4 a) {
     etk_v4 v;
@@ -165,6 +170,27 @@ inline float4 operator*(float4 a, float4 b) {
 }
 inline float4 operator*(float4 a, float s) {
     return etk_from_v4(etk_to_v4(a) * s);
+}
+// Four lanes compared at once (bvh.h): comparisons give a mask per lane (-1 or 0), as in OpenCL.
+typedef etk_v4 etk_lanes;
+inline etk_lanes etk_lanes_of(float4 a) {
+    return etk_to_v4(a);
+}
+inline etk_lanes etk_lanes_splat(float s) {
+    return etk_v4{s, s, s, s};
+}
+template <typename Mask> inline int etk_any_lane(Mask m) {
+#if defined(__SSE__)
+    return __builtin_ia32_movmskps(reinterpret_cast<etk_v4>(m)) != 0; // one instruction
+#else
+    return (m[0] | m[1] | m[2] | m[3]) != 0;
+#endif
+}
+inline float4 operator+(float4 a, float4 b) {
+    return etk_from_v4(etk_to_v4(a) + etk_to_v4(b));
+}
+inline float4 operator/(float4 a, float4 b) {
+    return etk_from_v4(etk_to_v4(a) / etk_to_v4(b));
 }
 
 // fmin/fmax as single min/max instructions: std::fminf is a libm call GCC does not inline

@@ -162,7 +162,7 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
     int slot = Q.ray_in[i];
     float4 o = P.ray_o[slot], d = P.ray_d[slot];
     EtkHit h;
-    if (!etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h)) {
+    if (!etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h)) {
         etk_escaped(S, P, p, slot);
         return;
     }
@@ -352,7 +352,7 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
     int slot = Q.shadow[i];
     float4 o = P.shadow_o[slot], d = P.shadow_d[slot];
     EtkHit h;
-    int visible = !etk_bvh_traverse(S.nodes, S.tris, etk_xyz(o), etk_xyz(d), d.w, 1, &h);
+    int visible = !etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), d.w, 1, &h);
     if (visible) {
         float4 r = P.radiance[slot];
         P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.shadow_L[slot]), 0.0f);

@@ -172,7 +172,7 @@ std::vector<etk::float4> trace(et::ClRuntime& rt, const et::DeviceScene& ds,
         return cl::Buffer(rt.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
                           v.size() * sizeof(etk::float4), const_cast<etk::float4*>(v.data()));
     };
-    cl::Buffer bn = buf(ds.nodes), bt = buf(ds.tris), bo = buf(org), bd = buf(dir);
+    cl::Buffer bn = buf(ds.nodes), bt = buf(ds.packets), bo = buf(org), bd = buf(dir);
     cl::Buffer out(rt.context(), CL_MEM_WRITE_ONLY, n * sizeof(etk::float4));
     k.setArg(0, bn);
     k.setArg(1, bt);
@@ -205,7 +205,7 @@ TEST(Oclgrind, BvhTraversalEqualsPoclAndHost) {
     const std::string scene = std::string(ENVTRACE_SOURCE_DIR) + "/scenes/cornell_box.json";
     ETT_DATA_FILE(mesh, "meshes/cornell_box.obj");
     const et::DeviceScene ds = prepare(scene, 4, 4);
-    ASSERT_GT(ds.tris.size(), 0u);
+    ASSERT_GT(ds.packets.size(), 0u);
     // Rays from inside the box's bounds towards random directions, some short (tmax).
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> pos(0.0f, 550.0f), d(-1.0f, 1.0f), t(10.0f, 900.0f);
@@ -224,7 +224,7 @@ TEST(Oclgrind, BvhTraversalEqualsPoclAndHost) {
         for (size_t i = 0; i < org.size(); ++i) {
             etk::EtkHit hh;
             const int hit = etk::etk_bvh_traverse(
-                ds.nodes.data(), ds.tris.data(), etk::make_float3(org[i].x, org[i].y, org[i].z),
+                ds.nodes.data(), ds.packets.data(), etk::make_float3(org[i].x, org[i].y, org[i].z),
                 etk::make_float3(dir[i].x, dir[i].y, dir[i].z), org[i].w, any_hit, &hh);
             hits += hit ? 1 : 0;
             const int prim = hit ? hh.prim : -1;
@@ -284,19 +284,18 @@ TEST_P(OclgrindScenes, TinyRenderEqualsPoclBitForBit) {
     expect_same_films(ds, 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Shipped, OclgrindScenes,
-                         ::testing::Values(SceneCase{"default.json", ""},
-                                           SceneCase{"textures.json", ""},
-                                           SceneCase{"textured_cube.json", ""},
-                                           SceneCase{"cornell_box.json", "meshes/cornell_box.obj"},
-                                           SceneCase{"matpreview.json",
-                                                     "envmaps/museum_wells6.exr"},
-                                           SceneCase{"bunny_grace.json", "envmaps/grace.hdr"},
-                                           SceneCase{"glass.json", "envmaps/royal_esplanade_1k.hdr"}),
-                         [](const auto& info) {
-                             std::string n = info.param.file;
-                             return n.substr(0, n.find('.'));
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Shipped, OclgrindScenes,
+    ::testing::Values(SceneCase{"default.json", ""}, SceneCase{"textures.json", ""},
+                      SceneCase{"textured_cube.json", ""},
+                      SceneCase{"cornell_box.json", "meshes/cornell_box.obj"},
+                      SceneCase{"matpreview.json", "envmaps/museum_wells6.exr"},
+                      SceneCase{"bunny_grace.json", "envmaps/grace.hdr"},
+                      SceneCase{"glass.json", "envmaps/royal_esplanade_1k.hdr"}),
+    [](const auto& info) {
+        std::string n = info.param.file;
+        return n.substr(0, n.find('.'));
+    });
 
 TEST(Oclgrind, LightSetAndSisRenderEqualPocl) {
     // The shade_lights stage: a directional light set and SIS strata, direct lighting.

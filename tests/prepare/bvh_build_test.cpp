@@ -32,13 +32,14 @@ struct Ray {
 
 struct Prepared {
     et::Bvh bvh;
-    std::vector<float4> tris;
+    std::vector<float4> tris, packets;
 };
 
-Prepared prepare(const et::TriangleSoup& soup) {
+Prepared prepare(const et::TriangleSoup& soup, int max_leaf = 4) {
     Prepared p;
-    p.bvh = et::build_bvh(soup);
+    p.bvh = et::build_bvh(soup, max_leaf);
     p.tris = et::flatten_triangles(soup, p.bvh.order);
+    p.packets = et::flatten_packets(soup, p.bvh);
     return p;
 }
 
@@ -46,13 +47,31 @@ etk::float3 f3(glm::vec3 v) {
     return etk::make_float3(v.x, v.y, v.z);
 }
 
+// The kernels' triangle test (etk_packet_hit) on triangle `prim` alone, in lane `lane` of a
+// packet whose other lanes are unused; returns whether it hit (updating h).
+int triangle_hit(const Prepared& p, int prim, const Ray& r, etk::EtkHit* h, int lane = 0) {
+    float v[ETK_BVH_PACKET][4] = {};
+    const float4 a = p.tris[3 * prim], b = p.tris[3 * prim + 1], c = p.tris[3 * prim + 2];
+    const float row[ETK_BVH_PACKET] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, 0.0f};
+    for (int k = 0; k < 4; ++k)
+        v[ETK_BVH_PACKET - 1][k] = etk::as_float(0xffffffffu);
+    for (int i = 0; i < ETK_BVH_PACKET; ++i)
+        v[i][lane] = row[i];
+    v[ETK_BVH_PACKET - 1][lane] = etk::as_float(static_cast<uint32_t>(prim));
+    float4 pk[ETK_BVH_PACKET];
+    for (int i = 0; i < ETK_BVH_PACKET; ++i)
+        pk[i] = etk::make_float4(v[i][0], v[i][1], v[i][2], v[i][3]);
+    return etk::etk_packet_hit(pk, f3(r.o), f3(r.d), 1, h);
+}
+
+// Every triangle in turn, as the kernels' test sees it.
 etk::EtkHit brute_force(const Prepared& p, const Ray& r, bool any) {
     etk::EtkHit h;
     h.t = r.tmax;
     h.prim = -1;
     h.b1 = h.b2 = 0.0f;
     for (int i = 0; i < static_cast<int>(p.tris.size() / 3); ++i)
-        if (etk::etk_triangle_hit(p.tris.data(), i, f3(r.o), f3(r.d), &h) && any)
+        if (triangle_hit(p, i, r, &h, i % 4) && any)
             break;
     return h;
 }
@@ -62,7 +81,7 @@ float single_t(const Prepared& p, int prim, const Ray& r) {
     etk::EtkHit h;
     h.t = 3e38f;
     h.prim = -1;
-    return etk::etk_triangle_hit(p.tris.data(), prim, f3(r.o), f3(r.d), &h) ? h.t : INFINITY;
+    return triangle_hit(p, prim, r, &h) ? h.t : INFINITY;
 }
 
 bool same_t(float a, float b) {
@@ -271,15 +290,15 @@ et::TriangleSoup awkward_soup(uint32_t seed) {
 }
 
 void run_host(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const char* name,
-              float max_radius = 1e30f) {
-    const Prepared p = prepare(soup);
+              float max_radius = 1e30f, int max_leaf = 4) {
+    const Prepared p = prepare(soup, max_leaf);
     const std::vector<Ray> rays = make_rays(soup, n_rays, seed, max_radius);
     Outcome closest, any;
     for (size_t i = 0; i < rays.size(); ++i) {
         const Ray& r = rays[i];
         for (int a = 0; a < 2; ++a) {
             etk::EtkHit h;
-            etk::etk_bvh_traverse(p.bvh.nodes.data(), p.tris.data(), f3(r.o), f3(r.d), r.tmax, a,
+            etk::etk_bvh_traverse(p.bvh.nodes.data(), p.packets.data(), f3(r.o), f3(r.d), r.tmax, a,
                                   &h);
             check(p, r, a, h, true, a ? any : closest, static_cast<int>(i));
         }
@@ -312,8 +331,8 @@ void run_device(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const c
         return cl::Buffer(rt.context(), f | CL_MEM_COPY_HOST_PTR, v.size() * sizeof(float4),
                           v.data());
     };
-    std::vector<float4> nodes = p.bvh.nodes, tris = p.tris;
-    cl::Buffer bn = buf(nodes, CL_MEM_READ_ONLY), bt = buf(tris, CL_MEM_READ_ONLY),
+    std::vector<float4> nodes = p.bvh.nodes, packets = p.packets;
+    cl::Buffer bn = buf(nodes, CL_MEM_READ_ONLY), bt = buf(packets, CL_MEM_READ_ONLY),
                bo = buf(org, CL_MEM_READ_ONLY), bd = buf(dir, CL_MEM_READ_ONLY),
                bout = buf(out, CL_MEM_WRITE_ONLY);
     Outcome closest, any;
@@ -352,6 +371,17 @@ void run_device(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const c
 TEST(Bvh, RandomSoupsHost) {
     for (uint32_t seed : {1u, 2u, 3u})
         run_host(random_soup(seed), 4000, seed, "random soup");
+}
+
+TEST(Bvh, LeavesOfSeveralPacketsHost) {
+    // Leaves of up to 16 triangles: a leaf's packets are consecutive, its last one part-filled.
+    const et::TriangleSoup soup = random_soup(4);
+    const Prepared p = prepare(soup, 16);
+    int largest = 0;
+    for (const auto& leaf : p.bvh.leaves)
+        largest = std::max(largest, leaf.second);
+    EXPECT_GT(largest, 4);
+    run_host(soup, 4000, 4, "random soup, leaves <= 16", 1e30f, 16);
 }
 
 TEST(Bvh, AwkwardSoupHost) {
@@ -404,7 +434,7 @@ TEST(Bvh, EmptySceneMissesEverything) {
         for (int any = 0; any < 2; ++any) {
             glm::vec3 d = i < 3 ? glm::vec3(i == 0, i == 1, i == 2) : random_dir(rng);
             etk::EtkHit h;
-            EXPECT_FALSE(etk::etk_bvh_traverse(p.bvh.nodes.data(), p.tris.data(),
+            EXPECT_FALSE(etk::etk_bvh_traverse(p.bvh.nodes.data(), p.packets.data(),
                                                etk::make_float3(0, 0, 0), f3(d), 3e38f, any, &h));
             EXPECT_EQ(h.prim, -1);
         }

@@ -29,6 +29,10 @@ struct Box {
 };
 
 constexpr int kBins = 32;
+// Triangles the kernels test at once (a packet, kernels/bvh.h): the SAH's unit of intersection.
+int packets(int triangles) {
+    return (triangles + 3) / 4;
+}
 // Binary depth limit: the 4-wide tree then has at most 31 levels, and traversal needs at most
 // 1 + 3 x 31 stack entries (kernels/bvh.h).
 constexpr int kMaxDepth = 60;
@@ -126,7 +130,7 @@ struct Builder {
                 n += bin_count[ax][b];
                 if (n == 0 || right_count[b + 1] == 0)
                     continue;
-                float c = acc.area() * n + right_area[b + 1] * right_count[b + 1];
+                float c = acc.area() * packets(n) + right_area[b + 1] * packets(right_count[b + 1]);
                 if (c < best) {
                     best = c;
                     split = b;
@@ -134,8 +138,9 @@ struct Builder {
                 }
             }
         }
-        // SAH: traversal cost 1, intersection cost 1 per triangle.
-        if (split >= 0 && count <= max_leaf && best / area + 1.0f >= count)
+        // SAH: traversal cost 1, intersection cost 1 per packet of four triangles (the kernels
+        // test a packet's four at once: kernels/bvh.h).
+        if (split >= 0 && count <= max_leaf && best / area + 1.0f >= packets(count))
             split = -1;
         if (split >= 0) {
             const float lo = cbounds.lo[split_axis], scale = kBins / ext[split_axis];
@@ -194,11 +199,13 @@ struct Builder {
 // children are its binary node's children, each inner one replaced by its own two children (so
 // every path descends at least two binary levels per node, and the 4-wide depth is at most half
 // the binary one, plus one), then, while a lane is free, the inner child of largest area replaced
-// by its children. Leaf children carry their triangles, inner ones their node index. Measures
-// the binary tree's depth and SAH cost on the way.
+// by its children. Leaf children carry their packets (recorded in `leaves`), inner ones their
+// node index. Measures the binary tree's depth and SAH cost on the way.
 struct Flattener {
     const std::vector<BvhTreeNode>& tree;
     std::vector<etk::float4>& out;
+    std::vector<std::pair<int, int>>& leaves;
+    int packets = 0;
     double root_area = 1.0;
     double cost = 0.0;
     int depth = 0, wide_depth = 0;
@@ -255,8 +262,12 @@ struct Flattener {
                 lo = t.lo;
                 hi = t.hi;
                 if (t.left < 0) {
-                    meta = static_cast<uint32_t>(t.first);
-                    flags = 0x80000000u | static_cast<uint32_t>(t.count);
+                    const int count = (t.count + 3) / 4;
+                    meta = static_cast<uint32_t>(packets);
+                    flags = 0x80000000u | static_cast<uint32_t>(count);
+                    packets += count;
+                    if (t.count > 0)
+                        leaves.emplace_back(t.first, t.count);
                 } else {
                     meta = static_cast<uint32_t>(emit(kids[k], level + 1));
                     flags = 0u;
@@ -323,7 +334,7 @@ Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
     Box root;
     root.lo = tree[0].lo;
     root.hi = tree[0].hi;
-    Flattener f{tree, bvh.nodes};
+    Flattener f{tree, bvh.nodes, bvh.leaves};
     f.root_area = std::max(root.area(), 1e-30f);
     f.measure(0, 0);
     f.emit(0, 0);
@@ -349,6 +360,37 @@ std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup,
         out[3 * i] = etk::make_float4(p[0].x, p[0].y, p[0].z, 0.0f);
         out[3 * i + 1] = etk::make_float4(e1.x, e1.y, e1.z, 0.0f);
         out[3 * i + 2] = etk::make_float4(e2.x, e2.y, e2.z, 0.0f);
+    }
+    return out;
+}
+
+std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh) {
+    std::vector<etk::float4> out;
+    for (const auto& [first, count] : bvh.leaves) {
+        for (int b = 0; b < count; b += 4) {
+            float lane[ETK_BVH_PACKET][4] = {};
+            for (int k = 0; k < 4; ++k) {
+                const int i = first + b + k;
+                if (b + k >= count) { // unused lane: zero edges, index -1
+                    lane[ETK_BVH_PACKET - 1][k] = as_float_bits(0xffffffffu);
+                    continue;
+                }
+                const glm::vec3* p = &soup.positions[3 * bvh.order[i]];
+                const glm::vec3 e1 = p[1] - p[0], e2 = p[2] - p[0];
+                const float v[ETK_BVH_PACKET] = {
+                    p[0].x, p[0].y, p[0].z, e1.x, e1.y,
+                    e1.z,   e2.x,   e2.y,   e2.z, as_float_bits(uint32_t(i))};
+                for (int r = 0; r < ETK_BVH_PACKET; ++r)
+                    lane[r][k] = v[r];
+            }
+            for (int r = 0; r < ETK_BVH_PACKET; ++r)
+                out.push_back(etk::make_float4(lane[r][0], lane[r][1], lane[r][2], lane[r][3]));
+        }
+    }
+    if (out.empty()) { // device buffers cannot be empty: one packet of unused lanes
+        out.assign(ETK_BVH_PACKET, etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
+        const float none = as_float_bits(0xffffffffu);
+        out.back() = etk::make_float4(none, none, none, none);
     }
     return out;
 }

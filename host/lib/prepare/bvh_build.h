@@ -4,6 +4,7 @@
 #include "kernels/bvh.h"
 #include "load/scene.h"
 
+#include <utility>
 #include <vector>
 
 namespace et {
@@ -11,8 +12,10 @@ namespace et {
 struct Bvh {
     std::vector<etk::float4> nodes; // ETK_BVH_NODE per 4-wide node (kernels/bvh.h)
     std::vector<int> order; // triangle order: flattened triangle i is soup triangle order[i]
-    int depth = 0;          // of the binary tree the builder made (leaves' level)
-    int wide_depth = 0;     // of the 4-wide tree the kernels traverse (nodes on the longest path)
+    // (first flattened triangle, count) of each non-empty leaf, in the order of their packets
+    std::vector<std::pair<int, int>> leaves;
+    int depth = 0;      // of the binary tree the builder made (leaves' level)
+    int wide_depth = 0; // of the 4-wide tree the kernels traverse (nodes on the longest path)
     double build_seconds = 0.0;
     double sah_cost = 0.0; // of the binary tree: traversal 1, triangle test 1, per root area
     int node_count() const { return static_cast<int>(nodes.size() / ETK_BVH_NODE); }
@@ -34,8 +37,12 @@ struct BvhTreeNode {
 // its depth and SAH cost; build_seconds is left to the caller.
 Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order);
 
-// Triangles in BVH order as the kernels read them: v0, e1, e2 (three float4 each); one all-zero
+// Triangles in BVH order as shading reads them: v0, e1, e2 (three float4 each); one all-zero
 // triangle for an empty soup (device buffers cannot be empty).
 std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup, const std::vector<int>& order);
+
+// The leaves' triangles as the traversal reads them: packets of four (kernels/bvh.h), each leaf's
+// from the index its node gives; one packet of unused lanes when there is no triangle.
+std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh);
 
 } // namespace et

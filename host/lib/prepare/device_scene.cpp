@@ -82,6 +82,7 @@ void add_textures(const Scene& scene, DeviceScene& d) {
 void add_triangles(const Scene& scene, DeviceScene& d) {
     Bvh bvh = build_bvh(scene.triangles);
     d.tris = flatten_triangles(scene.triangles, bvh.order);
+    d.packets = flatten_packets(scene.triangles, bvh);
     const size_t n = bvh.order.size();
     d.normals.resize(3 * n);
     d.tri_material.resize(n);
