@@ -10,7 +10,7 @@
 #define ETK_SCENE_BUFFERS(X)                                                                       \
     X(float4, nodes)        /* BVH: 4-wide nodes (bvh.h) */                                        \
     X(float4, packets)      /* BVH: the leaves' triangles, four per packet (bvh.h) */              \
-    X(float4, tris)         /* v0, e1, e2 per triangle (the geometric normal) */                   \
+    X(float4, face_normals) /* geometric normal per triangle */                                    \
     X(float4, normals)      /* three vertex normals per triangle */                                \
     X(int, tri_material)    /* material index per triangle */                                      \
     X(int, material_bin)    /* adaptive strategy: light-share bin per material */                  \

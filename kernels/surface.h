@@ -68,8 +68,7 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, Et
     EtkSurface s;
     int prim = h.prim;
     float3 pos = o + d * h.t;
-    float4 e1 = S.tris[3 * prim + 1], e2 = S.tris[3 * prim + 2];
-    float3 ng = normalize(cross(etk_xyz(e1), etk_xyz(e2)));
+    float3 ng = etk_xyz(S.face_normals[prim]);
     float b0 = 1.0f - h.b1 - h.b2;
     float3 ns = etk_xyz(S.normals[3 * prim]) * b0 + etk_xyz(S.normals[3 * prim + 1]) * h.b1 +
                 etk_xyz(S.normals[3 * prim + 2]) * h.b2;

@@ -364,6 +364,20 @@ std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup,
     return out;
 }
 
+std::vector<etk::float4> face_normals(const TriangleSoup& soup, const std::vector<int>& order) {
+    if (order.empty()) // device buffers cannot be empty
+        return std::vector<etk::float4>(1, etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
+    const std::vector<etk::float4> tris = flatten_triangles(soup, order);
+    std::vector<etk::float4> out(order.size());
+    for (size_t i = 0; i < out.size(); ++i) {
+        const etk::float4 e1 = tris[3 * i + 1], e2 = tris[3 * i + 2];
+        const etk::float3 n = etk::normalize(
+            etk::cross(etk::make_float3(e1.x, e1.y, e1.z), etk::make_float3(e2.x, e2.y, e2.z)));
+        out[i] = etk::make_float4(n.x, n.y, n.z, 0.0f);
+    }
+    return out;
+}
+
 std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh) {
     std::vector<etk::float4> out;
     for (const auto& [first, count] : bvh.leaves) {

@@ -37,9 +37,13 @@ struct BvhTreeNode {
 // its depth and SAH cost; build_seconds is left to the caller.
 Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order);
 
-// Triangles in BVH order as shading reads them: v0, e1, e2 (three float4 each); one all-zero
-// triangle for an empty soup (device buffers cannot be empty).
+// Triangles in BVH order: v0, e1, e2 (three float4 each; tests and benchmarks); one all-zero
+// triangle for an empty soup.
 std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup, const std::vector<int>& order);
+
+// Geometric normals in BVH order, normalize(cross(e1, e2)) of the edges above (so the very bits
+// the kernels computed from them before); one zero normal for an empty soup.
+std::vector<etk::float4> face_normals(const TriangleSoup& soup, const std::vector<int>& order);
 
 // The leaves' triangles as the traversal reads them: packets of four (kernels/bvh.h), each leaf's
 // from the index its node gives; one packet of unused lanes when there is no triangle.

@@ -81,8 +81,8 @@ void add_textures(const Scene& scene, DeviceScene& d) {
 
 void add_triangles(const Scene& scene, DeviceScene& d) {
     Bvh bvh = build_bvh(scene.triangles);
-    d.tris = flatten_triangles(scene.triangles, bvh.order);
     d.packets = flatten_packets(scene.triangles, bvh);
+    d.face_normals = face_normals(scene.triangles, bvh.order);
     const size_t n = bvh.order.size();
     d.normals.resize(3 * n);
     d.tri_material.resize(n);
@@ -95,7 +95,7 @@ void add_triangles(const Scene& scene, DeviceScene& d) {
         d.tri_material[i] = scene.triangles.material[t];
     }
     add_texture_coordinates(scene, bvh.order, d);
-    if (n == 0) // one all-zero triangle (flatten_triangles) that nothing hits
+    if (n == 0) // one all-zero triangle (face_normals, flatten_packets) that nothing hits
         d.normals.resize(3), d.tri_material.resize(1);
     d.bvh.nodes = bvh.node_count();
     d.bvh.depth = bvh.depth;
