@@ -12,7 +12,10 @@
 //   guide can never be paired with another table's CDFs (plain and MIS-compensated twins).
 // Densities are over the unit interval (they average to one over a row with any light), so the
 // joint density on the unit square is p(u,v) = p(v) p(u|v). A function that sums to zero keeps a
-// linear CDF and zero densities: it is never chosen and evaluates to zero, without a division by 0.
+// linear CDF and zero densities: a row without light has zero marginal width, so it is never
+// chosen and evaluates to zero (a table without any light is gated by the map's has_light).
+// Sampling and evaluation take densities from the CDFs' widths (etk_interval_density); the stored
+// densities serve the host (the builder's workspace, the compensated twin's input).
 // Offsets are 32-bit ints, as on the device: they are exact while etk_dist2d_size(w, h) fits in an
 // int and w, h <= 65536, which the host checks before it builds a table (check_distribution_size
 // in host/lib/load/env_distribution.cpp, in 64-bit arithmetic).
@@ -114,23 +117,31 @@ ETK_FN float etk_cell_coordinate(int i, float t, int n) {
     return x;
 }
 
+// Density of interval i of a CDF over n intervals on [0,1]: its width times n. It is the density
+// inversion of this float CDF really samples with (the stored densities f n / sum differ from it
+// by the CDF's rounding), so a sample's density and the density evaluated at its point are one
+// number from the two CDF entries the sample has just read: sampling touches no density table
+// (issue 12: one cache line fewer per sample).
+ETK_FN float etk_interval_density(ETK_GLOBAL const float* cdf, int n, int i) {
+    return (cdf[i + 1] - cdf[i]) * (float)n;
+}
+
 // The point of interval i (found for u) of a 1D piecewise-constant density over [0,1]: returns
 // x, its density and its cell.
-ETK_FN float etk_sample_1d_in(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* cdf, int n,
-                              int i, float u, float* density, int* cell) {
+ETK_FN float etk_sample_1d_in(ETK_GLOBAL const float* cdf, int n, int i, float u, float* density,
+                              int* cell) {
     float width = cdf[i + 1] - cdf[i];
     float t = width > 0.0f ? (u - cdf[i]) / width : 0.5f;
     // t > 0: x is never exactly 0, where the lat-long density has its zero at the pole.
     t = clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS);
-    *density = pdf[i];
+    *density = width * (float)n; // etk_interval_density
     *cell = i;
     return etk_cell_coordinate(i, t, n);
 }
 
 // Samples a 1D piecewise-constant density over [0,1]: returns x, its density and its cell.
-ETK_FN float etk_sample_1d(ETK_GLOBAL const float* pdf, ETK_GLOBAL const float* cdf, int n, float u,
-                           float* density, int* cell) {
-    return etk_sample_1d_in(pdf, cdf, n, etk_find_interval(cdf, n, u), u, density, cell);
+ETK_FN float etk_sample_1d(ETK_GLOBAL const float* cdf, int n, float u, float* density, int* cell) {
+    return etk_sample_1d_in(cdf, n, etk_find_interval(cdf, n, u), u, density, cell);
 }
 
 // Row r's conditional CDF and its guide table.
@@ -150,19 +161,20 @@ ETK_FN float2 etk_sample_2d(ETK_GLOBAL const float* dist, int w, int h, float2 x
     float pv, pu;
     ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
     int r = etk_find_interval_guided(mcdf, h, dist + etk_dist2d_marginal_guide(w, h), xi.y);
-    float v = etk_sample_1d_in(dist, mcdf, h, r, xi.y, &pv, row);
-    ETK_GLOBAL const float* cpdf = dist + etk_dist2d_conditional_pdf(h) + r * w;
+    float v = etk_sample_1d_in(mcdf, h, r, xi.y, &pv, row);
     ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(dist, w, h, r);
     int c = etk_find_interval_guided(ccdf, w, etk_dist2d_row_guide(dist, w, h, r), xi.x);
-    float u = etk_sample_1d_in(cpdf, ccdf, w, c, xi.x, &pu, col);
+    float u = etk_sample_1d_in(ccdf, w, c, xi.x, &pu, col);
     *density = pv * pu;
     return make_float2(u, v);
 }
 
+// The joint density etk_sample_2d samples with, at (u, v).
 ETK_FN float etk_pdf_2d(ETK_GLOBAL const float* dist, int w, int h, float2 uv) {
     int row = etk_cell_of(uv.y, h);
     int col = etk_cell_of(uv.x, w);
-    return dist[row] * dist[etk_dist2d_conditional_pdf(h) + row * w + col];
+    return etk_interval_density(dist + etk_dist2d_marginal_cdf(h), h, row) *
+           etk_interval_density(etk_dist2d_row_cdf(dist, w, h, row), w, col);
 }
 
 ETK_END

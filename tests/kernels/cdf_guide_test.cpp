@@ -144,10 +144,9 @@ void expect_same_as_plain(const et::EnvDistribution& d, uint32_t seed) {
             const etk::float2 uv =
                 etk::etk_sample_2d(t, w, h, etk::make_float2(u, v), &density, &row, &col);
             const float y =
-                etk::etk_sample_1d(t, t + etk::etk_dist2d_marginal_cdf(h), h, v, &pv, &prow);
+                etk::etk_sample_1d(t + etk::etk_dist2d_marginal_cdf(h), h, v, &pv, &prow);
             const float x =
-                etk::etk_sample_1d(t + etk::etk_dist2d_conditional_pdf(h) + prow * w,
-                                   etk::etk_dist2d_row_cdf(t, w, h, prow), w, u, &pu, &pcol);
+                etk::etk_sample_1d(etk::etk_dist2d_row_cdf(t, w, h, prow), w, u, &pu, &pcol);
             ASSERT_EQ(row, prow) << "u " << u << " v " << v;
             ASSERT_EQ(col, pcol) << "u " << u << " v " << v;
             ASSERT_EQ(uv.x, x);

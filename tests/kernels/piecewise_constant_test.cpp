@@ -23,7 +23,7 @@ struct Dist1D {
     }
     int n() const { return static_cast<int>(f.size()); }
     float sample(float u, float* density, int* cell) const {
-        return etk::etk_sample_1d(pdf.data(), cdf.data(), n(), u, density, cell);
+        return etk::etk_sample_1d(cdf.data(), n(), u, density, cell);
     }
 };
 
@@ -37,7 +37,8 @@ std::vector<float> edge_uniforms(const Dist1D& d) {
     return u;
 }
 
-// The sample lies in the returned cell, which has positive width and the returned density;
+// The sample lies in the returned cell, which has positive width; its density is the cell's CDF
+// width times n (what inversion samples with), within the CDF's rounding of the stored f n / sum;
 // x inverts the CDF.
 void check_sample(const Dist1D& d, float u) {
     float density = -1;
@@ -48,8 +49,11 @@ void check_sample(const Dist1D& d, float u) {
     ASSERT_LT(cell, d.n());
     ASSERT_TRUE(x >= 0.0f && x < 1.0f) << x;
     EXPECT_EQ(etk::etk_cell_of(x, d.n()), cell) << "x = " << x << " left its cell";
-    EXPECT_EQ(density, d.pdf[cell]);
+    EXPECT_EQ(density, (d.cdf[cell + 1] - d.cdf[cell]) * d.n());
+    EXPECT_EQ(density, etk::etk_interval_density(d.cdf.data(), d.n(), cell));
     if (d.sum > 0) {
+        // Each CDF entry is within half an ulp (<= 2^-25 below 1) of its exact value.
+        EXPECT_NEAR(density, d.pdf[cell], d.n() * 0x1p-24 + 1e-6 * d.pdf[cell]);
         EXPECT_GT(d.cdf[cell + 1], d.cdf[cell]) << "a zero-width cell was chosen";
         EXPECT_GT(density, 0.0f);
         // CDF(x) = cdf[i] + (x n - i) (cdf[i+1] - cdf[i]) should give back u, up to the float
@@ -57,8 +61,8 @@ void check_sample(const Dist1D& d, float u) {
         const double t = static_cast<double>(x) * d.n() - cell;
         const double back = d.cdf[cell] + t * (d.cdf[cell + 1] - d.cdf[cell]);
         EXPECT_NEAR(back, u, 4.0 * 0x1p-24 * (1.0 + density)) << "x " << x << " cell " << cell;
-    } else {
-        EXPECT_EQ(density, 0.0f);
+    } else { // no mass: a linear CDF, sampled uniformly (a 2D table gives such a row no mass)
+        EXPECT_NEAR(density, 1.0f, 1e-5f);
     }
 }
 
@@ -179,7 +183,7 @@ TEST(PiecewiseConstant1D, SearchEqualsUpperBound) {
         }
 }
 
-TEST(PiecewiseConstant1D, AllZeroFunctionHasLinearCdfAndZeroDensity) {
+TEST(PiecewiseConstant1D, AllZeroFunctionHasLinearCdfAndIsSampledUniformly) {
     Dist1D d({0, 0, 0, 0});
     EXPECT_EQ(d.sum, 0.0);
     for (int i = 0; i <= 4; ++i)

@@ -395,15 +395,25 @@ TEST(EnvDistribution, AllBlackMapHasAValidZeroDistribution) {
                     EXPECT_FLOAT_EQ(t.cond_cdf(r, c), float(c) / d.width);
                 }
             }
-            // The kernels' lookups stay finite and zero.
+            // The kernels' lookups stay finite; the map's has_light (false) makes the sample's
+            // and the evaluated densities zero (the table alone is uniform: linear CDFs).
+            etk::EtkEnvMap env{};
+            env.dist_w = d.width;
+            env.dist_h = d.height;
+            env.rot_cos = 1.0f;
+            env.has_light = d.has_light() ? 1 : 0;
             for (float v : {0.0f, 0.3f, 0.999f}) {
                 float density = -1.0f;
                 int row, col;
                 const etk::float2 uv =
                     etk::etk_sample_2d(d.table.data(), d.width, d.height, etk::make_float2(0.5f, v),
                                        &density, &row, &col);
-                EXPECT_EQ(density, 0.0f);
+                EXPECT_TRUE(std::isfinite(density));
                 EXPECT_TRUE(std::isfinite(uv.x) && std::isfinite(uv.y));
+                const etk::EtkEnvSample s =
+                    etk::etk_env_sample(d.table.data(), env, etk::make_float2(0.5f, v));
+                EXPECT_EQ(s.pdf, 0.0f);
+                EXPECT_EQ(etk::etk_env_pdf(d.table.data(), env, s.dir), 0.0f);
             }
         }
 }

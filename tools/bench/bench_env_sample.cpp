@@ -59,11 +59,9 @@ const Fixture& fixture(const std::string& name) {
 etk::float2 sample_2d_plain(const float* dist, int w, int h, etk::float2 xi, float* density) {
     float pv, pu;
     int row, col;
-    const float v =
-        etk::etk_sample_1d(dist, dist + etk::etk_dist2d_marginal_cdf(h), h, xi.y, &pv, &row);
+    const float v = etk::etk_sample_1d(dist + etk::etk_dist2d_marginal_cdf(h), h, xi.y, &pv, &row);
     const float u =
-        etk::etk_sample_1d(dist + etk::etk_dist2d_conditional_pdf(h) + row * w,
-                           etk::etk_dist2d_row_cdf(dist, w, h, row), w, xi.x, &pu, &col);
+        etk::etk_sample_1d(etk::etk_dist2d_row_cdf(dist, w, h, row), w, xi.x, &pu, &col);
     *density = pv * pu;
     return etk::make_float2(u, v);
 }
@@ -150,8 +148,8 @@ void BM_Build(benchmark::State& st, std::string map) {
     st.counters["guides_MB"] = static_cast<double>(guide) / 1e6;
 }
 
-const std::vector<std::string> kSampleMaps = {"royal_esplanade_1k", "sky_256", "sky_1024",
-                                              "sky_4096", "sky_8192", "sky_16384"};
+const std::vector<std::string> kSampleMaps = {"royal_esplanade_1k", "sky_256",  "sky_1024",
+                                              "sky_4096",           "sky_8192", "sky_16384"};
 
 int register_all() {
     for (const std::string& m : kSampleMaps) {
