@@ -205,7 +205,7 @@ struct Flattener {
     const std::vector<BvhTreeNode>& tree;
     std::vector<etk::float4>& out;
     std::vector<std::pair<int, int>>& leaves;
-    int packets = 0;
+    int packet_count = 0;
     double root_area = 1.0;
     double cost = 0.0;
     int depth = 0, wide_depth = 0;
@@ -262,10 +262,9 @@ struct Flattener {
                 lo = t.lo;
                 hi = t.hi;
                 if (t.left < 0) {
-                    const int count = (t.count + 3) / 4;
-                    meta = static_cast<uint32_t>(packets);
-                    flags = 0x80000000u | static_cast<uint32_t>(count);
-                    packets += count;
+                    meta = static_cast<uint32_t>(packet_count);
+                    flags = 0x80000000u | static_cast<uint32_t>(packets(t.count));
+                    packet_count += packets(t.count);
                     if (t.count > 0)
                         leaves.emplace_back(t.first, t.count);
                 } else {
