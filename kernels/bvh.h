@@ -5,9 +5,9 @@
 // arrays, so that the four box tests are the same operation on four lanes: what PoCL's
 // work-item vectoriser and GCC's SLP vectoriser both handle): lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
 // meta, flags; integers are stored as float bits. An inner child has flags 0 and meta = its node
-// index. A leaf child has flags = 0x80000000 | count and meta = its first packet (below); leaves
-// are intersected straight from their parent, so a leaf costs no node fetch. An unused lane is an
-// empty leaf (count 0) with a point box. Node 0 is the root. Inner children that the ray enters
+// index. A leaf child has flags = 0x80000000 | its number of packets (below) and meta = its
+// first packet; leaves are intersected straight from their parent, so a leaf costs no node fetch.
+// An unused lane is an empty leaf (no packet) with a point box. Node 0 is the root. Inner children that the ray enters
 // are pushed far-first with their entry distance, so the nearest is visited next and a popped
 // node that lies beyond the closest hit found meanwhile is skipped without a fetch. The host
 // keeps the tree shallow enough for ETK_BVH_STACK (at most 1 + 3 x depth entries).
