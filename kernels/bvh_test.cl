@@ -11,7 +11,7 @@ __kernel void bvh_trace(__global const float4* nodes, __global const float4* pac
         return;
     float4 o = org[i], d = dir[i];
     EtkHit h;
-    int hit = etk_bvh_traverse(nodes, packets, (float3)(o.x, o.y, o.z), (float3)(d.x, d.y, d.z), o.w,
-                               any_hit, &h);
+    int hit = etk_bvh_traverse(nodes, packets, (float3)(o.x, o.y, o.z), (float3)(d.x, d.y, d.z),
+                               o.w, any_hit, &h);
     out[i] = (float4)(h.t, as_float(hit ? h.prim : -1), h.b1, h.b2);
 }

@@ -134,7 +134,7 @@ ETK_FN float etk_sample_1d_in(ETK_GLOBAL const float* cdf, int n, int i, float u
     float t = width > 0.0f ? (u - cdf[i]) / width : 0.5f;
     // t > 0: x is never exactly 0, where the lat-long density has its zero at the pole.
     t = clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS);
-    *density = width * (float)n; // etk_interval_density
+    *density = etk_interval_density(cdf, n, i); // the entries just read
     *cell = i;
     return etk_cell_coordinate(i, t, n);
 }

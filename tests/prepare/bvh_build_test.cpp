@@ -32,11 +32,13 @@ struct Ray {
 
 struct Prepared {
     et::Bvh bvh;
+    et::TriangleSoup soup;
     std::vector<float4> tris, packets;
 };
 
 Prepared prepare(const et::TriangleSoup& soup, int max_leaf = 4) {
     Prepared p;
+    p.soup = soup;
     p.bvh = et::build_bvh(soup, max_leaf);
     p.tris = et::flatten_triangles(soup, p.bvh.order);
     p.packets = et::flatten_packets(soup, p.bvh);
@@ -50,18 +52,11 @@ etk::float3 f3(glm::vec3 v) {
 // The kernels' triangle test (etk_packet_hit) on triangle `prim` alone, in lane `lane` of a
 // packet whose other lanes are unused; returns whether it hit (updating h).
 int triangle_hit(const Prepared& p, int prim, const Ray& r, etk::EtkHit* h, int lane = 0) {
-    float v[ETK_BVH_PACKET][4] = {};
-    const float4 a = p.tris[3 * prim], b = p.tris[3 * prim + 1], c = p.tris[3 * prim + 2];
-    const float row[ETK_BVH_PACKET] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, 0.0f};
-    for (int k = 0; k < 4; ++k)
-        v[ETK_BVH_PACKET - 1][k] = etk::as_float(0xffffffffu);
-    for (int i = 0; i < ETK_BVH_PACKET; ++i)
-        v[i][lane] = row[i];
-    v[ETK_BVH_PACKET - 1][lane] = etk::as_float(static_cast<uint32_t>(prim));
-    float4 pk[ETK_BVH_PACKET];
-    for (int i = 0; i < ETK_BVH_PACKET; ++i)
-        pk[i] = etk::make_float4(v[i][0], v[i][1], v[i][2], v[i][3]);
-    return etk::etk_packet_hit(pk, f3(r.o), f3(r.d), 1, h);
+    int lanes[4] = {-1, -1, -1, -1};
+    lanes[lane] = prim;
+    std::vector<float4> pk;
+    et::append_packet(p.soup, p.bvh.order, lanes, pk);
+    return etk::etk_packet_hit(pk.data(), f3(r.o), f3(r.d), 1, h);
 }
 
 // Every triangle in turn, as the kernels' test sees it.
@@ -163,6 +158,18 @@ void check(const Prepared& p, const Ray& r, bool any, const etk::EtkHit& got, bo
     const float t_own = single_t(p, got.prim, r);
     EXPECT_TRUE(exact ? t_own == got.t : same_t(t_own, got.t)) << "own t " << t_own;
     EXPECT_LT(got.t, r.tmax);
+    // ... on the triangle's plane, measured on the flattened triangle (p.tris), not on the
+    // packets the traversal read (a packet holding another triangle or swapped components puts
+    // the point off it). Barycentrics would be ill-conditioned on slivers; the plane is not.
+    const float4 v0 = p.tris[3 * got.prim], e1 = p.tris[3 * got.prim + 1],
+                 e2 = p.tris[3 * got.prim + 2];
+    const glm::dvec3 n = glm::cross(glm::dvec3(e1.x, e1.y, e1.z), glm::dvec3(e2.x, e2.y, e2.z));
+    const glm::dvec3 along = glm::dvec3(r.o) + double(got.t) * glm::dvec3(r.d);
+    const double scale = std::max({std::fabs(r.o.x), std::fabs(r.o.y), std::fabs(r.o.z)}) + got.t;
+    if (!below_resolution(p, got.prim, r, got.t)) // else the ray's rounding exceeds it
+        EXPECT_LE(std::fabs(glm::dot(along - glm::dvec3(v0.x, v0.y, v0.z), n)),
+                  1e-4 * scale * glm::length(n))
+            << "hit point off its triangle's plane";
     if (any)
         return;
     if (exact)

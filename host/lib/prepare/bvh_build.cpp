@@ -348,17 +348,27 @@ Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
     return bvh;
 }
 
+namespace {
+// A triangle as the kernels see it: v0 and the edges e1 = v1 - v0, e2 = v2 - v0 (Moller-Trumbore).
+struct Edges {
+    glm::vec3 v0, e1, e2;
+};
+Edges edges_of(const TriangleSoup& soup, int t) {
+    const glm::vec3* p = &soup.positions[3 * static_cast<size_t>(t)];
+    return {p[0], p[1] - p[0], p[2] - p[0]};
+}
+} // namespace
+
 std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup,
                                            const std::vector<int>& order) {
     if (order.empty()) // device buffers cannot be empty: one all-zero triangle, never hit
         return std::vector<etk::float4>(3, etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
     std::vector<etk::float4> out(3 * order.size());
     for (size_t i = 0; i < order.size(); ++i) {
-        const glm::vec3* p = &soup.positions[3 * order[i]];
-        glm::vec3 e1 = p[1] - p[0], e2 = p[2] - p[0];
-        out[3 * i] = etk::make_float4(p[0].x, p[0].y, p[0].z, 0.0f);
-        out[3 * i + 1] = etk::make_float4(e1.x, e1.y, e1.z, 0.0f);
-        out[3 * i + 2] = etk::make_float4(e2.x, e2.y, e2.z, 0.0f);
+        const Edges t = edges_of(soup, order[i]);
+        out[3 * i] = etk::make_float4(t.v0.x, t.v0.y, t.v0.z, 0.0f);
+        out[3 * i + 1] = etk::make_float4(t.e1.x, t.e1.y, t.e1.z, 0.0f);
+        out[3 * i + 2] = etk::make_float4(t.e2.x, t.e2.y, t.e2.z, 0.0f);
     }
     return out;
 }
@@ -366,44 +376,45 @@ std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup,
 std::vector<etk::float4> face_normals(const TriangleSoup& soup, const std::vector<int>& order) {
     if (order.empty()) // device buffers cannot be empty
         return std::vector<etk::float4>(1, etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
-    const std::vector<etk::float4> tris = flatten_triangles(soup, order);
     std::vector<etk::float4> out(order.size());
-    for (size_t i = 0; i < out.size(); ++i) {
-        const etk::float4 e1 = tris[3 * i + 1], e2 = tris[3 * i + 2];
-        const etk::float3 n = etk::normalize(
-            etk::cross(etk::make_float3(e1.x, e1.y, e1.z), etk::make_float3(e2.x, e2.y, e2.z)));
+    for (size_t i = 0; i < order.size(); ++i) {
+        const Edges t = edges_of(soup, order[i]);
+        const etk::float3 n = etk::normalize(etk::cross(etk::make_float3(t.e1.x, t.e1.y, t.e1.z),
+                                                        etk::make_float3(t.e2.x, t.e2.y, t.e2.z)));
         out[i] = etk::make_float4(n.x, n.y, n.z, 0.0f);
     }
     return out;
 }
 
+void append_packet(const TriangleSoup& soup, const std::vector<int>& order, const int lanes[4],
+                   std::vector<etk::float4>& out) {
+    float v[ETK_BVH_PACKET][4];
+    for (int k = 0; k < 4; ++k) {
+        Edges t{glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)}; // unused: determinant 0
+        if (lanes[k] >= 0)
+            t = edges_of(soup, order[lanes[k]]);
+        const float row[ETK_BVH_PACKET] = {
+            t.v0.x, t.v0.y, t.v0.z, t.e1.x, t.e1.y,
+            t.e1.z, t.e2.x, t.e2.y, t.e2.z, as_float_bits(static_cast<uint32_t>(lanes[k]))};
+        for (int r = 0; r < ETK_BVH_PACKET; ++r)
+            v[r][k] = row[r];
+    }
+    for (int r = 0; r < ETK_BVH_PACKET; ++r)
+        out.push_back(etk::make_float4(v[r][0], v[r][1], v[r][2], v[r][3]));
+}
+
 std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh) {
     std::vector<etk::float4> out;
-    for (const auto& [first, count] : bvh.leaves) {
+    for (const auto& [first, count] : bvh.leaves)
         for (int b = 0; b < count; b += 4) {
-            float lane[ETK_BVH_PACKET][4] = {};
-            for (int k = 0; k < 4; ++k) {
-                const int i = first + b + k;
-                if (b + k >= count) { // unused lane: zero edges, index -1
-                    lane[ETK_BVH_PACKET - 1][k] = as_float_bits(0xffffffffu);
-                    continue;
-                }
-                const glm::vec3* p = &soup.positions[3 * bvh.order[i]];
-                const glm::vec3 e1 = p[1] - p[0], e2 = p[2] - p[0];
-                const float v[ETK_BVH_PACKET] = {
-                    p[0].x, p[0].y, p[0].z, e1.x, e1.y,
-                    e1.z,   e2.x,   e2.y,   e2.z, as_float_bits(uint32_t(i))};
-                for (int r = 0; r < ETK_BVH_PACKET; ++r)
-                    lane[r][k] = v[r];
-            }
-            for (int r = 0; r < ETK_BVH_PACKET; ++r)
-                out.push_back(etk::make_float4(lane[r][0], lane[r][1], lane[r][2], lane[r][3]));
+            int lanes[4];
+            for (int k = 0; k < 4; ++k)
+                lanes[k] = b + k < count ? first + b + k : -1;
+            append_packet(soup, bvh.order, lanes, out);
         }
-    }
     if (out.empty()) { // device buffers cannot be empty: one packet of unused lanes
-        out.assign(ETK_BVH_PACKET, etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
-        const float none = as_float_bits(0xffffffffu);
-        out.back() = etk::make_float4(none, none, none, none);
+        const int none[4] = {-1, -1, -1, -1};
+        append_packet(soup, bvh.order, none, out);
     }
     return out;
 }

@@ -49,4 +49,9 @@ std::vector<etk::float4> face_normals(const TriangleSoup& soup, const std::vecto
 // from the index its node gives; one packet of unused lanes when there is no triangle.
 std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh);
 
+// Appends one packet (ETK_BVH_PACKET float4) holding flattened triangles lanes[0..3], where
+// flattened triangle i is soup triangle order[i]; -1 is an unused lane.
+void append_packet(const TriangleSoup& soup, const std::vector<int>& order, const int lanes[4],
+                   std::vector<etk::float4>& out);
+
 } // namespace et
