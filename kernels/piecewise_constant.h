@@ -73,6 +73,21 @@ ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
     return lo;
 }
 
+// The largest i in [lo, hi] with cdf[i] <= u, given cdf[lo] <= u: binary lifting from the
+// largest power of two <= hi - lo, with selects rather than branches (the comparisons are
+// unpredictable; only the trip count varies, and it is 0 or 1 for most short ranges).
+ETK_FN int etk_find_interval_between(ETK_GLOBAL const float* cdf, int lo, int hi, float u) {
+    int step = 1;
+    while (2 * step <= hi - lo)
+        step *= 2;
+    for (; step > 0; step >>= 1) {
+        int mid = lo + step;
+        float c = cdf[min(mid, hi)];
+        lo = (mid <= hi && c <= u) ? mid : lo;
+    }
+    return lo;
+}
+
 // etk_find_interval's result, from the CDF's guide table (guide[k] = etk_find_interval(cdf, n,
 // k/K) for k < K, guide[K] = n-1), for u in [0, 1]. K is a power of two, so the cell k =
 // floor(u K) is exact: k/K <= u < (k+1)/K, hence guide[k] <= answer <= guide[k+1] (the CDF is
@@ -83,19 +98,7 @@ ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n,
                                     ETK_GLOBAL const float* guide, float u) {
     int K = etk_guide_cells(n);
     int k = clamp((int)(u * (float)K), 0, K - 1);
-    int lo = (int)guide[k], hi = (int)guide[k + 1]; // invariant: cdf[lo] <= u, answer <= hi
-    // Binary lifting over [lo, hi] from the largest power of two <= hi - lo, with selects rather
-    // than branches (the comparisons are unpredictable; only the trip count varies, and it is
-    // 0 or 1 for most cells).
-    int step = 1;
-    while (2 * step <= hi - lo)
-        step *= 2;
-    for (; step > 0; step >>= 1) {
-        int mid = lo + step;
-        float c = cdf[min(mid, hi)];
-        lo = (mid <= hi && c <= u) ? mid : lo;
-    }
-    return lo;
+    return etk_find_interval_between(cdf, (int)guide[k], (int)guide[k + 1], u);
 }
 
 ETK_FN int etk_cell_of(float x, int n) {

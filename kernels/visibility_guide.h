@@ -21,7 +21,13 @@
 //
 // guide_regions: [0, K) the map's mass per region, M_R (sum 1); then, per region column C and
 // row R, the CDF over the region's distribution rows of p(v_r) x the row's mass in C's columns:
-// rows(R) + 1 entries at K + C (h + ETK_GUIDE_ROWS) + row_start(R) + R.
+// rows(R) + 1 entries at K + C (h + ETK_GUIDE_ROWS) + row_start(R) + R; then, per distribution
+// row r, its conditional CDF at the starts of ETK_GUIDE_SPLITS sub-bands of every column band
+// (ETK_GUIDE_COLS x ETK_GUIDE_SPLITS + 1 entries, copies of the map's CDF entries: 260 bytes a
+// row, 130 KB for a 512-row map, small enough to stay in cache). A guided sample reads the ends
+// of its region's columns and finds its sub-band there, then searches only the sub-band's
+// entries of the map's row (one line of it for a 1024-wide map): one cache miss where the
+// map's guide table and CDF cost two, with the same column (etk_guide_column).
 // guide_cells: per slot, K + 1 CDF entries of Q over the regions (0 ... 1), row-major (R =
 // row band x ETK_GUIDE_COLS + column), so entry ETK_GUIDE_COLS x b is the CDF of the row bands.
 #ifndef ETK_VISIBILITY_GUIDE_H
@@ -36,6 +42,8 @@
 #define ETK_GUIDE_ROWS 8
 #define ETK_GUIDE_COLS 16
 #define ETK_GUIDE_REGIONS (ETK_GUIDE_ROWS * ETK_GUIDE_COLS)
+#define ETK_GUIDE_SPLITS 4
+#define ETK_GUIDE_SUBBANDS (ETK_GUIDE_COLS * ETK_GUIDE_SPLITS)
 
 ETK_BEGIN
 
@@ -44,8 +52,13 @@ ETK_BEGIN
 ETK_FN int etk_guide_row_start(int R, int h) {
     return (R * h) / ETK_GUIDE_ROWS;
 }
+// Sub-band j's first column (of w); column band C is sub-bands SPLITS C ... SPLITS (C + 1) - 1,
+// so it starts at (SPLITS C w) / (SPLITS COLS) = (C w) / COLS.
+ETK_FN int etk_guide_sub_start(int j, int w) {
+    return (j * w) / ETK_GUIDE_SUBBANDS;
+}
 ETK_FN int etk_guide_col_start(int C, int w) {
-    return (C * w) / ETK_GUIDE_COLS;
+    return etk_guide_sub_start(C * ETK_GUIDE_SPLITS, w);
 }
 // The region holding distribution row r (the largest R with row_start(R) <= r), column c.
 ETK_FN int etk_guide_region_row(int r, int h) {
@@ -61,6 +74,13 @@ ETK_FN int etk_guide_region(EtkEnvMap env, float2 uv) {
 }
 ETK_FN int etk_guide_row_table(int R, int C, int h) {
     return ETK_GUIDE_REGIONS + C * (h + ETK_GUIDE_ROWS) + etk_guide_row_start(R, h) + R;
+}
+// Distribution row r's CDF at the sub-band starts (entry ETK_GUIDE_SUBBANDS: its end, 1).
+ETK_FN int etk_guide_split_table(int r, int h) {
+    return ETK_GUIDE_REGIONS + ETK_GUIDE_COLS * (h + ETK_GUIDE_ROWS) + r * (ETK_GUIDE_SUBBANDS + 1);
+}
+ETK_FN int etk_guide_regions_size(int h) {
+    return etk_guide_split_table(h, h);
 }
 
 // The hash-grid slot of surface point `pos` with geometric normal `n`.
@@ -92,13 +112,27 @@ ETK_FN float etk_guide_factor(EtkScene S, EtkParams p, int cell, float2 uv) {
     return M > 0.0f ? (cdf[R + 1] - cdf[R]) / M : 1.0f;
 }
 
+// The column of x in a row whose CDF is ccdf and sub-band table split, within column band Rc
+// (x in [ccdf[c0], ccdf[c1]]): the last sub-band of the band that has a column and starts at or
+// below x, then the last of its columns whose CDF entry is <= x. The same column as the plain
+// search clamped to the band, clamp(etk_find_interval(ccdf, w, x), c0, c1 - 1): the sub-band
+// starts are entries of the same CDF (tests/kernels/visibility_guide_test.cpp).
+ETK_FN int etk_guide_column(ETK_GLOBAL const float* ccdf, ETK_GLOBAL const float* split, int Rc,
+                            int w, float x) {
+    int first = Rc * ETK_GUIDE_SPLITS, c1 = etk_guide_col_start(Rc + 1, w);
+    int j = first;
+    for (int k = first + 1; k < first + ETK_GUIDE_SPLITS; ++k)
+        j = split[k] <= x && etk_guide_sub_start(k, w) < c1 ? k : j;
+    int lo = etk_guide_sub_start(j, w); // hi >= lo even in a band of no columns (never sampled)
+    return etk_find_interval_between(ccdf, lo, max(etk_guide_sub_start(j + 1, w) - 1, lo), x);
+}
+
 // Map coordinates drawn inside region R (row band Rr, column band Rc) proportionally to the map,
 // from u in [0,1)^2; by inversion of the map's own CDFs restricted to the region.
 ETK_FN float2 etk_guide_sample_region(EtkScene S, EtkEnvMap env, int R, float2 u) {
     int w = env.dist_w, h = env.dist_h;
     int Rr = R / ETK_GUIDE_COLS, Rc = R % ETK_GUIDE_COLS;
     int r0 = etk_guide_row_start(Rr, h), nr = etk_guide_row_start(Rr + 1, h) - r0;
-    int c0 = etk_guide_col_start(Rc, w), c1 = etk_guide_col_start(Rc + 1, w);
     // The row: the region's own row CDF (nr + 1 entries).
     ETK_GLOBAL const float* rcdf = S.guide_regions + etk_guide_row_table(Rr, Rc, h);
     int i = etk_find_interval(rcdf, nr, u.y);
@@ -106,12 +140,12 @@ ETK_FN float2 etk_guide_sample_region(EtkScene S, EtkEnvMap env, int R, float2 u
     float t = rw > 0.0f ? (u.y - rcdf[i]) / rw : 0.5f;
     int row = r0 + i;
     float v = etk_cell_coordinate(row, clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS), h);
-    // The column: the row's conditional CDF, its span over columns [c0, c1).
+    // The column: the row's conditional CDF, its span over the band's columns.
     ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(S.env_dist, w, h, row);
-    float a = ccdf[c0], b = ccdf[c1];
+    ETK_GLOBAL const float* split = S.guide_regions + etk_guide_split_table(row, h);
+    float a = split[Rc * ETK_GUIDE_SPLITS], b = split[(Rc + 1) * ETK_GUIDE_SPLITS]; // ccdf[c0, c1]
     float x = a + clamp(u.x, 0.0f, ETK_ONE_MINUS_EPS) * (b - a);
-    int c = clamp(etk_find_interval_guided(ccdf, w, etk_dist2d_row_guide(S.env_dist, w, h, row), x),
-                  c0, c1 - 1);
+    int c = etk_guide_column(ccdf, split, Rc, w, x);
     float cw = ccdf[c + 1] - ccdf[c];
     float tc = cw > 0.0f ? (x - ccdf[c]) / cw : 0.5f;
     float uu = etk_cell_coordinate(c, clamp(tc, 5.9604645e-8f, ETK_ONE_MINUS_EPS), w);

@@ -181,6 +181,54 @@ TEST_P(VisibilityWarp, IsAnInversion) {
 
 INSTANTIATE_TEST_SUITE_P(BlackBand, VisibilityWarp, ::testing::Values(false, true));
 
+// A guided sample finds its column from the region tables' copies of the CDF at the sub-band
+// starts and then the sub-band's own entries (etk_guide_column): it must be the column the plain
+// search over the whole row gives, clamped to the band, for every x a sample can produce (x in
+// [CDF at the band's start, at its end]: every CDF entry of the band and its float neighbours,
+// a grid, the ends). Maps wider than the sub-bands, of unequal sub-bands, narrower than the
+// column bands (bands and sub-bands of no columns) and with black rows (flat CDFs, ties).
+class VisibilityColumn : public ::testing::TestWithParam<std::pair<int, int>> {};
+
+TEST_P(VisibilityColumn, EqualsThePlainSearchInItsBand) {
+    const auto [w, h] = GetParam();
+    Fixture f;
+    make(f, w, h, 13u + w, true);
+    const float* ccdf0 = f.dist.table.data() + etk::etk_dist2d_conditional_cdf(w, h);
+    long checked = 0;
+    for (int r = 0; r < h; ++r) {
+        const float* ccdf = ccdf0 + static_cast<size_t>(r) * (w + 1);
+        const float* split = f.regions.data() + etk::etk_guide_split_table(r, h);
+        for (int Rc = 0; Rc < ETK_GUIDE_COLS; ++Rc) {
+            const int c0 = etk::etk_guide_col_start(Rc, w),
+                      c1 = etk::etk_guide_col_start(Rc + 1, w);
+            if (c0 == c1)
+                continue; // a band of no columns: zero mass, never sampled
+            const float a = ccdf[c0], b = ccdf[c1];
+            std::vector<float> xs;
+            for (int c = c0; c <= c1; ++c)
+                for (float x :
+                     {ccdf[c], std::nextafter(ccdf[c], 0.0f), std::nextafter(ccdf[c], 2.0f)})
+                    xs.push_back(x);
+            for (int k = 0; k <= 64; ++k)
+                xs.push_back(a + std::min(k / 64.0f, 0.99999994f) * (b - a));
+            for (float x : xs) {
+                if (x < a || x > b)
+                    continue;
+                const int plain = std::clamp(etk::etk_find_interval(ccdf, w, x), c0, c1 - 1);
+                ASSERT_EQ(etk::etk_guide_column(ccdf, split, Rc, w, x), plain)
+                    << "row " << r << " band " << Rc << " x " << x;
+                ++checked;
+            }
+        }
+    }
+    EXPECT_GT(checked, 3L * w * h);
+}
+
+INSTANTIATE_TEST_SUITE_P(Sizes, VisibilityColumn,
+                         ::testing::Values(std::make_pair(1024, 64), std::make_pair(64, 32),
+                                           std::make_pair(50, 27), std::make_pair(7, 9),
+                                           std::make_pair(100, 3)));
+
 // Before anything is learned the strategy is the paper's map sampling.
 TEST(VisibilityGuideTables, PriorIsTheMap) {
     Fixture f;

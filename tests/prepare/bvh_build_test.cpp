@@ -166,10 +166,11 @@ void check(const Prepared& p, const Ray& r, bool any, const etk::EtkHit& got, bo
     const glm::dvec3 n = glm::cross(glm::dvec3(e1.x, e1.y, e1.z), glm::dvec3(e2.x, e2.y, e2.z));
     const glm::dvec3 along = glm::dvec3(r.o) + double(got.t) * glm::dvec3(r.d);
     const double scale = std::max({std::fabs(r.o.x), std::fabs(r.o.y), std::fabs(r.o.z)}) + got.t;
-    if (!below_resolution(p, got.prim, r, got.t)) // else the ray's rounding exceeds it
+    if (!below_resolution(p, got.prim, r, got.t)) { // else the ray's rounding exceeds it
         EXPECT_LE(std::fabs(glm::dot(along - glm::dvec3(v0.x, v0.y, v0.z), n)),
                   1e-4 * scale * glm::length(n))
             << "hit point off its triangle's plane";
+    }
     if (any)
         return;
     if (exact)

@@ -15,10 +15,13 @@ constexpr double kMaxValue = 4096.0;
 } // namespace
 
 std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, int h) {
-    std::vector<float> out(
-        static_cast<size_t>(K) + static_cast<size_t>(ETK_GUIDE_COLS) * (h + ETK_GUIDE_ROWS), 0.0f);
+    std::vector<float> out(static_cast<size_t>(etk::etk_guide_regions_size(h)), 0.0f);
     const float* marginal = dist.data();
     const float* ccdf = dist.data() + etk::etk_dist2d_conditional_cdf(w, h);
+    for (int r = 0; r < h; ++r)
+        for (int j = 0; j <= ETK_GUIDE_SUBBANDS; ++j)
+            out[etk::etk_guide_split_table(r, h) + j] =
+                ccdf[static_cast<size_t>(r) * (w + 1) + etk::etk_guide_sub_start(j, w)];
     std::vector<double> mass(K, 0.0);
     for (int Rc = 0; Rc < ETK_GUIDE_COLS; ++Rc) {
         const int c0 = etk::etk_guide_col_start(Rc, w), c1 = etk::etk_guide_col_start(Rc + 1, w);
