@@ -26,8 +26,9 @@
 // (ETK_GUIDE_COLS x ETK_GUIDE_SPLITS + 1 entries, copies of the map's CDF entries: 260 bytes a
 // row, 130 KB for a 512-row map, small enough to stay in cache). A guided sample reads the ends
 // of its region's columns and finds its sub-band there, then searches only the sub-band's
-// entries of the map's row (one line of it for a 1024-wide map): one cache miss where the
-// map's guide table and CDF cost two, with the same column (etk_guide_column).
+// entries of the map's row (17 of them for a 1024-wide map: one line, sometimes two): one
+// cache miss where the band's two ends in the map's row, the row's guide entry and the search
+// took three or four, for the same column (etk_guide_column).
 // guide_cells: per slot, K + 1 CDF entries of Q over the regions (0 ... 1), row-major (R =
 // row band x ETK_GUIDE_COLS + column), so entry ETK_GUIDE_COLS x b is the CDF of the row bands.
 #ifndef ETK_VISIBILITY_GUIDE_H
