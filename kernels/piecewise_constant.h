@@ -129,17 +129,22 @@ ETK_FN float etk_interval_density(ETK_GLOBAL const float* cdf, int n, int i) {
     return (cdf[i + 1] - cdf[i]) * (float)n;
 }
 
+// The point in cell i of n on [0,1] for u between the cell's CDF entries lo and hi: inversion
+// within the cell (its middle when it has no width).
+ETK_FN float etk_interval_point(float lo, float hi, float u, int i, int n) {
+    float width = hi - lo;
+    float t = width > 0.0f ? (u - lo) / width : 0.5f;
+    // t > 0: x is never exactly 0, where the lat-long density has its zero at the pole.
+    return etk_cell_coordinate(i, clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS), n);
+}
+
 // The point of interval i (found for u) of a 1D piecewise-constant density over [0,1]: returns
 // x, its density and its cell.
 ETK_FN float etk_sample_1d_in(ETK_GLOBAL const float* cdf, int n, int i, float u, float* density,
                               int* cell) {
-    float width = cdf[i + 1] - cdf[i];
-    float t = width > 0.0f ? (u - cdf[i]) / width : 0.5f;
-    // t > 0: x is never exactly 0, where the lat-long density has its zero at the pole.
-    t = clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS);
-    *density = etk_interval_density(cdf, n, i); // the entries just read
+    *density = etk_interval_density(cdf, n, i); // the entries the point is made from
     *cell = i;
-    return etk_cell_coordinate(i, t, n);
+    return etk_interval_point(cdf[i], cdf[i + 1], u, i, n);
 }
 
 // Samples a 1D piecewise-constant density over [0,1]: returns x, its density and its cell.

@@ -137,20 +137,15 @@ ETK_FN float2 etk_guide_sample_region(EtkScene S, EtkEnvMap env, int R, float2 u
     // The row: the region's own row CDF (nr + 1 entries).
     ETK_GLOBAL const float* rcdf = S.guide_regions + etk_guide_row_table(Rr, Rc, h);
     int i = etk_find_interval(rcdf, nr, u.y);
-    float rw = rcdf[i + 1] - rcdf[i];
-    float t = rw > 0.0f ? (u.y - rcdf[i]) / rw : 0.5f;
     int row = r0 + i;
-    float v = etk_cell_coordinate(row, clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS), h);
+    float v = etk_interval_point(rcdf[i], rcdf[i + 1], u.y, row, h);
     // The column: the row's conditional CDF, its span over the band's columns.
     ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(S.env_dist, w, h, row);
     ETK_GLOBAL const float* split = S.guide_regions + etk_guide_split_table(row, h);
     float a = split[Rc * ETK_GUIDE_SPLITS], b = split[(Rc + 1) * ETK_GUIDE_SPLITS]; // ccdf[c0, c1]
     float x = a + clamp(u.x, 0.0f, ETK_ONE_MINUS_EPS) * (b - a);
     int c = etk_guide_column(ccdf, split, Rc, w, x);
-    float cw = ccdf[c + 1] - ccdf[c];
-    float tc = cw > 0.0f ? (x - ccdf[c]) / cw : 0.5f;
-    float uu = etk_cell_coordinate(c, clamp(tc, 5.9604645e-8f, ETK_ONE_MINUS_EPS), w);
-    return make_float2(uu, v);
+    return make_float2(etk_interval_point(ccdf[c], ccdf[c + 1], x, c, w), v);
 }
 
 // (u - a) / (b - a) in [0, 1): where u lies in [a, b), for the next level of a hierarchical warp.

@@ -158,17 +158,17 @@ void check(const Prepared& p, const Ray& r, bool any, const etk::EtkHit& got, bo
     const float t_own = single_t(p, got.prim, r);
     EXPECT_TRUE(exact ? t_own == got.t : same_t(t_own, got.t)) << "own t " << t_own;
     EXPECT_LT(got.t, r.tmax);
-    // ... on the triangle's plane, measured on the flattened triangle (p.tris), not on the
-    // packets the traversal read (a packet holding another triangle or swapped components puts
-    // the point off it). Barycentrics would be ill-conditioned on slivers; the plane is not.
-    const float4 v0 = p.tris[3 * got.prim], e1 = p.tris[3 * got.prim + 1],
-                 e2 = p.tris[3 * got.prim + 2];
-    const glm::dvec3 n = glm::cross(glm::dvec3(e1.x, e1.y, e1.z), glm::dvec3(e2.x, e2.y, e2.z));
+    // ... on the triangle's plane, measured on the soup's own vertices (in double), not on the
+    // packets the traversal read nor on the edges the flatteners share (a packet holding another
+    // triangle, swapped components or a wrong edge puts the point off it). Barycentrics would be
+    // ill-conditioned on slivers; the plane is not.
+    const glm::vec3* v = &p.soup.positions[3 * static_cast<size_t>(p.bvh.order[got.prim])];
+    const glm::dvec3 v0(v[0]);
+    const glm::dvec3 n = glm::cross(glm::dvec3(v[1]) - v0, glm::dvec3(v[2]) - v0);
     const glm::dvec3 along = glm::dvec3(r.o) + double(got.t) * glm::dvec3(r.d);
     const double scale = std::max({std::fabs(r.o.x), std::fabs(r.o.y), std::fabs(r.o.z)}) + got.t;
     if (!below_resolution(p, got.prim, r, got.t)) { // else the ray's rounding exceeds it
-        EXPECT_LE(std::fabs(glm::dot(along - glm::dvec3(v0.x, v0.y, v0.z), n)),
-                  1e-4 * scale * glm::length(n))
+        EXPECT_LE(std::fabs(glm::dot(along - v0, n)), 1e-4 * scale * glm::length(n))
             << "hit point off its triangle's plane";
     }
     if (any)
