@@ -13,6 +13,7 @@
 #include "bsdf.h"
 #include "bvh.h"
 #include "compat.h"
+#include "continuation_guide.h"
 #include "directional_lights.h"
 #include "envmap.h"
 #include "film.h"
@@ -203,6 +204,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     }
     int guided = p.strategy == ETK_STRATEGY_VISIBILITY;
     int cell = guided ? etk_guide_cell(p, s.origin, ng) : 0;
+    float cg = guided ? etk_cguide_share(S, p, cell, m) : 0.0f; // guided continuations' share
 
     // Light sample (sample A of the adaptive strategy).
     if (p.strategy != ETK_STRATEGY_BSDF && !delta) {
@@ -270,7 +272,9 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
                 float w = etk_strategy_is_mis(p.strategy)
-                              ? etk_mis_weight(p.heuristic, pdf_light, etk_bsdf_pdf(m, wo, wi))
+                              ? etk_mis_weight(p.heuristic, pdf_light,
+                                               etk_cguide_mix_pdf(
+                                                   S, cell, cg, etk_bsdf_pdf(m, wo, wi), wi_world))
                               : 1.0f;
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
@@ -299,7 +303,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     float3 wi_world, weight;
     float pdf; // p_bsdf of the direction for the adaptive strategy; else the pdf it was drawn with
     int delta_sample, b_from_light = 0;
-    float wz; // the direction's cosine in the shading frame: < 0 for a transmission
+    float rr_scale = 1.0f; // the throughput Russian roulette weighs, relative to beta
+    float wz;              // the direction's cosine in the shading frame: < 0 for a transmission
     if (adaptive && !delta && share > 1.0f &&
         etk_dims(p, pixel, ETK_PAIR_SHARE + (uint)depth).x < share - 1.0f) {
         // Continuation B drawn from the light distribution (last bounce, share > 1).
@@ -314,6 +319,20 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         wz = wi.z;
         delta_sample = 0;
         b_from_light = 1;
+    } else if (cg > 0.0f) {
+        // A guided vertex: the mixture of the cell's learned directions and the BSDF.
+        EtkGuidedSample g = etk_cguide_sample_mixture(S, cell, cg, m, wo, t, b, ns, u, rr.x);
+        if (!(g.pdf > 0.0f) || !(g.pdf_bsdf > 0.0f))
+            return; // below the surface: nothing a diffuse surface reflects
+        wi_world = g.wi_world;
+        pdf = g.pdf;
+        weight = etk_bsdf_eval(m, wo, g.wi) * (g.wi.z / pdf);
+        wz = g.wi.z;
+        delta_sample = 0;
+        // Russian roulette as if the BSDF had drawn the direction: a guided sample towards bright
+        // light has a small weight (its density is high), and a survival probability that
+        // followed it would cut exactly the paths the guide found.
+        rr_scale = pdf / g.pdf_bsdf;
     } else {
         EtkBsdfSample bs = etk_bsdf_sample(m, wo, u, rr.x);
         if (!(bs.pdf > 0.0f))
@@ -332,7 +351,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         return; // across the geometric surface from its shading side: would leak light
     beta = beta * weight;
     if (depth + 1 >= p.rr_depth) {
-        float survive = fmin(0.95f, etk_max3(beta));
+        float survive = fmin(0.95f, etk_max3(beta) * rr_scale);
         if (!(rr.y < survive))
             return;
         beta = beta / survive;

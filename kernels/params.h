@@ -76,12 +76,14 @@ typedef struct {
     // Visibility strategy (kernels/visibility_guide.h): the hash grid over surface positions
     // (origin, 1 / cell size, slots: a power of two), whether the cells' tables hold anything
     // learned yet (they hold the map's defensive share too), and whether this pass records
-    // shadow-ray outcomes.
+    // shadow-ray outcomes; whether diffuse vertices guide their continuation too
+    // (kernels/continuation_guide.h).
     float guide_origin[3];
     float guide_inv_cell;
     int guide_slots;
     int guide_ready;
     int guide_learn;
+    int guide_continuation;
 } EtkParams;
 
 ETK_END

@@ -29,8 +29,10 @@
 // entries of the map's row (17 of them for a 1024-wide map: one line, sometimes two): one
 // cache miss where the band's two ends in the map's row, the row's guide entry and the search
 // took three or four, for the same column (etk_guide_column).
-// guide_cells: per slot, K + 1 CDF entries of Q over the regions (0 ... 1), row-major (R =
-// row band x ETK_GUIDE_COLS + column), so entry ETK_GUIDE_COLS x b is the CDF of the row bands.
+// guide_cells: per slot, ETK_GUIDE_CELL_FLOATS: K + 1 CDF entries of Q over the regions (0 ... 1),
+// row-major (R = row band x ETK_GUIDE_COLS + column), so entry ETK_GUIDE_COLS x b is the CDF of
+// the row bands; then the continuation guide's (continuation_guide.h): K + 1 CDF entries over
+// the sphere's equal-area regions, same layout, and the share of continuations drawn from it.
 #ifndef ETK_VISIBILITY_GUIDE_H
 #define ETK_VISIBILITY_GUIDE_H
 #include "color.h"
@@ -45,6 +47,9 @@
 #define ETK_GUIDE_REGIONS (ETK_GUIDE_ROWS * ETK_GUIDE_COLS)
 #define ETK_GUIDE_SPLITS 4
 #define ETK_GUIDE_SUBBANDS (ETK_GUIDE_COLS * ETK_GUIDE_SPLITS)
+#define ETK_GUIDE_DIR_CDF (ETK_GUIDE_REGIONS + 1)
+#define ETK_GUIDE_DIR_SHARE (2 * ETK_GUIDE_REGIONS + 2)
+#define ETK_GUIDE_CELL_FLOATS (2 * ETK_GUIDE_REGIONS + 3)
 
 ETK_BEGIN
 
@@ -109,7 +114,7 @@ ETK_FN float etk_guide_factor(EtkScene S, EtkParams p, int cell, float2 uv) {
         return 1.0f;
     int R = etk_guide_region(p.env, uv);
     float M = S.guide_regions[R];
-    ETK_GLOBAL const float* cdf = S.guide_cells + cell * (ETK_GUIDE_REGIONS + 1);
+    ETK_GLOBAL const float* cdf = S.guide_cells + cell * ETK_GUIDE_CELL_FLOATS;
     return M > 0.0f ? (cdf[R + 1] - cdf[R]) / M : 1.0f;
 }
 
@@ -153,16 +158,12 @@ ETK_FN float etk_guide_rescale(float u, float a, float b) {
     return b > a ? clamp((u - a) / (b - a), 0.0f, ETK_ONE_MINUS_EPS) : 0.5f;
 }
 
-// A light sample of the visibility strategy at a vertex in `cell`, from u in [0,1)^2: the row
-// band by u.y over the bands' CDF, the column by u.x over the band's conditional, each rescaled,
-// then the map inside the region. pdf: the mixture's, 0 for no sample.
-ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
-    if (!p.guide_ready)
-        return etk_env_sample(S.env_dist, p.env, u);
-    ETK_GLOBAL const float* cdf = S.guide_cells + cell * (ETK_GUIDE_REGIONS + 1);
-    // The last band whose start is <= u.y (searching band starts cdf[COLS b]), then the last
-    // column of it whose start is <= the point u.x of the way through the band's mass: never a
-    // region of zero probability unless the whole table is (it is not: Q sums to one).
+// The region of a row-major CDF over the ETK_GUIDE_ROWS x ETK_GUIDE_COLS regions that u in
+// [0,1)^2 maps to by inversion -- the last band whose start is <= u.y (searching band starts
+// cdf[COLS b]), then the last column of it whose start is <= the point u.x of the way through
+// the band's mass: never a region of zero probability unless the whole table is -- and, in *t,
+// where u lies inside the region, rescaled to [0,1)^2 for the next level.
+ETK_FN int etk_guide_pick_region(ETK_GLOBAL const float* cdf, float2 u, float2* t) {
     int band = 0;
     for (int b = 1; b < ETK_GUIDE_ROWS; ++b)
         band = cdf[b * ETK_GUIDE_COLS] <= u.y ? b : band;
@@ -173,8 +174,18 @@ ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u
     for (int c = 1; c < ETK_GUIDE_COLS; ++c)
         col = cdf[first + c] <= x && cdf[first + c] < b1 ? c : col;
     int R = first + col;
-    float2 t =
-        make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(u.y, b0, b1));
+    *t = make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(u.y, b0, b1));
+    return R;
+}
+
+// A light sample of the visibility strategy at a vertex in `cell`, from u in [0,1)^2: the region
+// by inverting the cell's table, then the map inside the region. pdf: the mixture's, 0 for no
+// sample.
+ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
+    if (!p.guide_ready)
+        return etk_env_sample(S.env_dist, p.env, u);
+    float2 t;
+    int R = etk_guide_pick_region(S.guide_cells + cell * ETK_GUIDE_CELL_FLOATS, u, &t);
     EtkEnvSample s;
     s.uv = etk_guide_sample_region(S, p.env, R, t);
     s.dir = etk_env_to_world(p.env, etk_latlong_to_dir(s.uv));

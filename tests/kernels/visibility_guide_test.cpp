@@ -242,43 +242,77 @@ TEST(VisibilityGuideTables, PriorIsTheMap) {
         }
 }
 
-// The sums are fixed point: any order of the same records gives the same tables, bit for bit.
+// The sums are fixed point: any order of the same records gives the same tables, bit for bit
+// -- the light sample's and the continuation guide's (continuation_guide.h).
 TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     Fixture f;
     make(f, 64, 32, 5u);
     et::VisibilityOptions o;
     o.slots = 64;
     std::mt19937 rng(9u);
-    std::vector<int> keys(5000);
-    std::vector<float> values(5000);
+    // Records of both kinds; continuation records only in the first half of the slots, and the
+    // last of those with values 0 only (no light came back).
+    std::vector<int> keys(5000), dkeys(3000);
+    std::vector<float> values(5000), dvalues(3000);
     for (size_t i = 0; i < keys.size(); ++i) {
         keys[i] = static_cast<int>(rng() % (o.slots * K));
         values[i] = (rng() % 3 == 0) ? 0.0f : std::ldexp(float(rng() % 1000 + 1), -int(rng() % 20));
     }
+    const int dark = o.slots / 2 - 1;
+    std::vector<int> dcount(o.slots, 0);
+    for (size_t i = 0; i < dkeys.size(); ++i) {
+        dkeys[i] = static_cast<int>(rng() % (o.slots / 2 * K));
+        dvalues[i] = (rng() % 3 == 0 || dkeys[i] / K == dark)
+                         ? 0.0f
+                         : std::ldexp(float(rng() % 1000 + 1), -int(rng() % 20));
+        ++dcount[dkeys[i] / K];
+    }
     et::VisibilityCache a(o, f.regions, 3.0), b(o, f.regions, 3.0);
     a.add(keys.data(), values.data(), static_cast<int>(keys.size()));
-    std::vector<size_t> order(keys.size());
-    for (size_t i = 0; i < order.size(); ++i)
-        order[i] = i;
-    std::shuffle(order.begin(), order.end(), rng);
-    for (size_t k = 0; k < order.size(); k += 37) { // in uneven batches
-        std::vector<int> kk;
-        std::vector<float> vv;
-        for (size_t j = k; j < std::min(order.size(), k + 37); ++j) {
-            kk.push_back(keys[order[j]]);
-            vv.push_back(values[order[j]]);
+    a.add_continuations(dkeys.data(), dvalues.data(), static_cast<int>(dkeys.size()));
+    // The same records into b, shuffled, in uneven batches, the two kinds interleaved.
+    auto batches = [&](const std::vector<int>& kk0, const std::vector<float>& vv0, bool dir,
+                       size_t first, size_t step) {
+        std::vector<size_t> order(kk0.size());
+        for (size_t i = 0; i < order.size(); ++i)
+            order[i] = i;
+        std::shuffle(order.begin(), order.end(), rng);
+        for (size_t k = first; k < order.size(); k += step) {
+            std::vector<int> kk;
+            std::vector<float> vv;
+            for (size_t j = k; j < std::min(order.size(), k + step); ++j) {
+                kk.push_back(kk0[order[j]]);
+                vv.push_back(vv0[order[j]]);
+            }
+            if (dir)
+                b.add_continuations(kk.data(), vv.data(), static_cast<int>(kk.size()));
+            else
+                b.add(kk.data(), vv.data(), static_cast<int>(kk.size()));
         }
-        b.add(kk.data(), vv.data(), static_cast<int>(kk.size()));
-    }
+    };
+    batches(dkeys, dvalues, true, 0, 41);
+    batches(keys, values, false, 0, 37);
     const std::vector<float> ta = a.tables(), tb = b.tables();
+    ASSERT_EQ(ta.size(), static_cast<size_t>(o.slots) * ETK_GUIDE_CELL_FLOATS);
     ASSERT_EQ(ta.size(), tb.size());
     EXPECT_TRUE(ta == tb);
-    // Every cell's table is a CDF from 0 to 1.
+    // Every cell's two tables are CDFs from 0 to 1; the guided share is continuation_share x
+    // n / (n + n0) where light came back, 0 elsewhere.
     for (int s = 0; s < o.slots; ++s) {
-        EXPECT_EQ(ta[static_cast<size_t>(s) * (K + 1)], 0.0f);
-        EXPECT_EQ(ta[static_cast<size_t>(s) * (K + 1) + K], 1.0f);
-        for (int R = 0; R < K; ++R)
-            EXPECT_LE(ta[s * (K + 1) + R], ta[s * (K + 1) + R + 1]);
+        const float* cell = ta.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
+        for (const float* cdf : {cell, cell + ETK_GUIDE_DIR_CDF}) {
+            EXPECT_EQ(cdf[0], 0.0f);
+            EXPECT_EQ(cdf[K], 1.0f);
+            for (int R = 0; R < K; ++R)
+                EXPECT_LE(cdf[R], cdf[R + 1]);
+        }
+        const double n = dcount[s];
+        const double share = s == dark || n == 0 ? 0.0 : o.continuation_share * n / (n + o.prior);
+        EXPECT_NEAR(cell[ETK_GUIDE_DIR_SHARE], share, 1e-6) << "slot " << s;
+        if (share == 0.0) { // nothing learned: uniform over the regions
+            for (int R = 0; R <= K; ++R)
+                EXPECT_NEAR(cell[ETK_GUIDE_DIR_CDF + R], float(R) / K, 1e-6);
+        }
     }
 }
 

@@ -192,6 +192,14 @@ void ClDevice::read_guide(int n, int* keys, float* values) {
                              values);
 }
 
+void ClDevice::read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) {
+    const size_t bytes = sizeof(cl_float4) * n;
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_ray_o], CL_FALSE, 0, bytes, ray_o);
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_ray_d], CL_FALSE, 0, bytes, ray_d);
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_beta], CL_FALSE, 0, bytes, beta);
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_radiance], CL_TRUE, 0, bytes, radiance);
+}
+
 void ClDevice::upload_guide(const std::vector<float>& cells) {
     if (cells.size() != guide_floats_)
         throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +

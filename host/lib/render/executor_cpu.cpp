@@ -14,8 +14,7 @@ namespace {
 // Path state and queues start as a device's do: unwritten (default-initialised, not zeroed), so
 // a stage that reads a field no earlier stage wrote reads garbage here too, and Valgrind's
 // memcheck (tests/portability/memcheck_test.cpp) reports it instead of seeing a zero.
-template <typename T>
-std::unique_ptr<T[]> uninitialised(int n) {
+template <typename T> std::unique_ptr<T[]> uninitialised(int n) {
     return std::unique_ptr<T[]>(new T[static_cast<size_t>(n)]);
 }
 
@@ -57,6 +56,16 @@ class CpuDevice::Lane : public StageExecutor {
     void read_guide(int n, int* keys, float* values) override {
         std::copy(guide_key_.get(), guide_key_.get() + n, keys);
         std::copy(guide_val_.get(), guide_val_.get() + n, values);
+    }
+    void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) override {
+        auto copy = [n](const etk::float4* from, float* to) {
+            std::copy(reinterpret_cast<const float*>(from),
+                      reinterpret_cast<const float*>(from + n), to);
+        };
+        copy(ray_o_.get(), ray_o);
+        copy(ray_d_.get(), ray_d);
+        copy(beta_.get(), beta);
+        copy(radiance_.get(), radiance);
     }
     // The cells' tables live in the device, not the (read-only) prepared scene.
     void set_guide_cells(const float* cells) {

@@ -20,6 +20,7 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
     options_.last_bounce = scene.settings.max_depth <= 1;
     guide_ = scene.settings.strategy == Strategy::visibility;
     if (guide_) {
+        guide_options_.continuation = scene.params.guide_continuation != 0;
         cache_ = std::make_unique<VisibilityCache>(guide_options_, scene.guide_regions,
                                                    scene.guide_map_power);
         stats_.guide_host_bytes = cache_->bytes();

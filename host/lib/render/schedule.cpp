@@ -1,11 +1,13 @@
 #include "render/schedule.h"
 
 #include "render/light_share.h"
+#include "kernels/continuation_guide.h"
 #include "render/visibility_cache.h"
 #include "util/error.h"
 
 #include <algorithm>
 #include <atomic>
+#include <memory>
 #include <vector>
 
 namespace et {
@@ -21,9 +23,72 @@ void StageExecutor::read_guide(int, int*, float*) {
     throw Error("this back end cannot read the visibility strategy's records");
 }
 
+void StageExecutor::read_paths(int, float*, float*, float*, float*) {
+    throw Error("this back end cannot read the continuation guide's path state");
+}
+
 void WavefrontDevice::upload_guide(const std::vector<float>&) {
     throw Error("this back end cannot take the visibility strategy's tables");
 }
+
+namespace {
+
+// The continuation guide's records of one wave (visibility_cache.h): each bounce, the paths that
+// pushed a continuation from a non-delta vertex note its cell, region, 1 / pdf, the throughput
+// after the vertex and the radiance so far; at the wave's end the radiance that came back along
+// each continuation is the path's final radiance less that.
+class ContinuationRecorder {
+  public:
+    explicit ContinuationRecorder(int n) : n_(n), o_(4 * n), d_(4 * n), b_(4 * n), r_(4 * n) {}
+
+    void after_bounce(StageExecutor& ex, int bounce) {
+        ex.read_paths(n_, o_.data(), d_.data(), b_.data(), r_.data());
+        for (int s = 0; s < n_; ++s) {
+            const float* o = &o_[4 * s];
+            const float* d = &d_[4 * s];
+            const float* b = &b_[4 * s];
+            if (static_cast<int>(o[3]) != bounce + 1 || !(d[3] > 0.0f))
+                continue; // no continuation from this bounce's vertex, or a delta one
+            Vertex v;
+            v.slot = s;
+            v.key = static_cast<int>(b[3]) * ETK_GUIDE_REGIONS +
+                    etk::etk_cguide_region(etk::make_float3(d[0], d[1], d[2]));
+            v.inv_pdf = 1.0f / d[3];
+            for (int k = 0; k < 3; ++k) {
+                v.beta[k] = b[k];
+                v.radiance[k] = r_[4 * s + k];
+            }
+            vertices_.push_back(v);
+        }
+    }
+
+    // After the last bounce (the radiance read then is final).
+    void finish(VisibilityCache& guide) {
+        std::vector<int> keys;
+        std::vector<float> values;
+        keys.reserve(vertices_.size());
+        values.reserve(vertices_.size());
+        for (const Vertex& v : vertices_) {
+            float L[3];
+            for (int k = 0; k < 3; ++k)
+                L[k] = v.beta[k] > 0.0f ? (r_[4 * v.slot + k] - v.radiance[k]) / v.beta[k] : 0.0f;
+            keys.push_back(v.key);
+            values.push_back(etk::etk_luma(etk::make_float3(L[0], L[1], L[2])) * v.inv_pdf);
+        }
+        guide.add_continuations(keys.data(), values.data(), static_cast<int>(keys.size()));
+    }
+
+  private:
+    struct Vertex {
+        int slot, key;
+        float inv_pdf, beta[3], radiance[3];
+    };
+    int n_;
+    std::vector<float> o_, d_, b_, r_;
+    std::vector<Vertex> vertices_;
+};
+
+} // namespace
 
 RayCounts& RayCounts::operator+=(const RayCounts& o) {
     camera += o.camera;
@@ -45,6 +110,9 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     uint32_t c[etk::ETK_Q_COUNT];
     ex.bind_queues(true); // generate fills queue A
     ex.launch(etk::ETK_STAGE_generate, n, p);
+    std::unique_ptr<ContinuationRecorder> recorder;
+    if (guide && p.guide_learn && p.guide_continuation)
+        recorder = std::make_unique<ContinuationRecorder>(n);
     counts.camera += n;
     int rays = n;
     bool swapped = false;
@@ -67,9 +135,13 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
             ex.read_guide(m, keys.data(), values.data());
             guide->add(keys.data(), values.data(), m);
         }
+        if (recorder)
+            recorder->after_bounce(ex, bounce);
         rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
         swapped = !swapped;
     }
+    if (recorder)
+        recorder->finish(*guide);
     ex.launch(etk::ETK_STAGE_accumulate, n, p);
     ex.read_counters(c); // the last bounce reset them: this is the film's count
     counts.nonfinite += c[etk::ETK_Q_NONFINITE];

@@ -86,11 +86,14 @@ void write_cdf(const std::vector<double>& prob, float* cdf) {
 
 std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots) {
     std::vector<double> prob(regions.begin(), regions.begin() + K);
-    std::vector<float> one(K + 1);
+    std::vector<float> one(ETK_GUIDE_CELL_FLOATS, 0.0f);
     write_cdf(prob, one.data());
-    std::vector<float> out(static_cast<size_t>(slots) * (K + 1));
+    write_cdf(std::vector<double>(K, 1.0), one.data() + ETK_GUIDE_DIR_CDF);
+    one[ETK_GUIDE_DIR_SHARE] = 0.0f;
+    std::vector<float> out(static_cast<size_t>(slots) * ETK_GUIDE_CELL_FLOATS);
     for (int s = 0; s < slots; ++s)
-        std::copy(one.begin(), one.end(), out.begin() + static_cast<size_t>(s) * (K + 1));
+        std::copy(one.begin(), one.end(),
+                  out.begin() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS);
     return out;
 }
 
@@ -98,46 +101,72 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
                                  const std::vector<float>& regions, double scale)
     : opt_(options), mass_(regions.begin(), regions.begin() + K),
       inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0), sums_(static_cast<size_t>(options.slots) * K, 0),
-      counts_(options.slots, 0) {}
+      dir_sums_(options.continuation ? sums_.size() : 0, 0), counts_(options.slots, 0),
+      dir_counts_(options.continuation ? options.slots : 0, 0) {}
+
+namespace {
+
+void add_records(const int* keys, const float* values, int n, int slots, double inv_scale,
+                 std::vector<uint64_t>& sums, std::vector<uint32_t>& counts, uint64_t& records) {
+    if (sums.empty())
+        return;
+    for (int i = 0; i < n; ++i) {
+        const int key = keys[i];
+        if (key < 0 || key >= slots * K)
+            continue;
+        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
+        sums[key] +=
+            static_cast<uint64_t>(std::llround(std::min(v * inv_scale, kMaxValue) * kUnit));
+        ++counts[key / K];
+        ++records;
+    }
+}
+
+} // namespace
 
 void VisibilityCache::add(const int* keys, const float* values, int n) {
     std::lock_guard<std::mutex> lock(mutex_);
-    for (int i = 0; i < n; ++i) {
-        const int key = keys[i];
-        if (key < 0 || key >= opt_.slots * K)
-            continue;
-        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
-        sums_[key] +=
-            static_cast<uint64_t>(std::llround(std::min(v * inv_scale_, kMaxValue) * kUnit));
-        ++counts_[key / K];
-        ++records_;
-    }
+    add_records(keys, values, n, opt_.slots, inv_scale_, sums_, counts_, records_);
+}
+
+void VisibilityCache::add_continuations(const int* keys, const float* values, int n) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    add_records(keys, values, n, opt_.slots, inv_scale_, dir_sums_, dir_counts_, records_);
 }
 
 std::vector<float> VisibilityCache::tables() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    std::vector<float> out(static_cast<size_t>(opt_.slots) * (K + 1));
+    std::vector<float> out(static_cast<size_t>(opt_.slots) * ETK_GUIDE_CELL_FLOATS);
     std::vector<double> prob(K);
-    std::vector<float> prior(K + 1);
-    write_cdf(mass_, prior.data());
-    for (int s = 0; s < opt_.slots; ++s) {
-        if (counts_[s] == 0) { // nothing recorded: the map's own distribution
-            std::copy(prior.begin(), prior.end(), out.begin() + static_cast<size_t>(s) * (K + 1));
-            continue;
-        }
-        const uint64_t* S = sums_.data() + static_cast<size_t>(s) * K;
+    const std::vector<double> uniform(K, 1.0 / K);
+    // P = own x S / sum S + (1 - own) x prior, own = n / (n + n0) (0 if nothing came back).
+    auto learned = [&](const uint64_t* S, uint32_t count, const std::vector<double>& prior,
+                       std::vector<double>& P) {
         double total = 0.0;
         for (int R = 0; R < K; ++R)
             total += double(S[R]);
-        const double n = counts_[s];
+        const double n = count;
         const double own = total > 0.0 ? n / (n + opt_.prior) : 0.0;
-        // P, then the mixture's region probabilities Q = alpha M + (1 - alpha) P.
-        for (int R = 0; R < K; ++R) {
-            const double P =
-                (own > 0.0 ? own * double(S[R]) / total : 0.0) + (1.0 - own) * mass_[R];
-            prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * P;
-        }
-        write_cdf(prob, out.data() + static_cast<size_t>(s) * (K + 1));
+        for (int R = 0; R < K; ++R)
+            P[R] = (own > 0.0 ? own * double(S[R]) / total : 0.0) + (1.0 - own) * prior[R];
+        return own;
+    };
+    for (int s = 0; s < opt_.slots; ++s) {
+        float* cell = out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
+        // The light sample's mixture Q = alpha M + (1 - alpha) P.
+        learned(sums_.data() + static_cast<size_t>(s) * K, counts_[s], mass_, prob);
+        for (int R = 0; R < K; ++R)
+            prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];
+        write_cdf(prob, cell);
+        // The continuation guide and its share.
+        double own = 0.0;
+        if (dir_sums_.empty())
+            prob = uniform;
+        else
+            own = learned(dir_sums_.data() + static_cast<size_t>(s) * K, dir_counts_[s], uniform,
+                          prob);
+        write_cdf(prob, cell + ETK_GUIDE_DIR_CDF);
+        cell[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
     }
     return out;
 }

@@ -16,6 +16,14 @@
 // probabilities Q(R) = alpha M_R + (1 - alpha) P(R) (alpha: the map's defensive share) for the
 // passes that follow.
 // Passes L and later render with the last table and record nothing.
+//
+// The continuation guide (kernels/continuation_guide.h) learns the same way from records the
+// schedule makes of every non-delta vertex's continuation during the learning passes: key cell x
+// regions + the equal-area region of its direction, value luminance(L_in) / p of the direction,
+// with L_in the radiance the rest of the path brought back along it (the path's radiance at its
+// end less its radiance after the vertex, divided by the throughput after the vertex). Per cell,
+// P(R) = n / (n + n0) S(R) / sum S + n0 / (n + n0) / K (uniform where it knows little) and the
+// guided share c = continuation_share x n / (n + n0), 0 where the cell saw no light come back.
 #pragma once
 #include "kernels/visibility_guide.h"
 
@@ -33,6 +41,8 @@ struct VisibilityOptions {
     int learning_passes = 64; // samples 0 .. 63 record shadow rays (16: 1.78x -> 64: 2.17x MIS's
                               // efficiency on the interiors; docs/results.md, issue 11)
     double prior = 32.0;      // n0: records a cell needs before its own sums weigh half
+    bool continuation = true; // guide diffuse vertices' continuations as well
+    double continuation_share = 0.5; // the guided share of a well-learned cell's continuations
 };
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).
@@ -42,7 +52,7 @@ std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, in
 double guide_map_power(const std::vector<float>& rgb, int w, int h);
 
 // Every cell's table before anything is learned: the map's region masses (the map's own
-// distribution).
+// distribution) and no guided continuation.
 std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots);
 
 class VisibilityCache {
@@ -50,12 +60,18 @@ class VisibilityCache {
     // regions: guide_region_tables; scale: the map's power (values are kept relative to it).
     VisibilityCache(const VisibilityOptions& options, const std::vector<float>& regions,
                     double scale);
-    // One bounce's records (thread-safe).
+    // One bounce's shadow-ray records (thread-safe).
     void add(const int* keys, const float* values, int n);
-    // The per-cell CDFs of Q from everything recorded so far (slots x (K + 1) floats).
+    // One wave's continuation records (thread-safe).
+    void add_continuations(const int* keys, const float* values, int n);
+    // The per-cell tables from everything recorded so far (slots x ETK_GUIDE_CELL_FLOATS):
+    // the CDF of Q, the continuation guide's CDF and share.
     std::vector<float> tables() const;
     // Host memory of the sums, bytes.
-    uint64_t bytes() const { return sums_.size() * sizeof(uint64_t) + counts_.size() * 4; }
+    uint64_t bytes() const {
+        return (sums_.size() + dir_sums_.size()) * sizeof(uint64_t) +
+               (counts_.size() + dir_counts_.size()) * 4;
+    }
     uint64_t records() const { return records_; }
     // Whether the table should be rebuilt after learning pass `pass` (0-based): 1, 2, 4, ...
     static bool update_after(int pass, int learning_passes);
@@ -64,8 +80,8 @@ class VisibilityCache {
     VisibilityOptions opt_;
     std::vector<double> mass_; // M_R
     double inv_scale_;
-    std::vector<uint64_t> sums_;   // slots x K, fixed point
-    std::vector<uint32_t> counts_; // records per slot
+    std::vector<uint64_t> sums_, dir_sums_;     // slots x K, fixed point
+    std::vector<uint32_t> counts_, dir_counts_; // records per slot
     uint64_t records_ = 0;
     mutable std::mutex mutex_;
 };

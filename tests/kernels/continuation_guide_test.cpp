@@ -1,0 +1,189 @@
+// The continuation guide (kernels/continuation_guide.h): its equal-area regions of the sphere
+// must map back to themselves, its density must integrate to one over the sphere, and the
+// mixture the shade stage draws a guided continuation from (the cell's regions with probability
+// c, else the BSDF) must draw directions with exactly the density it reports and that the MIS
+// weights evaluate (chi-square over 32 x 64 equal-area bins of the sphere, expected counts
+// integrated from the reported density).
+#include "chi2.h"
+#include "kernels/continuation_guide.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace {
+
+constexpr int K = ETK_GUIDE_REGIONS;
+constexpr int kTests = 2; // chi-square tests in this file, family-wise alpha 0.01
+
+// One cell whose continuation table is random, with some regions of zero probability.
+struct Cell {
+    std::vector<float> floats = std::vector<float>(ETK_GUIDE_CELL_FLOATS, 0.0f);
+    std::vector<double> P = std::vector<double>(K, 0.0);
+    etk::EtkScene S{};
+};
+
+void make(Cell& c, uint32_t seed, float share) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    double total = 0.0;
+    for (int R = 0; R < K; ++R) {
+        c.P[R] = R % 7 == 3 ? 0.0 : (R == 37 ? 20.0 : U(rng));
+        total += c.P[R];
+    }
+    float* cdf = c.floats.data() + ETK_GUIDE_DIR_CDF;
+    double run = 0.0;
+    for (int R = 0; R < K; ++R) {
+        c.P[R] /= total;
+        run += c.P[R];
+        cdf[R + 1] = static_cast<float>(run);
+    }
+    cdf[K] = 1.0f;
+    for (int R = 0; R < K; ++R) // the density the table really holds
+        c.P[R] = double(cdf[R + 1]) - double(cdf[R]);
+    c.floats[ETK_GUIDE_DIR_SHARE] = share;
+    c.S.guide_cells = c.floats.data();
+}
+
+TEST(ContinuationGuide, RegionsMapBackToThemselves) {
+    for (int R = 0; R < K; ++R)
+        for (int i = 0; i < 7; ++i)
+            for (int j = 0; j < 7; ++j) {
+                const etk::float2 t = etk::make_float2((i + 0.5f) / 7.0f, (j + 0.5f) / 7.0f);
+                const etk::float3 d = etk::etk_cguide_region_dir(R, t);
+                ASSERT_NEAR(etk::dot(d, d), 1.0f, 1e-5f);
+                ASSERT_EQ(etk::etk_cguide_region(d), R) << "t " << t.x << " " << t.y;
+            }
+    // The poles and the seam of the azimuth.
+    EXPECT_EQ(etk::etk_cguide_region(etk::make_float3(0, 1, 0)) / ETK_GUIDE_COLS, 0);
+    EXPECT_EQ(etk::etk_cguide_region(etk::make_float3(0, -1, 0)) / ETK_GUIDE_COLS,
+              ETK_GUIDE_ROWS - 1);
+    EXPECT_EQ(etk::etk_cguide_region(etk::make_float3(-1, 0, 0)) % ETK_GUIDE_COLS,
+              ETK_GUIDE_COLS - 1);
+}
+
+// The guide's density over a fine equal-area grid of the sphere sums to one (each grid cell
+// lies inside one region), and is the table's probability over the region's solid angle.
+TEST(ContinuationGuide, DensityIntegratesToOne) {
+    Cell c;
+    make(c, 5u, 0.5f);
+    const int ny = 256, nphi = 512;
+    double sum = 0.0;
+    for (int i = 0; i < ny; ++i)
+        for (int j = 0; j < nphi; ++j) {
+            const float y = 1.0f - 2.0f * (i + 0.5f) / ny;
+            const float phi = -float(M_PI) + 2.0f * float(M_PI) * (j + 0.5f) / nphi;
+            const float r = std::sqrt(1.0f - y * y);
+            const etk::float3 d = etk::make_float3(r * std::cos(phi), y, r * std::sin(phi));
+            const double pdf = etk::etk_cguide_pdf(c.S, 0, d);
+            const int R = etk::etk_cguide_region(d);
+            ASSERT_NEAR(pdf, c.P[R] * K / (4.0 * M_PI), 1e-5 * (1.0 + pdf));
+            sum += pdf * 4.0 * M_PI / (double(ny) * nphi);
+        }
+    EXPECT_NEAR(sum, 1.0, 1e-5);
+}
+
+// The density of the mixture of share c at a vertex of normal n (world), integrated over the
+// bin (i, j) of a ny x nphi equal-area grid by a sub x sub midpoint rule.
+double bin_mass(const Cell& cell, float c, const etk::EtkMaterial& m, etk::float3 wo_local,
+                etk::float3 t, etk::float3 b, etk::float3 n, int i, int j, int ny, int nphi) {
+    const int sub = 12;
+    double mass = 0.0;
+    for (int a = 0; a < sub; ++a)
+        for (int e = 0; e < sub; ++e) {
+            const double y = 1.0 - 2.0 * (i + (a + 0.5) / sub) / ny;
+            const double phi = -M_PI + 2.0 * M_PI * (j + (e + 0.5) / sub) / nphi;
+            const double r = std::sqrt(std::max(0.0, 1.0 - y * y));
+            const etk::float3 d =
+                etk::make_float3(static_cast<float>(r * std::cos(phi)), static_cast<float>(y),
+                                 static_cast<float>(r * std::sin(phi)));
+            const etk::float3 wi = etk::etk_to_local(d, t, b, n);
+            mass += etk::etk_cguide_mix_pdf(cell.S, 0, c, etk::etk_bsdf_pdf(m, wo_local, wi), d);
+        }
+    return mass * 4.0 * M_PI / (double(ny) * nphi * sub * sub);
+}
+
+struct MixCase {
+    float share;
+    float nx, ny, nz; // the vertex's normal (world, normalised below)
+};
+
+class ContinuationMixture : public ::testing::TestWithParam<MixCase> {};
+
+TEST_P(ContinuationMixture, SamplesMatchTheirDensity) {
+    const MixCase mc = GetParam();
+    Cell cell;
+    make(cell, 11u, mc.share);
+    etk::EtkMaterial m{};
+    m.type = ETK_MAT_DIFFUSE;
+    m.albedo = etk::make_float3(0.8f, 0.6f, 0.4f);
+    const etk::float3 n = etk::normalize(etk::make_float3(mc.nx, mc.ny, mc.nz));
+    etk::float3 t, b;
+    etk::etk_make_frame(n, &t, &b);
+    const etk::float3 wo = etk::normalize(etk::make_float3(0.3f, -0.2f, 0.9f)); // local
+    const int ny = 32, nphi = 64, n_samples = 1 << 20;
+    std::vector<double> observed(ny * nphi, 0.0), expected(ny * nphi, 0.0);
+    std::mt19937 rng(77u);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    int mismatched = 0, lost = 0;
+    for (int k = 0; k < n_samples; ++k) {
+        const etk::float2 u =
+            etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
+        const etk::EtkGuidedSample g =
+            etk::etk_cguide_sample_mixture(cell.S, 0, mc.share, m, wo, t, b, n, u, U(rng));
+        if (!(g.pdf > 0.0f)) {
+            ++lost;
+            continue;
+        }
+        // The density reported is the one the MIS weights evaluate for the same direction.
+        const float again = etk::etk_cguide_mix_pdf(cell.S, 0, mc.share,
+                                                    etk::etk_bsdf_pdf(m, wo, g.wi), g.wi_world);
+        mismatched += std::fabs(again - g.pdf) > 1e-5f * g.pdf;
+        const etk::float3 d = g.wi_world;
+        const int i = std::min(ny - 1, static_cast<int>((1.0f - d.y) * 0.5f * ny));
+        const double phi = std::atan2(double(d.z), double(d.x));
+        const int j = std::min(nphi - 1, static_cast<int>((phi + M_PI) / (2.0 * M_PI) * nphi));
+        observed[i * nphi + j] += 1.0;
+    }
+    EXPECT_EQ(lost, 0);
+    EXPECT_EQ(mismatched, 0);
+    double total = 0.0;
+    for (int i = 0; i < ny; ++i)
+        for (int j = 0; j < nphi; ++j) {
+            const double mass = bin_mass(cell, mc.share, m, wo, t, b, n, i, j, ny, nphi);
+            expected[i * nphi + j] = n_samples * mass;
+            total += mass;
+        }
+    EXPECT_NEAR(total, 1.0, 2e-3) << "the mixture's density does not integrate to one";
+    const ett::Chi2Result chi =
+        ett::chi2_test(observed, expected, nphi, ny, ett::sidak_alpha(0.01, kTests));
+    EXPECT_TRUE(chi.passed) << chi.report;
+}
+
+// Half guided, normal up (the horizon on a bin boundary); mostly guided, a tilted normal.
+INSTANTIATE_TEST_SUITE_P(Shares, ContinuationMixture,
+                         ::testing::Values(MixCase{0.5f, 0.0f, 1.0f, 0.0f},
+                                           MixCase{0.8f, 0.4f, 0.7f, -0.5f}));
+
+// Only diffuse vertices guide, only when the option is on, with the cell's share.
+TEST(ContinuationGuide, ShareOnlyAtDiffuseVerticesWithTheOptionOn) {
+    Cell c;
+    make(c, 3u, 0.375f);
+    etk::EtkParams p{};
+    etk::EtkMaterial m{};
+    m.type = ETK_MAT_DIFFUSE;
+    p.guide_continuation = 1;
+    EXPECT_EQ(etk::etk_cguide_share(c.S, p, 0, m), 0.375f);
+    m.type = ETK_MAT_MICROFACET;
+    EXPECT_EQ(etk::etk_cguide_share(c.S, p, 0, m), 0.0f);
+    m.type = ETK_MAT_DIFFUSE;
+    p.guide_continuation = 0;
+    EXPECT_EQ(etk::etk_cguide_share(c.S, p, 0, m), 0.0f);
+    // Share 0: the mixture is the BSDF's density.
+    const etk::float3 d = etk::make_float3(0.0f, 1.0f, 0.0f);
+    EXPECT_EQ(etk::etk_cguide_mix_pdf(c.S, 0, 0.0f, 0.25f, d), 0.25f);
+}
+
+} // namespace
