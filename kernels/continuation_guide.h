@@ -40,35 +40,36 @@ ETK_FN float3 etk_cguide_region_dir(int R, float2 t) {
     return make_float3(r * sc.y, y, r * sc.x);
 }
 
-// The cell's directional CDF (K + 1 entries) and its guided share.
-ETK_FN ETK_GLOBAL const float* etk_cguide_cdf(EtkScene S, int cell) {
-    return S.guide_cells + cell * ETK_GUIDE_CELL_FLOATS + ETK_GUIDE_DIR_CDF;
+// The cell's directional CDF (K + 1 entries), followed by its guided share.
+ETK_FN ETK_GLOBAL const float* etk_cguide_cdf(EtkScene S, EtkParams p, int cell) {
+    return S.guide_cells + p.guide_slots * ETK_GUIDE_CELL_FLOATS + cell * ETK_GUIDE_DIR_FLOATS;
 }
 // The share c of continuation samples a vertex of material m in `cell` draws from the guide: 0
 // where the continuation is not guided (strategy, option, material: only diffuse surfaces, whose
 // BSDF sample reaches the whole hemisphere and whose lobe the guide's coarse regions can match).
 ETK_FN float etk_cguide_share(EtkScene S, EtkParams p, int cell, EtkMaterial m) {
     return p.guide_continuation && m.type == ETK_MAT_DIFFUSE
-               ? S.guide_cells[cell * ETK_GUIDE_CELL_FLOATS + ETK_GUIDE_DIR_SHARE]
+               ? etk_cguide_cdf(S, p, cell)[ETK_GUIDE_DIR_SHARE]
                : 0.0f;
 }
 
 // p_guide of world direction d (unit) in `cell`.
-ETK_FN float etk_cguide_pdf(EtkScene S, int cell, float3 d) {
-    ETK_GLOBAL const float* cdf = etk_cguide_cdf(S, cell);
+ETK_FN float etk_cguide_pdf(EtkScene S, EtkParams p, int cell, float3 d) {
+    ETK_GLOBAL const float* cdf = etk_cguide_cdf(S, p, cell);
     int R = etk_cguide_region(d);
     return (cdf[R + 1] - cdf[R]) * (ETK_GUIDE_REGIONS * 0.25f * ETK_INV_PI);
 }
 
 // The mixture's density c p_guide + (1 - c) p_bsdf of world direction d.
-ETK_FN float etk_cguide_mix_pdf(EtkScene S, int cell, float c, float pdf_bsdf, float3 d) {
-    return c > 0.0f ? c * etk_cguide_pdf(S, cell, d) + (1.0f - c) * pdf_bsdf : pdf_bsdf;
+ETK_FN float etk_cguide_mix_pdf(EtkScene S, EtkParams p, int cell, float c, float pdf_bsdf,
+                                float3 d) {
+    return c > 0.0f ? c * etk_cguide_pdf(S, p, cell, d) + (1.0f - c) * pdf_bsdf : pdf_bsdf;
 }
 
 // A direction from the guide of `cell`, from u in [0,1)^2.
-ETK_FN float3 etk_cguide_sample(EtkScene S, int cell, float2 u) {
+ETK_FN float3 etk_cguide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
     float2 t;
-    int R = etk_guide_pick_region(etk_cguide_cdf(S, cell), u, &t);
+    int R = etk_guide_pick_region(etk_cguide_cdf(S, p, cell), u, &t);
     return etk_cguide_region_dir(R, t);
 }
 
@@ -80,14 +81,15 @@ typedef struct {
     float pdf, pdf_bsdf;
 } EtkGuidedSample;
 
-ETK_FN EtkGuidedSample etk_cguide_sample_mixture(EtkScene S, int cell, float c, EtkMaterial m,
-                                                 float3 wo, float3 t, float3 b, float3 n, float2 u,
-                                                 float lobe) {
+ETK_FN EtkGuidedSample etk_cguide_sample_mixture(EtkScene S, EtkParams p, int cell, float c,
+                                                 EtkMaterial m, float3 wo, float3 t, float3 b,
+                                                 float3 n, float2 u, float lobe) {
     EtkGuidedSample g;
     g.pdf = 0.0f;
     g.pdf_bsdf = 0.0f;
     if (u.x < c) {
-        g.wi_world = etk_cguide_sample(S, cell, make_float2(etk_guide_rescale(u.x, 0.0f, c), u.y));
+        g.wi_world =
+            etk_cguide_sample(S, p, cell, make_float2(etk_guide_rescale(u.x, 0.0f, c), u.y));
         g.wi = etk_to_local(g.wi_world, t, b, n);
     } else {
         EtkBsdfSample bs =
@@ -98,7 +100,7 @@ ETK_FN EtkGuidedSample etk_cguide_sample_mixture(EtkScene S, int cell, float c, 
             return g;
     }
     g.pdf_bsdf = etk_bsdf_pdf(m, wo, g.wi);
-    g.pdf = etk_cguide_mix_pdf(S, cell, c, g.pdf_bsdf, g.wi_world);
+    g.pdf = etk_cguide_mix_pdf(S, p, cell, c, g.pdf_bsdf, g.wi_world);
     return g;
 }
 

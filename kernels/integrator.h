@@ -204,7 +204,9 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     }
     int guided = p.strategy == ETK_STRATEGY_VISIBILITY;
     int cell = guided ? etk_guide_cell(p, s.origin, ng) : 0;
-    float cg = guided ? etk_cguide_share(S, p, cell, m) : 0.0f; // guided continuations' share
+    // The guided share of the continuation; none at the last bounce, where the continuation
+    // only gathers the map's light, which the light sample already draws from a learned table.
+    float cg = guided && !last ? etk_cguide_share(S, p, cell, m) : 0.0f;
 
     // Light sample (sample A of the adaptive strategy).
     if (p.strategy != ETK_STRATEGY_BSDF && !delta) {
@@ -271,11 +273,12 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             // Above the surface, or below it at a dielectric (it transmits light from there).
             if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
-                float w = etk_strategy_is_mis(p.strategy)
-                              ? etk_mis_weight(p.heuristic, pdf_light,
-                                               etk_cguide_mix_pdf(
-                                                   S, cell, cg, etk_bsdf_pdf(m, wo, wi), wi_world))
-                              : 1.0f;
+                float w =
+                    etk_strategy_is_mis(p.strategy)
+                        ? etk_mis_weight(
+                              p.heuristic, pdf_light,
+                              etk_cguide_mix_pdf(S, p, cell, cg, etk_bsdf_pdf(m, wo, wi), wi_world))
+                        : 1.0f;
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
                 // Visibility learning: what this direction would bring, unweighted, and where.
@@ -321,7 +324,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         b_from_light = 1;
     } else if (cg > 0.0f) {
         // A guided vertex: the mixture of the cell's learned directions and the BSDF.
-        EtkGuidedSample g = etk_cguide_sample_mixture(S, cell, cg, m, wo, t, b, ns, u, rr.x);
+        EtkGuidedSample g = etk_cguide_sample_mixture(S, p, cell, cg, m, wo, t, b, ns, u, rr.x);
         if (!(g.pdf > 0.0f) || !(g.pdf_bsdf > 0.0f))
             return; // below the surface: nothing a diffuse surface reflects
         wi_world = g.wi_world;

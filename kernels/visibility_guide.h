@@ -29,10 +29,12 @@
 // entries of the map's row (17 of them for a 1024-wide map: one line, sometimes two): one
 // cache miss where the band's two ends in the map's row, the row's guide entry and the search
 // took three or four, for the same column (etk_guide_column).
-// guide_cells: per slot, ETK_GUIDE_CELL_FLOATS: K + 1 CDF entries of Q over the regions (0 ... 1),
-// row-major (R = row band x ETK_GUIDE_COLS + column), so entry ETK_GUIDE_COLS x b is the CDF of
-// the row bands; then the continuation guide's (continuation_guide.h): K + 1 CDF entries over
-// the sphere's equal-area regions, same layout, and the share of continuations drawn from it.
+// guide_cells: per slot, ETK_GUIDE_CELL_FLOATS = K + 1 CDF entries of Q over the regions (0 ...
+// 1), row-major (R = row band x ETK_GUIDE_COLS + column), so entry ETK_GUIDE_COLS x b is the CDF
+// of the row bands; then, when the continuation is guided (continuation_guide.h), per slot
+// ETK_GUIDE_DIR_FLOATS: K + 1 CDF entries over the sphere's equal-area regions, same layout, and
+// the share of continuations drawn from it. Two halves rather than one record per slot, so that
+// the light sample's tables stay as compact as they were.
 #ifndef ETK_VISIBILITY_GUIDE_H
 #define ETK_VISIBILITY_GUIDE_H
 #include "color.h"
@@ -47,9 +49,9 @@
 #define ETK_GUIDE_REGIONS (ETK_GUIDE_ROWS * ETK_GUIDE_COLS)
 #define ETK_GUIDE_SPLITS 4
 #define ETK_GUIDE_SUBBANDS (ETK_GUIDE_COLS * ETK_GUIDE_SPLITS)
-#define ETK_GUIDE_DIR_CDF (ETK_GUIDE_REGIONS + 1)
-#define ETK_GUIDE_DIR_SHARE (2 * ETK_GUIDE_REGIONS + 2)
-#define ETK_GUIDE_CELL_FLOATS (2 * ETK_GUIDE_REGIONS + 3)
+#define ETK_GUIDE_CELL_FLOATS (ETK_GUIDE_REGIONS + 1)
+#define ETK_GUIDE_DIR_FLOATS (ETK_GUIDE_REGIONS + 2)
+#define ETK_GUIDE_DIR_SHARE (ETK_GUIDE_REGIONS + 1) // within a slot's ETK_GUIDE_DIR_FLOATS
 
 ETK_BEGIN
 

@@ -19,10 +19,13 @@ constexpr int K = ETK_GUIDE_REGIONS;
 constexpr int kTests = 2; // chi-square tests in this file, family-wise alpha 0.01
 
 // One cell whose continuation table is random, with some regions of zero probability.
+// One slot: the light sample's table (unused here), then the continuation guide's.
 struct Cell {
-    std::vector<float> floats = std::vector<float>(ETK_GUIDE_CELL_FLOATS, 0.0f);
+    std::vector<float> floats =
+        std::vector<float>(ETK_GUIDE_CELL_FLOATS + ETK_GUIDE_DIR_FLOATS, 0.0f);
     std::vector<double> P = std::vector<double>(K, 0.0);
     etk::EtkScene S{};
+    etk::EtkParams p{};
 };
 
 void make(Cell& c, uint32_t seed, float share) {
@@ -33,7 +36,7 @@ void make(Cell& c, uint32_t seed, float share) {
         c.P[R] = R % 7 == 3 ? 0.0 : (R == 37 ? 20.0 : U(rng));
         total += c.P[R];
     }
-    float* cdf = c.floats.data() + ETK_GUIDE_DIR_CDF;
+    float* cdf = c.floats.data() + ETK_GUIDE_CELL_FLOATS;
     double run = 0.0;
     for (int R = 0; R < K; ++R) {
         c.P[R] /= total;
@@ -43,8 +46,10 @@ void make(Cell& c, uint32_t seed, float share) {
     cdf[K] = 1.0f;
     for (int R = 0; R < K; ++R) // the density the table really holds
         c.P[R] = double(cdf[R + 1]) - double(cdf[R]);
-    c.floats[ETK_GUIDE_DIR_SHARE] = share;
+    cdf[ETK_GUIDE_DIR_SHARE] = share;
     c.S.guide_cells = c.floats.data();
+    c.p.guide_slots = 1;
+    c.p.guide_continuation = 1;
 }
 
 TEST(ContinuationGuide, RegionsMapBackToThemselves) {
@@ -77,7 +82,7 @@ TEST(ContinuationGuide, DensityIntegratesToOne) {
             const float phi = -float(M_PI) + 2.0f * float(M_PI) * (j + 0.5f) / nphi;
             const float r = std::sqrt(1.0f - y * y);
             const etk::float3 d = etk::make_float3(r * std::cos(phi), y, r * std::sin(phi));
-            const double pdf = etk::etk_cguide_pdf(c.S, 0, d);
+            const double pdf = etk::etk_cguide_pdf(c.S, c.p, 0, d);
             const int R = etk::etk_cguide_region(d);
             ASSERT_NEAR(pdf, c.P[R] * K / (4.0 * M_PI), 1e-5 * (1.0 + pdf));
             sum += pdf * 4.0 * M_PI / (double(ny) * nphi);
@@ -100,7 +105,8 @@ double bin_mass(const Cell& cell, float c, const etk::EtkMaterial& m, etk::float
                 etk::make_float3(static_cast<float>(r * std::cos(phi)), static_cast<float>(y),
                                  static_cast<float>(r * std::sin(phi)));
             const etk::float3 wi = etk::etk_to_local(d, t, b, n);
-            mass += etk::etk_cguide_mix_pdf(cell.S, 0, c, etk::etk_bsdf_pdf(m, wo_local, wi), d);
+            mass += etk::etk_cguide_mix_pdf(cell.S, cell.p, 0, c,
+                                            etk::etk_bsdf_pdf(m, wo_local, wi), d);
         }
     return mass * 4.0 * M_PI / (double(ny) * nphi * sub * sub);
 }
@@ -132,13 +138,13 @@ TEST_P(ContinuationMixture, SamplesMatchTheirDensity) {
         const etk::float2 u =
             etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
         const etk::EtkGuidedSample g =
-            etk::etk_cguide_sample_mixture(cell.S, 0, mc.share, m, wo, t, b, n, u, U(rng));
+            etk::etk_cguide_sample_mixture(cell.S, cell.p, 0, mc.share, m, wo, t, b, n, u, U(rng));
         if (!(g.pdf > 0.0f)) {
             ++lost;
             continue;
         }
         // The density reported is the one the MIS weights evaluate for the same direction.
-        const float again = etk::etk_cguide_mix_pdf(cell.S, 0, mc.share,
+        const float again = etk::etk_cguide_mix_pdf(cell.S, cell.p, 0, mc.share,
                                                     etk::etk_bsdf_pdf(m, wo, g.wi), g.wi_world);
         mismatched += std::fabs(again - g.pdf) > 1e-5f * g.pdf;
         const etk::float3 d = g.wi_world;
@@ -171,10 +177,9 @@ INSTANTIATE_TEST_SUITE_P(Shares, ContinuationMixture,
 TEST(ContinuationGuide, ShareOnlyAtDiffuseVerticesWithTheOptionOn) {
     Cell c;
     make(c, 3u, 0.375f);
-    etk::EtkParams p{};
+    etk::EtkParams p = c.p;
     etk::EtkMaterial m{};
     m.type = ETK_MAT_DIFFUSE;
-    p.guide_continuation = 1;
     EXPECT_EQ(etk::etk_cguide_share(c.S, p, 0, m), 0.375f);
     m.type = ETK_MAT_MICROFACET;
     EXPECT_EQ(etk::etk_cguide_share(c.S, p, 0, m), 0.0f);
@@ -183,7 +188,7 @@ TEST(ContinuationGuide, ShareOnlyAtDiffuseVerticesWithTheOptionOn) {
     EXPECT_EQ(etk::etk_cguide_share(c.S, p, 0, m), 0.0f);
     // Share 0: the mixture is the BSDF's density.
     const etk::float3 d = etk::make_float3(0.0f, 1.0f, 0.0f);
-    EXPECT_EQ(etk::etk_cguide_mix_pdf(c.S, 0, 0.0f, 0.25f, d), 0.25f);
+    EXPECT_EQ(etk::etk_cguide_mix_pdf(c.S, c.p, 0, 0.0f, 0.25f, d), 0.25f);
 }
 
 } // namespace

@@ -233,7 +233,7 @@ INSTANTIATE_TEST_SUITE_P(Sizes, VisibilityColumn,
 TEST(VisibilityGuideTables, PriorIsTheMap) {
     Fixture f;
     make(f, 64, 32, 3u);
-    f.cells = et::guide_prior_cells(f.regions, 1);
+    f.cells = et::guide_prior_cells(f.regions, 1, false);
     f.S.guide_cells = f.cells.data();
     for (int r = 0; r < 32; ++r)
         for (int c = 0; c < 64; ++c) {
@@ -293,14 +293,17 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     batches(dkeys, dvalues, true, 0, 41);
     batches(keys, values, false, 0, 37);
     const std::vector<float> ta = a.tables(), tb = b.tables();
-    ASSERT_EQ(ta.size(), static_cast<size_t>(o.slots) * ETK_GUIDE_CELL_FLOATS);
+    ASSERT_EQ(ta.size(), et::guide_cells_size(o.slots, true));
+    ASSERT_EQ(ta.size(), static_cast<size_t>(o.slots) * (2 * K + 3));
     ASSERT_EQ(ta.size(), tb.size());
     EXPECT_TRUE(ta == tb);
     // Every cell's two tables are CDFs from 0 to 1; the guided share is continuation_share x
     // n / (n + n0) where light came back, 0 elsewhere.
     for (int s = 0; s < o.slots; ++s) {
         const float* cell = ta.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
-        for (const float* cdf : {cell, cell + ETK_GUIDE_DIR_CDF}) {
+        const float* dir = ta.data() + static_cast<size_t>(o.slots) * ETK_GUIDE_CELL_FLOATS +
+                           static_cast<size_t>(s) * ETK_GUIDE_DIR_FLOATS;
+        for (const float* cdf : {cell, dir}) {
             EXPECT_EQ(cdf[0], 0.0f);
             EXPECT_EQ(cdf[K], 1.0f);
             for (int R = 0; R < K; ++R)
@@ -308,10 +311,10 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
         }
         const double n = dcount[s];
         const double share = s == dark || n == 0 ? 0.0 : o.continuation_share * n / (n + o.prior);
-        EXPECT_NEAR(cell[ETK_GUIDE_DIR_SHARE], share, 1e-6) << "slot " << s;
+        EXPECT_NEAR(dir[ETK_GUIDE_DIR_SHARE], share, 1e-6) << "slot " << s;
         if (share == 0.0) { // nothing learned: uniform over the regions
             for (int R = 0; R <= K; ++R)
-                EXPECT_NEAR(cell[ETK_GUIDE_DIR_CDF + R], float(R) / K, 1e-6);
+                EXPECT_NEAR(dir[R], float(R) / K, 1e-6);
         }
     }
 }

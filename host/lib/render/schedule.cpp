@@ -62,8 +62,9 @@ class ContinuationRecorder {
         }
     }
 
-    // After the last bounce (the radiance read then is final).
-    void finish(VisibilityCache& guide) {
+    // After the last bounce: the paths' final radiance, and the records.
+    void finish(StageExecutor& ex, VisibilityCache& guide) {
+        ex.read_paths(n_, o_.data(), d_.data(), b_.data(), r_.data());
         std::vector<int> keys;
         std::vector<float> values;
         keys.reserve(vertices_.size());
@@ -111,7 +112,7 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     ex.bind_queues(true); // generate fills queue A
     ex.launch(etk::ETK_STAGE_generate, n, p);
     std::unique_ptr<ContinuationRecorder> recorder;
-    if (guide && p.guide_learn && p.guide_continuation)
+    if (guide && p.guide_learn && p.guide_continuation && p.max_depth > 1)
         recorder = std::make_unique<ContinuationRecorder>(n);
     counts.camera += n;
     int rays = n;
@@ -135,13 +136,13 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
             ex.read_guide(m, keys.data(), values.data());
             guide->add(keys.data(), values.data(), m);
         }
-        if (recorder)
+        if (recorder && bounce + 1 < p.max_depth) // vertices at the last bounce are not guided
             recorder->after_bounce(ex, bounce);
         rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
         swapped = !swapped;
     }
     if (recorder)
-        recorder->finish(*guide);
+        recorder->finish(ex, *guide);
     ex.launch(etk::ETK_STAGE_accumulate, n, p);
     ex.read_counters(c); // the last bounce reset them: this is the film's count
     counts.nonfinite += c[etk::ETK_Q_NONFINITE];

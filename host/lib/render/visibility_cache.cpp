@@ -84,16 +84,26 @@ void write_cdf(const std::vector<double>& prob, float* cdf) {
 
 } // namespace
 
-std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots) {
+size_t guide_cells_size(int slots, bool continuation) {
+    return static_cast<size_t>(slots) *
+           (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0));
+}
+
+std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots,
+                                     bool continuation) {
     std::vector<double> prob(regions.begin(), regions.begin() + K);
-    std::vector<float> one(ETK_GUIDE_CELL_FLOATS, 0.0f);
-    write_cdf(prob, one.data());
-    write_cdf(std::vector<double>(K, 1.0), one.data() + ETK_GUIDE_DIR_CDF);
-    one[ETK_GUIDE_DIR_SHARE] = 0.0f;
-    std::vector<float> out(static_cast<size_t>(slots) * ETK_GUIDE_CELL_FLOATS);
+    std::vector<float> light(ETK_GUIDE_CELL_FLOATS), dir(ETK_GUIDE_DIR_FLOATS, 0.0f);
+    write_cdf(prob, light.data());
+    write_cdf(std::vector<double>(K, 1.0), dir.data()); // uniform, share 0: not guided
+    std::vector<float> out(guide_cells_size(slots, continuation));
     for (int s = 0; s < slots; ++s)
-        std::copy(one.begin(), one.end(),
+        std::copy(light.begin(), light.end(),
                   out.begin() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS);
+    if (continuation)
+        for (int s = 0; s < slots; ++s)
+            std::copy(dir.begin(), dir.end(),
+                      out.begin() + static_cast<size_t>(slots) * ETK_GUIDE_CELL_FLOATS +
+                          static_cast<size_t>(s) * ETK_GUIDE_DIR_FLOATS);
     return out;
 }
 
@@ -136,7 +146,7 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, in
 
 std::vector<float> VisibilityCache::tables() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    std::vector<float> out(static_cast<size_t>(opt_.slots) * ETK_GUIDE_CELL_FLOATS);
+    std::vector<float> out(guide_cells_size(opt_.slots, !dir_sums_.empty()));
     std::vector<double> prob(K);
     const std::vector<double> uniform(K, 1.0 / K);
     // P = own x S / sum S + (1 - own) x prior, own = n / (n + n0) (0 if nothing came back).
@@ -151,22 +161,33 @@ std::vector<float> VisibilityCache::tables() const {
             P[R] = (own > 0.0 ? own * double(S[R]) / total : 0.0) + (1.0 - own) * prior[R];
         return own;
     };
+    // Cells without records keep the prior tables (most cells of a scene: copied, not rebuilt).
+    std::vector<float> prior_light(K + 1), prior_dir(ETK_GUIDE_DIR_FLOATS, 0.0f);
+    write_cdf(mass_, prior_light.data());
+    write_cdf(uniform, prior_dir.data());
+    float* const dirs = out.data() + static_cast<size_t>(opt_.slots) * ETK_GUIDE_CELL_FLOATS;
     for (int s = 0; s < opt_.slots; ++s) {
         float* cell = out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
-        // The light sample's mixture Q = alpha M + (1 - alpha) P.
-        learned(sums_.data() + static_cast<size_t>(s) * K, counts_[s], mass_, prob);
-        for (int R = 0; R < K; ++R)
-            prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];
-        write_cdf(prob, cell);
-        // The continuation guide and its share.
-        double own = 0.0;
+        if (counts_[s] == 0) {
+            std::copy(prior_light.begin(), prior_light.end(), cell);
+        } else { // the light sample's mixture Q = alpha M + (1 - alpha) P
+            learned(sums_.data() + static_cast<size_t>(s) * K, counts_[s], mass_, prob);
+            for (int R = 0; R < K; ++R)
+                prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];
+            write_cdf(prob, cell);
+        }
         if (dir_sums_.empty())
-            prob = uniform;
-        else
-            own = learned(dir_sums_.data() + static_cast<size_t>(s) * K, dir_counts_[s], uniform,
-                          prob);
-        write_cdf(prob, cell + ETK_GUIDE_DIR_CDF);
-        cell[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
+            continue;
+        // The continuation guide and its share.
+        float* dir = dirs + static_cast<size_t>(s) * ETK_GUIDE_DIR_FLOATS;
+        if (dir_counts_[s] == 0) {
+            std::copy(prior_dir.begin(), prior_dir.end(), dir);
+            continue;
+        }
+        const double own =
+            learned(dir_sums_.data() + static_cast<size_t>(s) * K, dir_counts_[s], uniform, prob);
+        write_cdf(prob, dir);
+        dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
     }
     return out;
 }

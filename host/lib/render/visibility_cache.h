@@ -51,9 +51,14 @@ std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, in
 // The map's power (luminance over the sphere), the unit the learning's fixed point is relative to.
 double guide_map_power(const std::vector<float>& rgb, int w, int h);
 
-// Every cell's table before anything is learned: the map's region masses (the map's own
-// distribution) and no guided continuation.
-std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots);
+// Floats of the cells' tables (EtkScene.guide_cells): the light sample's, then the continuation
+// guide's if it is on (kernels/visibility_guide.h).
+size_t guide_cells_size(int slots, bool continuation);
+
+// Every cell's tables before anything is learned: the map's region masses (the map's own
+// distribution) and, with the continuation guide, uniform regions with a share of 0.
+std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots,
+                                     bool continuation);
 
 class VisibilityCache {
   public:
@@ -64,8 +69,8 @@ class VisibilityCache {
     void add(const int* keys, const float* values, int n);
     // One wave's continuation records (thread-safe).
     void add_continuations(const int* keys, const float* values, int n);
-    // The per-cell tables from everything recorded so far (slots x ETK_GUIDE_CELL_FLOATS):
-    // the CDF of Q, the continuation guide's CDF and share.
+    // The cells' tables from everything recorded so far (guide_cells_size floats): the CDFs of Q,
+    // then, with options.continuation, the continuation guide's CDFs and shares.
     std::vector<float> tables() const;
     // Host memory of the sums, bytes.
     uint64_t bytes() const {
