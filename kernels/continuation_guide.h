@@ -16,6 +16,7 @@
 #define ETK_CONTINUATION_GUIDE_H
 #include "bsdf.h"
 #include "compat.h"
+#include "latlong.h"
 #include "params.h"
 #include "path_state.h"
 #include "trig.h"
@@ -23,30 +24,33 @@
 
 ETK_BEGIN
 
-// The equal-area region of world direction d (unit): band of d.y, sector of atan2(d.z, d.x).
+// The equal-area region of world direction d (unit): the band of its y (cos of the colatitude),
+// the sector of its longitude u (latlong.h's, so the sectors are the map's column bands).
 ETK_FN int etk_cguide_region(float3 d) {
     int band = (int)floor((1.0f - d.y) * (0.5f * ETK_GUIDE_ROWS));
-    float t = etk_atan2(d.z, d.x) * (0.5f * ETK_INV_PI) + 0.5f;
-    int col = (int)floor(t * ETK_GUIDE_COLS);
+    int col = (int)floor(etk_latlong_u(d) * ETK_GUIDE_COLS);
     return clamp(band, 0, ETK_GUIDE_ROWS - 1) * ETK_GUIDE_COLS + clamp(col, 0, ETK_GUIDE_COLS - 1);
 }
 
-// A direction uniformly in region R's solid angle from t in [0,1)^2.
+// A direction uniformly in region R's solid angle from t in [0,1)^2: y uniform in the band (the
+// sphere's area is uniform in y), u uniform in the sector. The band's top and the offset into it
+// are summed last, so that t < 1 stays inside the band.
 ETK_FN float3 etk_cguide_region_dir(int R, float2 t) {
     int band = R / ETK_GUIDE_COLS, col = R % ETK_GUIDE_COLS;
-    float y = 1.0f - (2.0f / ETK_GUIDE_ROWS) * ((float)band + t.y);
-    float r = sqrt(fmax(0.0f, 1.0f - y * y));
-    float2 sc = etk_sincospi(2.0f * (((float)col + t.x) / ETK_GUIDE_COLS) - 1.0f);
-    return make_float3(r * sc.y, y, r * sc.x);
+    float h = 2.0f / ETK_GUIDE_ROWS;
+    float y = (1.0f - h * (float)band) - h * t.y;
+    float u = ((float)col + t.x) * (1.0f / ETK_GUIDE_COLS);
+    return etk_latlong_dir(u, y, sqrt(fmax(0.0f, 1.0f - y * y)));
 }
 
 // The cell's directional CDF (K + 1 entries), followed by its guided share.
 ETK_FN ETK_GLOBAL const float* etk_cguide_cdf(EtkScene S, EtkParams p, int cell) {
-    return S.guide_cells + p.guide_slots * ETK_GUIDE_CELL_FLOATS + cell * ETK_GUIDE_DIR_FLOATS;
+    return S.guide_cells + etk_guide_dir_offset(p.guide_slots, cell);
 }
 // The share c of continuation samples a vertex of material m in `cell` draws from the guide: 0
-// where the continuation is not guided (strategy, option, material: only diffuse surfaces, whose
-// BSDF sample reaches the whole hemisphere and whose lobe the guide's coarse regions can match).
+// where the option is off or the material is not diffuse (only a diffuse BSDF sample reaches the
+// whole hemisphere and has a lobe the guide's coarse regions can match). The caller asks only
+// for the visibility strategy's vertices below the last bounce (etk_shade).
 ETK_FN float etk_cguide_share(EtkScene S, EtkParams p, int cell, EtkMaterial m) {
     return p.guide_continuation && m.type == ETK_MAT_DIFFUSE
                ? etk_cguide_cdf(S, p, cell)[ETK_GUIDE_DIR_SHARE]
@@ -91,6 +95,7 @@ ETK_FN EtkGuidedSample etk_cguide_sample_mixture(EtkScene S, EtkParams p, int ce
         g.wi_world =
             etk_cguide_sample(S, p, cell, make_float2(etk_guide_rescale(u.x, 0.0f, c), u.y));
         g.wi = etk_to_local(g.wi_world, t, b, n);
+        g.pdf_bsdf = etk_bsdf_pdf(m, wo, g.wi);
     } else {
         EtkBsdfSample bs =
             etk_bsdf_sample(m, wo, make_float2(etk_guide_rescale(u.x, c, 1.0f), u.y), lobe);
@@ -98,8 +103,8 @@ ETK_FN EtkGuidedSample etk_cguide_sample_mixture(EtkScene S, EtkParams p, int ce
         g.wi_world = etk_from_local(bs.wi, t, b, n);
         if (!(bs.pdf > 0.0f))
             return g;
+        g.pdf_bsdf = bs.pdf;
     }
-    g.pdf_bsdf = etk_bsdf_pdf(m, wo, g.wi);
     g.pdf = etk_cguide_mix_pdf(S, p, cell, c, g.pdf_bsdf, g.wi_world);
     return g;
 }

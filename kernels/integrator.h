@@ -4,7 +4,8 @@
 // the live work. One path per pixel per pass: film accumulation needs no atomics.
 //
 // Sample dimensions (pairs, regenerated from pixel, sample index, pair; never stored):
-//   pair 0: pixel jitter; for bounce d: pair 1+3d light sample, 2+3d BSDF direction,
+//   pair 0: pixel jitter; for bounce d: pair 1+3d light sample, 2+3d BSDF direction (at a
+//   guided vertex: u.x also picks the guide or the BSDF, continuation_guide.h),
 //   3+3d (BSDF lobe, Russian roulette); the adaptive strategy's technique choices:
 //   ETK_PAIR_SHARE + d (etk_shade). Pairs are hashed, so these need not be contiguous.
 #ifndef ETK_INTEGRATOR_H
@@ -130,7 +131,8 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
     float4 d = P.ray_d[slot];
     float2 uv = etk_env_uv(p.env, etk_xyz(d));
     float w = 1.0f;
-    if (d.w >= 0.0f) {                             // made by a non-delta BSDF sample
+    if (d.w >= 0.0f) { // a non-delta continuation; d.w: the density it was drawn from (the
+                       // BSDF's, or a guided vertex's mixture: the MIS weight needs that one)
         if (p.strategy == ETK_STRATEGY_ADAPTIVE) { // d.w: p_bsdf of the direction (etk_shade)
             float s = P.beta[slot].w;
             int comp = s >= 8.0f;
@@ -186,7 +188,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     EtkMaterial m = s.m;
     float3 beta = etk_xyz(P.beta[slot]);
     uint pair = 1u + 3u * (uint)depth;
-    int last = depth + 1 >= p.max_depth;
+    int last = etk_last_bounce(p, depth);
     int adaptive = p.strategy == ETK_STRATEGY_ADAPTIVE;
     int delta = etk_bsdf_is_delta(m);
     // Adaptive: this vertex's share, distribution and GGX sampling; learning passes note the
@@ -296,7 +298,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         }
     }
 
-    // BSDF sample: the continuation. Not needed when nothing it could reach would count.
+    // The continuation (a BSDF sample, or at a guided vertex a sample of the mixture with the
+    // learned directions). Not needed when nothing it could reach would count.
     // SIS (like the light set) renders direct lighting from its strata alone: no continuation.
     if (p.strategy == ETK_STRATEGY_SIS || (last && p.strategy != ETK_STRATEGY_BSDF &&
                                            !etk_strategy_is_mis(p.strategy) && !adaptive && !delta))

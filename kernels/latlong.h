@@ -27,10 +27,15 @@ ETK_FN float3 etk_latlong_to_dir(float2 uv) {
     return etk_latlong_dir(uv.x, etk_cospi(uv.y), etk_latlong_sin_theta(uv.y));
 }
 
+// The longitude coordinate u of direction d.
+ETK_FN float etk_latlong_u(float3 d) {
+    return 0.5f * (1.0f + etk_atan2(d.x, -d.z) * ETK_INV_PI);
+}
+
 // theta = atan2(sqrt(x^2 + z^2), y) rather than acos(y): acos loses theta near the poles, where
 // y rounds to +-1 for theta below ~3e-4 and a sampled direction would map back to the pole.
 ETK_FN float2 etk_dir_to_latlong(float3 d) {
-    float u = 0.5f * (1.0f + etk_atan2(d.x, -d.z) * ETK_INV_PI);
+    float u = etk_latlong_u(d);
     float v = etk_atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * ETK_INV_PI;
     return make_float2(u, v);
 }

@@ -14,7 +14,9 @@
 #define ETK_STRATEGY_LIGHTS 5      // a directional light set, all lights at every hit
 #define ETK_STRATEGY_COMPENSATED 6 // MIS with the compensated map distribution (env_dist_comp)
 #define ETK_STRATEGY_ADAPTIVE 7    // compensated map, light/BSDF share learned per material bin
-#define ETK_STRATEGY_VISIBILITY 8  // MIS, light samples guided by learned visibility
+#define ETK_STRATEGY_VISIBILITY                                                                    \
+    8 // MIS, light samples and diffuse continuations guided by
+      // tables learned in the first passes
 #define ETK_HEURISTIC_BALANCE 0
 #define ETK_HEURISTIC_POWER 1
 // Material bins of the adaptive strategy's light shares (host/lib/render/light_share.h).
@@ -82,9 +84,15 @@ typedef struct {
     float guide_inv_cell;
     int guide_slots;
     int guide_ready;
-    int guide_learn;
+    int guide_learn; // records shadow rays' and continuations' outcomes (visibility_cache.h)
     int guide_continuation;
 } EtkParams;
+
+// Whether a vertex at `depth` (surface interactions before it) is the path's last: its
+// continuation can only escape (integrator.h; the continuation guide's recorder, schedule.cpp).
+ETK_FN int etk_last_bounce(EtkParams p, int depth) {
+    return depth + 1 >= p.max_depth;
+}
 
 ETK_END
 

@@ -27,14 +27,16 @@
     X(float4, tex_info)     /* per texture: (offset, width, height, channels), uv transform */     \
     X(float, tex_texels)    /* every texture's texels, one flat array */                           \
     X(float, guide_regions) /* visibility: the map's mass and row tables per region */             \
-    X(float, guide_cells)   /* visibility: per hash-grid cell, a CDF over the regions */
+    X(float, guide_cells)   /* visibility: per hash-grid cell, CDFs over regions (light sample;    \
+                               continuation guide) */
 
 // Path state, one element per path in flight: X(type, name).
 #define ETK_PATH_FIELDS(X)                                                                         \
     X(float4, ray_o)    /* origin; w: depth (surface interactions so far) */                       \
-    X(float4, ray_d)    /* direction; w: pdf of the BSDF sample that made it, < 0 if none */       \
+    X(float4, ray_d)    /* direction; w: density it was drawn from (BSDF or guided mixture), < 0   \
+                           if a delta sample or none */                                            \
     X(float4, beta)     /* throughput; w: adaptive: share of the vertex that made the ray, +4 if a \
-                           light sample */                                                         \
+                           light sample; visibility: the vertex's hash-grid cell */                \
     X(float4, radiance) /* accumulated along the path */                                           \
     X(float4, hit)      /* t, triangle (int bits), b1, b2 */                                       \
     X(float4, shadow_o) /* shadow ray origin */                                                    \

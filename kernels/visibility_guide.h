@@ -91,6 +91,11 @@ ETK_FN int etk_guide_regions_size(int h) {
     return etk_guide_split_table(h, h);
 }
 
+// Where slot `cell`'s continuation-guide table starts in guide_cells of `slots` slots.
+ETK_FN int etk_guide_dir_offset(int slots, int cell) {
+    return slots * ETK_GUIDE_CELL_FLOATS + cell * ETK_GUIDE_DIR_FLOATS;
+}
+
 // The hash-grid slot of surface point `pos` with geometric normal `n`.
 ETK_FN int etk_guide_cell(EtkParams p, float3 pos, float3 n) {
     float3 q = (pos - make_float3(p.guide_origin[0], p.guide_origin[1], p.guide_origin[2])) *

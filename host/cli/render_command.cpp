@@ -193,6 +193,7 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                            {"learning_seconds", s.guide_learning_seconds},
                            {"update_seconds", s.guide_update_seconds},
                            {"records", s.guide_records},
+                           {"continuation_records", s.guide_continuation_records},
                            {"host_bytes", s.guide_host_bytes},
                            {"device_bytes", s.guide_device_bytes}};
     j["render_seconds"] = render_s;

@@ -54,9 +54,12 @@ void make(Cell& c, uint32_t seed, float share) {
 
 TEST(ContinuationGuide, RegionsMapBackToThemselves) {
     for (int R = 0; R < K; ++R)
-        for (int i = 0; i < 7; ++i)
-            for (int j = 0; j < 7; ++j) {
-                const etk::float2 t = etk::make_float2((i + 0.5f) / 7.0f, (j + 0.5f) / 7.0f);
+        for (int i = 0; i < 9; ++i)
+            for (int j = 0; j < 9; ++j) {
+                // 7 interior points and, within the polynomial atan2's few ulps, the edges.
+                const float ti = i == 0 ? 1e-3f : i == 8 ? 0.999f : (i - 0.5f) / 7.0f;
+                const float tj = j == 0 ? 1e-3f : j == 8 ? 0.999f : (j - 0.5f) / 7.0f;
+                const etk::float2 t = etk::make_float2(ti, tj);
                 const etk::float3 d = etk::etk_cguide_region_dir(R, t);
                 ASSERT_NEAR(etk::dot(d, d), 1.0f, 1e-5f);
                 ASSERT_EQ(etk::etk_cguide_region(d), R) << "t " << t.x << " " << t.y;
@@ -65,8 +68,11 @@ TEST(ContinuationGuide, RegionsMapBackToThemselves) {
     EXPECT_EQ(etk::etk_cguide_region(etk::make_float3(0, 1, 0)) / ETK_GUIDE_COLS, 0);
     EXPECT_EQ(etk::etk_cguide_region(etk::make_float3(0, -1, 0)) / ETK_GUIDE_COLS,
               ETK_GUIDE_ROWS - 1);
-    EXPECT_EQ(etk::etk_cguide_region(etk::make_float3(-1, 0, 0)) % ETK_GUIDE_COLS,
+    EXPECT_EQ(etk::etk_cguide_region(etk::normalize(etk::make_float3(1e-4f, 0, 1))) %
+                  ETK_GUIDE_COLS,
               ETK_GUIDE_COLS - 1);
+    EXPECT_EQ(
+        etk::etk_cguide_region(etk::normalize(etk::make_float3(-1e-4f, 0, 1))) % ETK_GUIDE_COLS, 0);
 }
 
 // The guide's density over a fine equal-area grid of the sphere sums to one (each grid cell
@@ -91,7 +97,8 @@ TEST(ContinuationGuide, DensityIntegratesToOne) {
 }
 
 // The density of the mixture of share c at a vertex of normal n (world), integrated over the
-// bin (i, j) of a ny x nphi equal-area grid by a sub x sub midpoint rule.
+// bin (i, j) of a ny x nphi equal-area grid (bands of y, sectors of longitude) by a sub x sub
+// midpoint rule.
 double bin_mass(const Cell& cell, float c, const etk::EtkMaterial& m, etk::float3 wo_local,
                 etk::float3 t, etk::float3 b, etk::float3 n, int i, int j, int ny, int nphi) {
     const int sub = 12;
@@ -99,11 +106,12 @@ double bin_mass(const Cell& cell, float c, const etk::EtkMaterial& m, etk::float
     for (int a = 0; a < sub; ++a)
         for (int e = 0; e < sub; ++e) {
             const double y = 1.0 - 2.0 * (i + (a + 0.5) / sub) / ny;
-            const double phi = -M_PI + 2.0 * M_PI * (j + (e + 0.5) / sub) / nphi;
+            // Longitude u of the bin (latlong.h): the direction at angle a = pi (2u - 1).
+            const double a_u = M_PI * (2.0 * (j + (e + 0.5) / sub) / nphi - 1.0);
             const double r = std::sqrt(std::max(0.0, 1.0 - y * y));
             const etk::float3 d =
-                etk::make_float3(static_cast<float>(r * std::cos(phi)), static_cast<float>(y),
-                                 static_cast<float>(r * std::sin(phi)));
+                etk::make_float3(static_cast<float>(r * std::sin(a_u)), static_cast<float>(y),
+                                 static_cast<float>(-r * std::cos(a_u)));
             const etk::float3 wi = etk::etk_to_local(d, t, b, n);
             mass += etk::etk_cguide_mix_pdf(cell.S, cell.p, 0, c,
                                             etk::etk_bsdf_pdf(m, wo_local, wi), d);
@@ -143,18 +151,26 @@ TEST_P(ContinuationMixture, SamplesMatchTheirDensity) {
             ++lost;
             continue;
         }
-        // The density reported is the one the MIS weights evaluate for the same direction.
-        const float again = etk::etk_cguide_mix_pdf(cell.S, cell.p, 0, mc.share,
-                                                    etk::etk_bsdf_pdf(m, wo, g.wi), g.wi_world);
-        mismatched += std::fabs(again - g.pdf) > 1e-5f * g.pdf;
+        // The density reported, against one written out here: c P(R) K / 4 pi + (1 - c) cos / pi,
+        // R from the direction's y band and longitude (latlong.h: u = (1 + atan2(x, -z) / pi) / 2).
         const etk::float3 d = g.wi_world;
+        const double lon = 0.5 * (1.0 + std::atan2(double(d.x), -double(d.z)) / M_PI);
+        const int band = std::min(ETK_GUIDE_ROWS - 1, static_cast<int>((1.0 - d.y) * 4.0));
+        const int col = std::min(ETK_GUIDE_COLS - 1, static_cast<int>(lon * ETK_GUIDE_COLS));
+        const double cos_n = etk::dot(d, n);
+        const double expect = mc.share * cell.P[band * ETK_GUIDE_COLS + col] * K / (4.0 * M_PI) +
+                              (1.0 - mc.share) * std::max(0.0, cos_n) / M_PI;
+        mismatched += std::fabs(expect - g.pdf) > 1e-4 * expect;
         const int i = std::min(ny - 1, static_cast<int>((1.0f - d.y) * 0.5f * ny));
-        const double phi = std::atan2(double(d.z), double(d.x));
-        const int j = std::min(nphi - 1, static_cast<int>((phi + M_PI) / (2.0 * M_PI) * nphi));
+        const int j = std::min(nphi - 1, static_cast<int>(lon * nphi));
         observed[i * nphi + j] += 1.0;
     }
+    // A sampled direction's region is found again from its float coordinates through the
+    // polynomial atan2 (a few ulps): within that of a region's edge it can land in the
+    // neighbour, whose probability the density then reports (about 5 samples in 10^6 here; a
+    // bias far below float noise). More than 2e-5 of the samples would be a real mismatch.
     EXPECT_EQ(lost, 0);
-    EXPECT_EQ(mismatched, 0);
+    EXPECT_LE(mismatched, n_samples / 50000);
     double total = 0.0;
     for (int i = 0; i < ny; ++i)
         for (int j = 0; j < nphi; ++j) {
@@ -164,7 +180,8 @@ TEST_P(ContinuationMixture, SamplesMatchTheirDensity) {
         }
     EXPECT_NEAR(total, 1.0, 2e-3) << "the mixture's density does not integrate to one";
     const ett::Chi2Result chi =
-        ett::chi2_test(observed, expected, nphi, ny, ett::sidak_alpha(0.01, kTests));
+        ett::chi2_test(observed, expected, nphi, ny, ett::sidak_alpha(0.01, kTests), 5.0,
+                       n_samples / 50000.0); // the same edge slivers, into zero-probability regions
     EXPECT_TRUE(chi.passed) << chi.report;
 }
 

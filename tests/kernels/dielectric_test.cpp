@@ -84,8 +84,7 @@ double bin_integral(const etk::EtkMaterial& m, etk::float3 wo, double th0, doubl
 }
 
 // Refined until two successive estimates agree (as in bsdf_test.cpp).
-double refined_integral(const etk::EtkMaterial& m, etk::float3 wo, double th0, double th1,
-                        int ip) {
+double refined_integral(const etk::EtkMaterial& m, etk::float3 wo, double th0, double th1, int ip) {
     double prev = bin_integral(m, wo, th0, th1, ip, 4), cur = prev;
     for (int n = 8; n <= 512; n *= 2) {
         cur = bin_integral(m, wo, th0, th1, ip, n);

@@ -74,7 +74,10 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(std::make_tuple("opencl", 1, "mis"), std::make_tuple("opencl", 50, "mis"),
                       std::make_tuple("cpu", 1, "mis"), std::make_tuple("cpu", 50, "mis"),
                       std::make_tuple("cpu", 1, "light"), std::make_tuple("cpu", 50, "bsdf"),
-                      std::make_tuple("opencl", 50, "light")),
+                      std::make_tuple("opencl", 50, "light"),
+                      // Guided light samples and continuations, tables learned as it renders.
+                      std::make_tuple("cpu", 50, "visibility"),
+                      std::make_tuple("opencl", 50, "visibility")),
     [](const auto& info) {
         return std::get<0>(info.param) + "_depth" + std::to_string(std::get<1>(info.param)) + "_" +
                std::get<2>(info.param);

@@ -232,8 +232,8 @@ TEST(Sampler, PairEqualsTheSequenceFunctions) {
     for (const Key& k : kKeys)
         for (uint32_t first : {0u, 1000u, 0xfffff000u})
             for (uint32_t index = first; index < first + 2048u; ++index) {
-                const uint32_t key = etk::etk_hash_combine(etk::etk_hash_combine(k.seed, k.stream),
-                                                           k.pair);
+                const uint32_t key =
+                    etk::etk_hash_combine(etk::etk_hash_combine(k.seed, k.stream), k.pair);
                 const uint32_t i = etk::etk_shuffle_index(index, etk::etk_hash(key ^ 0x5bd1e995u));
                 const etk::float2 want = etk::make_float2(
                     etk::etk_unit_float(etk::etk_sobol02_x(i, etk::etk_hash(key ^ 0x68e31da4u))),

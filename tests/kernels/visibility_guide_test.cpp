@@ -6,6 +6,7 @@
 // its area: no direction the map lights is missed), and the learned tables must not depend on
 // the order records arrive in (host/lib/render/visibility_cache.h).
 #include "chi2.h"
+#include "kernels/continuation_guide.h"
 #include "kernels/visibility_guide.h"
 #include "load/env_distribution.h"
 #include "render/visibility_cache.h"
@@ -301,8 +302,15 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     // n / (n + n0) where light came back, 0 elsewhere.
     for (int s = 0; s < o.slots; ++s) {
         const float* cell = ta.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
-        const float* dir = ta.data() + static_cast<size_t>(o.slots) * ETK_GUIDE_CELL_FLOATS +
-                           static_cast<size_t>(s) * ETK_GUIDE_DIR_FLOATS;
+        // Read through the kernel's own accessors, so the layout is the one the kernels read.
+        etk::EtkScene S{};
+        S.guide_cells = ta.data();
+        etk::EtkParams p{};
+        p.guide_slots = o.slots;
+        p.guide_continuation = 1;
+        etk::EtkMaterial diffuse{};
+        diffuse.type = ETK_MAT_DIFFUSE;
+        const float* dir = etk::etk_cguide_cdf(S, p, s);
         for (const float* cdf : {cell, dir}) {
             EXPECT_EQ(cdf[0], 0.0f);
             EXPECT_EQ(cdf[K], 1.0f);
@@ -311,7 +319,7 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
         }
         const double n = dcount[s];
         const double share = s == dark || n == 0 ? 0.0 : o.continuation_share * n / (n + o.prior);
-        EXPECT_NEAR(dir[ETK_GUIDE_DIR_SHARE], share, 1e-6) << "slot " << s;
+        EXPECT_NEAR(etk::etk_cguide_share(S, p, s, diffuse), share, 1e-6) << "slot " << s;
         if (share == 0.0) { // nothing learned: uniform over the regions
             for (int R = 0; R <= K; ++R)
                 EXPECT_NEAR(dir[R], float(R) / K, 1e-6);

@@ -1,7 +1,8 @@
 // The visibility strategy inside the renderer (host/lib/render/renderer.cpp,
 // visibility_cache.h): its tables depend on the seed alone, so the image is the same bits on any
-// thread count, and a render that starts past the learning passes (a resume, a farm task, an MPI
-// rank) re-learns the same tables and continues exactly where the uninterrupted render was.
+// thread count (the continuation guide's too), and a render that starts past the learning passes (a
+// resume, a farm task, an MPI rank) re-learns the same tables and continues exactly where the
+// uninterrupted render was.
 #include "render_util.h"
 
 #include <gtest/gtest.h>
@@ -32,14 +33,15 @@ et::Scene room() {
 
 struct Result {
     std::vector<float> mean;
-    uint64_t records = 0;
+    uint64_t records = 0, continuation_records = 0;
 };
 
 // Samples [from, to) on `threads` threads, resuming `resume` if given.
 Result render(const et::Scene& s, int threads, int from, int to,
               const et::FilmSums* resume = nullptr) {
     const ett::SampleRun run = ett::render_samples(s, threads, from, to, resume);
-    return {run.renderer->sums().mean(), run.renderer->stats().guide_records};
+    const et::RenderStats& st = run.renderer->stats();
+    return {run.renderer->sums().mean(), st.guide_records, st.guide_continuation_records};
 }
 
 TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
@@ -48,6 +50,9 @@ TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
     const Result one = render(s, 1, 0, spp), two = render(s, 2, 0, spp);
     EXPECT_GT(one.records, 0u) << "nothing was learned: the test would not see the tables";
     EXPECT_EQ(one.records, two.records);
+    // Depth 2: the first bounce's diffuse vertices record (and guide) their continuations.
+    EXPECT_GT(one.continuation_records, 0u) << "the continuation guide learned nothing";
+    EXPECT_EQ(one.continuation_records, two.continuation_records);
     EXPECT_TRUE(one.mean == two.mean) << "the image depends on the thread count";
     // The first 7 samples, then a new renderer resumes their film at sample 7: it renders the
     // learning passes on a scratch film (recording the same outcomes), and the rest is the same.

@@ -172,7 +172,8 @@ void add_strata(const VoronoiStrata& v, DeviceScene& d) {
 }
 
 // The visibility strategy: its hash grid over the scene's bounds, the map's region tables and
-// the cells' initial tables (the map's own distribution).
+// the cells' initial tables (the map's own distribution; the continuation guide's, at depth > 1,
+// uniform with a guided share of 0).
 void add_visibility_guide(const Scene& scene, DeviceScene& d) {
     const VisibilityOptions opt;
     glm::vec3 lo(0.0f), hi(0.0f);

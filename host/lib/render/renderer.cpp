@@ -82,6 +82,7 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
             stats_.guide_update_seconds += t.seconds();
         }
         stats_.guide_records = cache_->records();
+        stats_.guide_continuation_records = cache_->continuation_records();
         stats_.guide_learning_seconds += pass_timer.seconds();
         if (next_learning_pass_ + 1 == guide_options_.learning_passes)
             cache_.reset(); // learned: the sums are no longer needed

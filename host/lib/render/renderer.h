@@ -30,9 +30,11 @@ struct RenderStats {
     int learning_passes = 0; // adaptive: passes rendered only to learn (resumes, sample ranges)
     double seconds = 0.0;
     // Visibility strategy: learning passes' time (records read and summed included), the
-    // tables' rebuilds and uploads, records, and the learned structure's memory.
+    // tables' rebuilds and uploads, records (shadow rays', continuations'), and the learned
+    // structure's memory.
     double guide_learning_seconds = 0.0, guide_update_seconds = 0.0;
-    uint64_t guide_records = 0, guide_host_bytes = 0, guide_device_bytes = 0;
+    uint64_t guide_records = 0, guide_continuation_records = 0;
+    uint64_t guide_host_bytes = 0, guide_device_bytes = 0;
     // Time per stage (seconds): device time from profiling events for OpenCL, thread time natively.
     std::vector<std::pair<std::string, double>> stage_seconds;
     uint64_t rays() const { return camera_rays + continuation_rays + shadow_rays; }

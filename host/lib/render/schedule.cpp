@@ -112,7 +112,7 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     ex.bind_queues(true); // generate fills queue A
     ex.launch(etk::ETK_STAGE_generate, n, p);
     std::unique_ptr<ContinuationRecorder> recorder;
-    if (guide && p.guide_learn && p.guide_continuation && p.max_depth > 1)
+    if (guide && p.guide_learn && p.guide_continuation)
         recorder = std::make_unique<ContinuationRecorder>(n);
     counts.camera += n;
     int rays = n;
@@ -136,7 +136,7 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
             ex.read_guide(m, keys.data(), values.data());
             guide->add(keys.data(), values.data(), m);
         }
-        if (recorder && bounce + 1 < p.max_depth) // vertices at the last bounce are not guided
+        if (recorder && !etk::etk_last_bounce(p, bounce)) // the last vertex is never guided
             recorder->after_bounce(ex, bounce);
         rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
         swapped = !swapped;

@@ -96,14 +96,12 @@ std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slot
     write_cdf(prob, light.data());
     write_cdf(std::vector<double>(K, 1.0), dir.data()); // uniform, share 0: not guided
     std::vector<float> out(guide_cells_size(slots, continuation));
-    for (int s = 0; s < slots; ++s)
+    for (int s = 0; s < slots; ++s) {
         std::copy(light.begin(), light.end(),
                   out.begin() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS);
-    if (continuation)
-        for (int s = 0; s < slots; ++s)
-            std::copy(dir.begin(), dir.end(),
-                      out.begin() + static_cast<size_t>(slots) * ETK_GUIDE_CELL_FLOATS +
-                          static_cast<size_t>(s) * ETK_GUIDE_DIR_FLOATS);
+        if (continuation)
+            std::copy(dir.begin(), dir.end(), out.begin() + etk::etk_guide_dir_offset(slots, s));
+    }
     return out;
 }
 
@@ -141,12 +139,14 @@ void VisibilityCache::add(const int* keys, const float* values, int n) {
 
 void VisibilityCache::add_continuations(const int* keys, const float* values, int n) {
     std::lock_guard<std::mutex> lock(mutex_);
-    add_records(keys, values, n, opt_.slots, inv_scale_, dir_sums_, dir_counts_, records_);
+    add_records(keys, values, n, opt_.slots, inv_scale_, dir_sums_, dir_counts_, dir_records_);
 }
 
 std::vector<float> VisibilityCache::tables() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    std::vector<float> out(guide_cells_size(opt_.slots, !dir_sums_.empty()));
+    // Cells without records keep the prior tables (most cells of a scene).
+    const std::vector<float> mass(mass_.begin(), mass_.end());
+    std::vector<float> out = guide_prior_cells(mass, opt_.slots, !dir_sums_.empty());
     std::vector<double> prob(K);
     const std::vector<double> uniform(K, 1.0 / K);
     // P = own x S / sum S + (1 - own) x prior, own = n / (n + n0) (0 if nothing came back).
@@ -161,33 +161,20 @@ std::vector<float> VisibilityCache::tables() const {
             P[R] = (own > 0.0 ? own * double(S[R]) / total : 0.0) + (1.0 - own) * prior[R];
         return own;
     };
-    // Cells without records keep the prior tables (most cells of a scene: copied, not rebuilt).
-    std::vector<float> prior_light(K + 1), prior_dir(ETK_GUIDE_DIR_FLOATS, 0.0f);
-    write_cdf(mass_, prior_light.data());
-    write_cdf(uniform, prior_dir.data());
-    float* const dirs = out.data() + static_cast<size_t>(opt_.slots) * ETK_GUIDE_CELL_FLOATS;
     for (int s = 0; s < opt_.slots; ++s) {
-        float* cell = out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
-        if (counts_[s] == 0) {
-            std::copy(prior_light.begin(), prior_light.end(), cell);
-        } else { // the light sample's mixture Q = alpha M + (1 - alpha) P
+        if (counts_[s] > 0) { // the light sample's mixture Q = alpha M + (1 - alpha) P
             learned(sums_.data() + static_cast<size_t>(s) * K, counts_[s], mass_, prob);
             for (int R = 0; R < K; ++R)
                 prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];
-            write_cdf(prob, cell);
+            write_cdf(prob, out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS);
         }
-        if (dir_sums_.empty())
-            continue;
-        // The continuation guide and its share.
-        float* dir = dirs + static_cast<size_t>(s) * ETK_GUIDE_DIR_FLOATS;
-        if (dir_counts_[s] == 0) {
-            std::copy(prior_dir.begin(), prior_dir.end(), dir);
-            continue;
+        if (!dir_sums_.empty() && dir_counts_[s] > 0) { // the continuation guide and its share
+            float* dir = out.data() + etk::etk_guide_dir_offset(opt_.slots, s);
+            const double own = learned(dir_sums_.data() + static_cast<size_t>(s) * K,
+                                       dir_counts_[s], uniform, prob);
+            write_cdf(prob, dir);
+            dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
         }
-        const double own =
-            learned(dir_sums_.data() + static_cast<size_t>(s) * K, dir_counts_[s], uniform, prob);
-        write_cdf(prob, dir);
-        dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
     }
     return out;
 }

@@ -7,7 +7,9 @@
 // pdf of its direction if nothing blocked it, else 0 (the shadow stage writes them in queue order;
 // the schedule hands each bounce's records here). Per cell and region the values are summed in
 // 64-bit fixed point, so the sums -- and the tables -- do not depend on the order records
-// arrive in (threads, lanes, wave sizes, back ends): the tables depend on the seed alone. Each
+// arrive in (threads, lanes, wave sizes, back ends): the tables depend on the seed alone (and, for
+// the continuation guide below, on the paths' float radiance, which rounds differently on the two
+// back ends past depth 1; tests/render/backends_test.cpp compares them statistically). Each
 // value estimates, for the cell, the integral of L V cos over the region times the samples
 // drawn; after passes 1, 2, 4, 8 ... L the host turns the sums into a CDF per cell:
 //   P(R) = n / (n + n0) S(R) / sum S  +  n0 / (n + n0) M_R        (n records in the cell)
@@ -21,7 +23,9 @@
 // schedule makes of every non-delta vertex's continuation during the learning passes: key cell x
 // regions + the equal-area region of its direction, value luminance(L_in) / p of the direction,
 // with L_in the radiance the rest of the path brought back along it (the path's radiance at its
-// end less its radiance after the vertex, divided by the throughput after the vertex). Per cell,
+// end less its radiance after the vertex, divided by the throughput after the vertex; MIS-weighted
+// as the path counted it, so sky the light sample already covers weighs less). Radiance, not
+// radiance x cos: the mixture's BSDF half brings the cosine. Per cell,
 // P(R) = n / (n + n0) S(R) / sum S + n0 / (n + n0) / K (uniform where it knows little) and the
 // guided share c = continuation_share x n / (n + n0), 0 where the cell saw no light come back.
 #pragma once
@@ -34,14 +38,15 @@
 namespace et {
 
 struct VisibilityOptions {
-    int slots = 1 << 14;      // hash-grid cells (a power of two)
-    int resolution = 8;       // cells along the scene's longest side (few records per cell
-                              // otherwise: measured in docs/results.md, issue 11)
-    float alpha = 0.25f;      // the map's defensive share of every light sample
-    int learning_passes = 64; // samples 0 .. 63 record shadow rays (16: 1.78x -> 64: 2.17x MIS's
-                              // efficiency on the interiors; docs/results.md, issue 11)
-    double prior = 32.0;      // n0: records a cell needs before its own sums weigh half
-    bool continuation = true; // guide diffuse vertices' continuations as well
+    int slots = 1 << 14; // hash-grid cells (a power of two)
+    int resolution = 8;  // cells along the scene's longest side (few records per cell
+                         // otherwise: measured in docs/results.md, issue 11)
+    float alpha = 0.25f; // the map's defensive share of every light sample
+    int learning_passes =
+        64; // samples 0 .. 63 record shadow rays and continuations (16: 1.78x -> 64: 2.17x MIS's
+            // efficiency on the interiors; docs/results.md, issue 11)
+    double prior = 32.0;             // n0: records a cell needs before its own sums weigh half
+    bool continuation = true;        // guide diffuse vertices' continuations as well
     double continuation_share = 0.5; // the guided share of a well-learned cell's continuations
 };
 
@@ -77,7 +82,8 @@ class VisibilityCache {
         return (sums_.size() + dir_sums_.size()) * sizeof(uint64_t) +
                (counts_.size() + dir_counts_.size()) * 4;
     }
-    uint64_t records() const { return records_; }
+    uint64_t records() const { return records_; } // shadow-ray records
+    uint64_t continuation_records() const { return dir_records_; }
     // Whether the table should be rebuilt after learning pass `pass` (0-based): 1, 2, 4, ...
     static bool update_after(int pass, int learning_passes);
 
@@ -87,7 +93,7 @@ class VisibilityCache {
     double inv_scale_;
     std::vector<uint64_t> sums_, dir_sums_;     // slots x K, fixed point
     std::vector<uint32_t> counts_, dir_counts_; // records per slot
-    uint64_t records_ = 0;
+    uint64_t records_ = 0, dir_records_ = 0;
     mutable std::mutex mutex_;
 };
 
