@@ -14,9 +14,8 @@
 #define ETK_STRATEGY_LIGHTS 5      // a directional light set, all lights at every hit
 #define ETK_STRATEGY_COMPENSATED 6 // MIS with the compensated map distribution (env_dist_comp)
 #define ETK_STRATEGY_ADAPTIVE 7    // compensated map, light/BSDF share learned per material bin
-#define ETK_STRATEGY_VISIBILITY                                                                    \
-    8 // MIS, light samples and diffuse continuations guided by
-      // tables learned in the first passes
+// MIS, light samples and diffuse continuations guided by tables learned in the first passes.
+#define ETK_STRATEGY_VISIBILITY 8
 #define ETK_HEURISTIC_BALANCE 0
 #define ETK_HEURISTIC_POWER 1
 // Material bins of the adaptive strategy's light shares (host/lib/render/light_share.h).

@@ -18,8 +18,8 @@ namespace {
 constexpr int K = ETK_GUIDE_REGIONS;
 constexpr int kTests = 2; // chi-square tests in this file, family-wise alpha 0.01
 
-// One cell whose continuation table is random, with some regions of zero probability.
-// One slot: the light sample's table (unused here), then the continuation guide's.
+// One slot: the light sample's table (unused here), then the continuation guide's, random with
+// some regions of zero probability.
 struct Cell {
     std::vector<float> floats =
         std::vector<float>(ETK_GUIDE_CELL_FLOATS + ETK_GUIDE_DIR_FLOATS, 0.0f);

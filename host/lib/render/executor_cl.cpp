@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 
 namespace et {
 namespace {
@@ -194,10 +195,14 @@ void ClDevice::read_guide(int n, int* keys, float* values) {
 
 void ClDevice::read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) {
     const size_t bytes = sizeof(cl_float4) * n;
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_ray_o], CL_FALSE, 0, bytes, ray_o);
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_ray_d], CL_FALSE, 0, bytes, ray_d);
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_beta], CL_FALSE, 0, bytes, beta);
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_radiance], CL_TRUE, 0, bytes, radiance);
+    const std::pair<int, float*> fields[] = {{etk::ETK_ARG_ray_o, ray_o},
+                                             {etk::ETK_ARG_ray_d, ray_d},
+                                             {etk::ETK_ARG_beta, beta},
+                                             {etk::ETK_ARG_radiance, radiance}};
+    for (const auto& [arg, to] : fields)
+        if (to)
+            queue_.enqueueReadBuffer(args_[arg], CL_FALSE, 0, bytes, to);
+    queue_.finish(); // the reads above are non-blocking
 }
 
 void ClDevice::upload_guide(const std::vector<float>& cells) {

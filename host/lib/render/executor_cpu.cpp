@@ -59,8 +59,9 @@ class CpuDevice::Lane : public StageExecutor {
     }
     void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) override {
         auto copy = [n](const etk::float4* from, float* to) {
-            std::copy(reinterpret_cast<const float*>(from),
-                      reinterpret_cast<const float*>(from + n), to);
+            if (to)
+                std::copy(reinterpret_cast<const float*>(from),
+                          reinterpret_cast<const float*>(from + n), to);
         };
         copy(ray_o_.get(), ray_o);
         copy(ray_d_.get(), ray_d);

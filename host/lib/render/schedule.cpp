@@ -64,7 +64,7 @@ class ContinuationRecorder {
 
     // After the last bounce: the paths' final radiance, and the records.
     void finish(StageExecutor& ex, VisibilityCache& guide) {
-        ex.read_paths(n_, o_.data(), d_.data(), b_.data(), r_.data());
+        ex.read_paths(n_, nullptr, nullptr, nullptr, r_.data());
         std::vector<int> keys;
         std::vector<float> values;
         keys.reserve(vertices_.size());

@@ -33,7 +33,7 @@ class StageExecutor {
     // order) of the last trace_shadows launch.
     virtual void read_guide(int n, int* keys, float* values);
     // Learning passes of the continuation guide: ray_o, ray_d, beta and radiance of path slots
-    // 0 .. n-1 (4 n floats each).
+    // 0 .. n-1 (4 n floats each; a null pointer skips its field).
     virtual void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance);
 };
 

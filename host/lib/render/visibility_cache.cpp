@@ -1,5 +1,7 @@
 #include "render/visibility_cache.h"
 
+#include "util/error.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -108,70 +110,69 @@ std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slot
 VisibilityCache::VisibilityCache(const VisibilityOptions& options,
                                  const std::vector<float>& regions, double scale)
     : opt_(options), mass_(regions.begin(), regions.begin() + K),
-      inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0), sums_(static_cast<size_t>(options.slots) * K, 0),
-      dir_sums_(options.continuation ? sums_.size() : 0, 0), counts_(options.slots, 0),
-      dir_counts_(options.continuation ? options.slots : 0, 0) {}
-
-namespace {
-
-void add_records(const int* keys, const float* values, int n, int slots, double inv_scale,
-                 std::vector<uint64_t>& sums, std::vector<uint32_t>& counts, uint64_t& records) {
-    if (sums.empty())
-        return;
-    for (int i = 0; i < n; ++i) {
-        const int key = keys[i];
-        if (key < 0 || key >= slots * K)
-            continue;
-        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
-        sums[key] +=
-            static_cast<uint64_t>(std::llround(std::min(v * inv_scale, kMaxValue) * kUnit));
-        ++counts[key / K];
-        ++records;
+      inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0) {
+    light_.sums.assign(static_cast<size_t>(options.slots) * K, 0);
+    light_.counts.assign(options.slots, 0);
+    if (options.continuation) {
+        dir_.sums = light_.sums;
+        dir_.counts = light_.counts;
     }
 }
 
-} // namespace
+void VisibilityCache::add_to(RegionSums& to, const int* keys, const float* values, int n) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (to.sums.empty())
+        throw Error("continuation records for a visibility cache built without the guide");
+    for (int i = 0; i < n; ++i) {
+        const int key = keys[i];
+        if (key < 0 || key >= opt_.slots * K)
+            continue;
+        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
+        to.sums[key] +=
+            static_cast<uint64_t>(std::llround(std::min(v * inv_scale_, kMaxValue) * kUnit));
+        ++to.counts[key / K];
+        ++to.records;
+    }
+}
 
 void VisibilityCache::add(const int* keys, const float* values, int n) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    add_records(keys, values, n, opt_.slots, inv_scale_, sums_, counts_, records_);
+    add_to(light_, keys, values, n);
 }
 
 void VisibilityCache::add_continuations(const int* keys, const float* values, int n) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    add_records(keys, values, n, opt_.slots, inv_scale_, dir_sums_, dir_counts_, dir_records_);
+    add_to(dir_, keys, values, n);
 }
 
 std::vector<float> VisibilityCache::tables() const {
     std::lock_guard<std::mutex> lock(mutex_);
+    const bool continuation = !dir_.sums.empty();
     // Cells without records keep the prior tables (most cells of a scene).
-    const std::vector<float> mass(mass_.begin(), mass_.end());
-    std::vector<float> out = guide_prior_cells(mass, opt_.slots, !dir_sums_.empty());
+    std::vector<float> out = guide_prior_cells(mass_, opt_.slots, continuation);
     std::vector<double> prob(K);
-    const std::vector<double> uniform(K, 1.0 / K);
-    // P = own x S / sum S + (1 - own) x prior, own = n / (n + n0) (0 if nothing came back).
-    auto learned = [&](const uint64_t* S, uint32_t count, const std::vector<double>& prior,
-                       std::vector<double>& P) {
+    const std::vector<float> uniform(K, 1.0f / K);
+    // Slot s's P = own x S / sum S + (1 - own) x prior, own = n / (n + n0) (0 if nothing came
+    // back); returns own.
+    auto learned = [&](const RegionSums& r, int s, const std::vector<float>& prior) {
+        const uint64_t* S = r.sums.data() + static_cast<size_t>(s) * K;
         double total = 0.0;
         for (int R = 0; R < K; ++R)
             total += double(S[R]);
-        const double n = count;
+        const double n = r.counts[s];
         const double own = total > 0.0 ? n / (n + opt_.prior) : 0.0;
         for (int R = 0; R < K; ++R)
-            P[R] = (own > 0.0 ? own * double(S[R]) / total : 0.0) + (1.0 - own) * prior[R];
+            prob[R] = (own > 0.0 ? own * double(S[R]) / total : 0.0) + (1.0 - own) * prior[R];
         return own;
     };
     for (int s = 0; s < opt_.slots; ++s) {
-        if (counts_[s] > 0) { // the light sample's mixture Q = alpha M + (1 - alpha) P
-            learned(sums_.data() + static_cast<size_t>(s) * K, counts_[s], mass_, prob);
+        if (light_.counts[s] > 0) { // the light sample's mixture Q = alpha M + (1 - alpha) P
+            learned(light_, s, mass_);
             for (int R = 0; R < K; ++R)
                 prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];
             write_cdf(prob, out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS);
         }
-        if (!dir_sums_.empty() && dir_counts_[s] > 0) { // the continuation guide and its share
+        if (continuation && dir_.counts[s] > 0) { // the continuation guide and its share
             float* dir = out.data() + etk::etk_guide_dir_offset(opt_.slots, s);
-            const double own = learned(dir_sums_.data() + static_cast<size_t>(s) * K,
-                                       dir_counts_[s], uniform, prob);
+            const double own = learned(dir_, s, uniform);
             write_cdf(prob, dir);
             dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
         }

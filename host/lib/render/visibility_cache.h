@@ -42,12 +42,14 @@ struct VisibilityOptions {
     int resolution = 8;  // cells along the scene's longest side (few records per cell
                          // otherwise: measured in docs/results.md, issue 11)
     float alpha = 0.25f; // the map's defensive share of every light sample
-    int learning_passes =
-        64; // samples 0 .. 63 record shadow rays and continuations (16: 1.78x -> 64: 2.17x MIS's
-            // efficiency on the interiors; docs/results.md, issue 11)
-    double prior = 32.0;             // n0: records a cell needs before its own sums weigh half
-    bool continuation = true;        // guide diffuse vertices' continuations as well
-    double continuation_share = 0.5; // the guided share of a well-learned cell's continuations
+    // Samples 0 .. 63 record shadow rays and continuations (16: 1.78x -> 64: 2.17x MIS's
+    // efficiency on the interiors; docs/results.md, issue 11).
+    int learning_passes = 64;
+    double prior = 32.0;      // n0: records a cell needs before its own sums weigh half
+    bool continuation = true; // guide diffuse vertices' continuations as well
+    // The guided share of a well-learned cell's continuations (0.3 / 0.5 / 0.7 measured:
+    // docs/results.md, issue 11).
+    double continuation_share = 0.5;
 };
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).
@@ -78,22 +80,25 @@ class VisibilityCache {
     // then, with options.continuation, the continuation guide's CDFs and shares.
     std::vector<float> tables() const;
     // Host memory of the sums, bytes.
-    uint64_t bytes() const {
-        return (sums_.size() + dir_sums_.size()) * sizeof(uint64_t) +
-               (counts_.size() + dir_counts_.size()) * 4;
-    }
-    uint64_t records() const { return records_; } // shadow-ray records
-    uint64_t continuation_records() const { return dir_records_; }
+    uint64_t bytes() const { return light_.bytes() + dir_.bytes(); }
+    uint64_t records() const { return light_.records; } // shadow-ray records
+    uint64_t continuation_records() const { return dir_.records; }
     // Whether the table should be rebuilt after learning pass `pass` (0-based): 1, 2, 4, ...
     static bool update_after(int pass, int learning_passes);
 
   private:
+    // One kind of records, summed per slot and region.
+    struct RegionSums {
+        std::vector<uint64_t> sums;   // slots x K, fixed point
+        std::vector<uint32_t> counts; // records per slot
+        uint64_t records = 0;
+        uint64_t bytes() const { return sums.size() * sizeof(uint64_t) + counts.size() * 4; }
+    };
+    void add_to(RegionSums& to, const int* keys, const float* values, int n);
     VisibilityOptions opt_;
-    std::vector<double> mass_; // M_R
+    std::vector<float> mass_; // M_R
     double inv_scale_;
-    std::vector<uint64_t> sums_, dir_sums_;     // slots x K, fixed point
-    std::vector<uint32_t> counts_, dir_counts_; // records per slot
-    uint64_t records_ = 0, dir_records_ = 0;
+    RegionSums light_, dir_; // the light sample's (shadow rays), the continuation guide's
     mutable std::mutex mutex_;
 };
 
