@@ -242,6 +242,10 @@ inline uint as_uint(float f) {
     std::memcpy(&u, &f, 4);
     return u;
 }
+// Leading zero bits of x (32 for 0), as OpenCL's clz.
+inline uint clz(uint x) {
+    return x ? static_cast<uint>(__builtin_clz(x)) : 32u;
+}
 inline float as_float(uint u) {
     float f;
     std::memcpy(&f, &u, 4);

@@ -85,8 +85,9 @@ ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, 
     EtkEnvSample s;
     float pdf_uv;
     s.uv = etk_sample_2d(dist, env.dist_w, env.dist_h, xi, &pdf_uv, &s.row, &s.col);
-    s.dir = etk_env_to_world(env, etk_latlong_to_dir(s.uv));
-    s.pdf = env.has_light ? etk_latlong_pdf_to_solid_angle(pdf_uv, s.uv.y) : 0.0f;
+    float2 theta = etk_sincospi(s.uv.y); // sin and cos of theta, once for direction and density
+    s.dir = etk_env_to_world(env, etk_latlong_dir(s.uv.x, theta.y, theta.x));
+    s.pdf = env.has_light ? etk_latlong_pdf_to_solid_angle_sin(pdf_uv, theta.x) : 0.0f;
     return s;
 }
 

@@ -12,9 +12,11 @@
 
 ETK_BEGIN
 
-// sin(theta) for theta = pi v, accurate at both poles (sin(pi) in float is not zero).
+// sin(theta) for theta = pi v, accurate at both poles (sin(pi) in float is not zero): etk_sincospi
+// reduces v by the nearest multiple of 1/2 exactly, so near v = 1 it works on v - 1 (0 at the
+// pole).
 ETK_FN float etk_latlong_sin_theta(float v) {
-    return etk_sinpi(fmin(v, 1.0f - v));
+    return etk_sincospi(v).x;
 }
 
 // The direction at longitude coordinate u with the given cos and sin of the colatitude.
@@ -24,7 +26,8 @@ ETK_FN float3 etk_latlong_dir(float u, float cos_theta, float sin_theta) {
 }
 
 ETK_FN float3 etk_latlong_to_dir(float2 uv) {
-    return etk_latlong_dir(uv.x, etk_cospi(uv.y), etk_latlong_sin_theta(uv.y));
+    float2 theta = etk_sincospi(uv.y); // the sine is etk_latlong_sin_theta's
+    return etk_latlong_dir(uv.x, theta.y, theta.x);
 }
 
 // The longitude coordinate u of direction d.
@@ -41,10 +44,13 @@ ETK_FN float2 etk_dir_to_latlong(float3 d) {
 }
 
 // Density conversion from the unit square to solid angle: |J| = 2 pi^2 sin(theta).
-// Zero where sin(theta) is zero: the poles carry no area and are never sampled.
+// Zero where sin(theta) is zero: the poles carry no area and are never sampled. The _sin form takes
+// the sine a caller has already computed (etk_latlong_sin_theta's, for the direction).
+ETK_FN float etk_latlong_pdf_to_solid_angle_sin(float pdf_uv, float sin_theta) {
+    return sin_theta > 0.0f ? pdf_uv * ETK_INV_2PI2 / sin_theta : 0.0f;
+}
 ETK_FN float etk_latlong_pdf_to_solid_angle(float pdf_uv, float v) {
-    float st = etk_latlong_sin_theta(v);
-    return st > 0.0f ? pdf_uv * ETK_INV_2PI2 / st : 0.0f;
+    return etk_latlong_pdf_to_solid_angle_sin(pdf_uv, etk_latlong_sin_theta(v));
 }
 
 ETK_END

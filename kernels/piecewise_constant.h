@@ -38,10 +38,10 @@ ETK_FN int etk_dist2d_conditional_cdf(int w, int h) {
 // and k/K are exact in float and a cell holds about two intervals on average; the guides add about
 // a quarter to the table (a 1024-wide row: 513 guide entries next to 2,049 density and CDF ones).
 ETK_FN int etk_guide_cells(int n) {
-    int k = 1;
-    while (4 * k <= n)
-        k *= 2;
-    return k;
+    // 2^(floor(log2 n) - 1) from the leading zeros, not a loop: the table offsets below call it
+    // several times per sample (the loop it was made half of a sample's instructions).
+    int lg = 31 - (int)clz((uint)max(n, 2));
+    return 1 << (lg - 1);
 }
 ETK_FN int etk_dist2d_marginal_guide(int w, int h) {
     return 2 * h + 1 + h * (2 * w + 1);
@@ -98,7 +98,16 @@ ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n,
                                     ETK_GLOBAL const float* guide, float u) {
     int K = etk_guide_cells(n);
     int k = clamp((int)(u * (float)K), 0, K - 1);
-    return etk_find_interval_between(cdf, (int)guide[k], (int)guide[k + 1], u);
+    int lo = (int)guide[k], hi = (int)guide[k + 1];
+    // Most cells hold at most two interval ends: the next three CDF entries are read at once (one
+    // cache line, most often) and counted, and the binary search runs only when the answer lies
+    // beyond them (at most ~5% of the samples on the shipped maps). A sample's cost is the latency
+    // of its chain of dependent loads: a search whose trip count varies with the data mispredicts
+    // a branch on most samples, and a scan one entry at a time chains the loads.
+    float c1 = cdf[lo + 1], c2 = cdf[min(lo + 2, n)], c3 = cdf[min(lo + 3, n)];
+    if ((lo + 3 <= hi) & (c3 <= u))
+        return etk_find_interval_between(cdf, lo + 3, hi, u);
+    return lo + (int)((lo + 1 <= hi) & (c1 <= u)) + (int)((lo + 2 <= hi) & (c2 <= u));
 }
 
 ETK_FN int etk_cell_of(float x, int n) {
@@ -109,6 +118,17 @@ ETK_FN int etk_cell_of(float x, int n) {
 // so the density evaluated at the result is the density of the chosen cell. The division can
 // round across either edge (e.g. 53/100 rounds below 0.53): step back by one float at a time.
 ETK_FN float etk_cell_coordinate(int i, float t, int n) {
+    // For n a power of two (most maps) dividing by n is exact scaling, a product by 1/n (no
+    // division on the sample's critical path), and x n = fl(i + t) is >= i and, after the clamp,
+    // below i + 1: x is in cell i already. Otherwise rounding can be off by a float step or two,
+    // which fixed-count steps mend without branches. n is the same for every sample of a table,
+    // so the branch between the two is predicted.
+    if ((n & (n - 1)) == 0) {
+        float inv = 1.0f / (float)n;
+        float hi = (float)(i + 1) * inv;
+        float x = ((float)i + t) * inv;
+        return x < hi ? x : as_float(as_uint(hi) - 1u);
+    }
     float x = ((float)i + t) / (float)n;
     float hi = (float)(i + 1) / (float)n;
     x = x < hi ? x : as_float(as_uint(hi) - 1u);

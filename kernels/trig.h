@@ -22,10 +22,12 @@ ETK_FN float2 etk_sincospi(float x) {
         1.0f +
         t2 * (-0.5f + t2 * (4.1666667e-2f +
                             t2 * (-1.3888889e-3f + t2 * (2.4801587e-5f - t2 * 2.7557319e-7f))));
-    float s = (qi & 1) ? cp : sp;
-    float c = (qi & 1) ? sp : cp;
-    s = (qi & 2) ? -s : s;
-    c = ((qi + 1) & 2) ? -c : c;
+    // The quadrant by bit operations (swap, then sign bits): compilers turn the selects into
+    // branches, and the quadrant of a sampled direction is random (a misprediction per call).
+    uint swap = 0u - (uint)(qi & 1);
+    uint sb = as_uint(sp), cb = as_uint(cp);
+    float s = as_float(((cb & swap) | (sb & ~swap)) ^ ((uint)(qi & 2) << 30));
+    float c = as_float(((sb & swap) | (cb & ~swap)) ^ ((uint)((qi + 1) & 2) << 30));
     return make_float2(s, c);
 }
 ETK_FN float etk_sinpi(float x) {

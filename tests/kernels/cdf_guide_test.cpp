@@ -89,6 +89,17 @@ TEST(CdfGuide, TableIsThePlainSearchAtEachCellStart) {
         }
 }
 
+// The guide cells' count, a shift of the leading zeros, is the largest power of two <= n/2 (1 for
+// n < 4), as the loop it replaced computed it.
+TEST(CdfGuide, GuideCellsAreTheLargestPowerOfTwoAtMostHalfOfN) {
+    for (int n = 1; n <= 70000; ++n) {
+        int k = 1;
+        while (4 * k <= n)
+            k *= 2;
+        ASSERT_EQ(etk::etk_guide_cells(n), k) << "n " << n;
+    }
+}
+
 // The acceptance test of the guides: the same interval as etk_find_interval, sizes 1 ... 65536.
 TEST(CdfGuide, GuidedSearchEqualsPlainSearch) {
     std::mt19937 rng(12);

@@ -126,6 +126,25 @@ TEST(PiecewiseConstant1D, OffsetNeverRoundsIntoTheNextCell) {
     }
 }
 
+// For n a power of two the coordinate is a product by 1/n (no division): the same float as the
+// division i + t over n, clamped below the next cell, for every cell of small tables and random
+// offsets.
+TEST(PiecewiseConstant1D, PowerOfTwoCellCoordinateIsTheDivision) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    for (int n : {1, 2, 4, 64, 512, 1024, 4096, 65536}) {
+        for (int k = 0; k < 20000; ++k) {
+            const int i = k < n ? k : static_cast<int>(rng() % n);
+            const float t = k % 7 == 0 ? ETK_ONE_MINUS_EPS : std::min(U(rng), ETK_ONE_MINUS_EPS);
+            const float hi = static_cast<float>(i + 1) / n;
+            const float div = std::min((static_cast<float>(i) + t) / n, std::nextafter(hi, 0.0f));
+            const float x = etk::etk_cell_coordinate(i, t, n);
+            ASSERT_EQ(x, div) << "n " << n << " i " << i << " t " << t;
+            ASSERT_EQ(etk::etk_cell_of(x, n), i);
+        }
+    }
+}
+
 TEST(PiecewiseConstant1D, RandomUniformsOnRandomFunctions) {
     std::mt19937 rng(17);
     for (int trial = 0; trial < 50; ++trial) {
