@@ -117,6 +117,14 @@ TEST(LatLong, BilinearLookupHitsTexelCentresWrapsAndClamps) {
     // Halfway between two texel centres: the mean.
     const float3 mid = etk::etk_env_lookup_uv(t, w, h, etk::make_float2(3.0f / w, 1.5f / h));
     EXPECT_FLOAT_EQ(mid.x, 0.5f * (img.at(2, 1)[0] + img.at(3, 1)[0]));
+    // u = 1 wraps like u = 0; u outside [0, 1] (the remainder's path) like u shifted into it.
+    for (float u : {0.0f, 0.03125f, 0.25f, 0.96875f}) {
+        const float3 a = etk::etk_env_lookup_uv(t, w, h, etk::make_float2(u, 1.5f / h));
+        for (float shift : {1.0f, -1.0f, 2.0f, -3.0f}) {
+            const float3 b = etk::etk_env_lookup_uv(t, w, h, etk::make_float2(u + shift, 1.5f / h));
+            EXPECT_EQ(a.x, b.x) << "u " << u << " shift " << shift;
+        }
+    }
 }
 
 TEST(LatLong, RadianceFollowsRotation) {
