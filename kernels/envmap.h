@@ -81,14 +81,25 @@ typedef struct {
     int row, col; // distribution cell
 } EtkEnvSample;
 
-ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, float2 xi) {
+// The sample at map coordinates uv (distribution cell row, col) drawn with density pdf_uv on the
+// unit square: its world direction and solid-angle density, from one sin/cos of theta. Every
+// technique that samples the map ends here (etk_env_sample; visibility_guide.h).
+ETK_FN EtkEnvSample etk_env_sample_at(EtkEnvMap env, float2 uv, float pdf_uv, int row, int col) {
     EtkEnvSample s;
-    float pdf_uv;
-    s.uv = etk_sample_2d(dist, env.dist_w, env.dist_h, xi, &pdf_uv, &s.row, &s.col);
-    float2 theta = etk_sincospi(s.uv.y); // sin and cos of theta, once for direction and density
-    s.dir = etk_env_to_world(env, etk_latlong_dir(s.uv.x, theta.y, theta.x));
+    s.uv = uv;
+    s.row = row;
+    s.col = col;
+    float2 theta = etk_sincospi(uv.y);
+    s.dir = etk_env_to_world(env, etk_latlong_dir(uv.x, theta.y, theta.x));
     s.pdf = env.has_light ? etk_latlong_pdf_to_solid_angle_sin(pdf_uv, theta.x) : 0.0f;
     return s;
+}
+
+ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, float2 xi) {
+    float pdf_uv;
+    int row, col;
+    float2 uv = etk_sample_2d(dist, env.dist_w, env.dist_h, xi, &pdf_uv, &row, &col);
+    return etk_env_sample_at(env, uv, pdf_uv, row, col);
 }
 
 ETK_END

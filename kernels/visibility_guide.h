@@ -193,12 +193,12 @@ ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u
         return etk_env_sample(S.env_dist, p.env, u);
     float2 t;
     int R = etk_guide_pick_region(S.guide_cells + cell * ETK_GUIDE_CELL_FLOATS, u, &t);
-    EtkEnvSample s;
-    s.uv = etk_guide_sample_region(S, p.env, R, t);
-    s.dir = etk_env_to_world(p.env, etk_latlong_to_dir(s.uv));
-    s.row = etk_cell_of(s.uv.y, p.env.dist_h);
-    s.col = etk_cell_of(s.uv.x, p.env.dist_w);
-    s.pdf = etk_env_pdf_uv(S.env_dist, p.env, s.uv) * etk_guide_factor(S, p, cell, s.uv);
+    int w = p.env.dist_w, h = p.env.dist_h;
+    float2 uv = etk_guide_sample_region(S, p.env, R, t);
+    // The map's density at uv (etk_env_pdf_uv's), times the cell's factor: the mixture's.
+    EtkEnvSample s = etk_env_sample_at(p.env, uv, etk_pdf_2d(S.env_dist, w, h, uv),
+                                       etk_cell_of(uv.y, h), etk_cell_of(uv.x, w));
+    s.pdf *= etk_guide_factor(S, p, cell, uv);
     return s;
 }
 
