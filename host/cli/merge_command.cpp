@@ -42,7 +42,8 @@ std::string samples_text(int64_t first, int64_t end) {
 void run(const MergeArgs& a) {
     auto [exr_name, png_name] = output_names(a.output);
     check_writable_format(exr_name);
-    check_writable_format(png_name);
+    if (!png_name.empty())
+        check_writable_format(png_name);
     std::vector<Part> parts;
     for (const std::string& path : a.parts) {
         parts.push_back({path, read_render_state(path)});
@@ -106,7 +107,9 @@ void run(const MergeArgs& a) {
         ranges += (ranges.empty() ? "" : ",") + std::to_string(p->first()) + ":" +
                   std::to_string(p->end());
     }
-    std::vector<std::string> targets = {exr_name, png_name};
+    std::vector<std::string> targets = {exr_name};
+    if (!png_name.empty())
+        targets.push_back(png_name);
     if (!a.state.empty())
         targets.push_back(a.state);
     OutputBatch outputs(targets);
@@ -129,14 +132,16 @@ void run(const MergeArgs& a) {
         write_image(outputs, exr_name, w, h, 3, img, meta);
     }
     RgbImage film{w, h, img};
-    write_image(outputs, png_name, w, h, 3, tone_map(film, 1.0f));
+    if (!png_name.empty())
+        write_image(outputs, png_name, w, h, 3, tone_map(film, 1.0f));
     if (!a.state.empty())
         write_render_state(outputs, a.state, merged);
     outputs.commit();
-    std::printf("merged %zu part%s (%s%s) into %s and %s%s%s: %d spp\n", parts.size(),
+    std::printf("merged %zu part%s (%s%s) into %s%s%s%s%s: %d spp\n", parts.size(),
                 parts.size() == 1 ? "" : "s", samples_text(0, covered).c_str(),
-                gaps.empty() ? "" : ", with gaps", exr_name.c_str(), png_name.c_str(),
-                a.state.empty() ? "" : " and ", a.state.c_str(), merged.spp);
+                gaps.empty() ? "" : ", with gaps", exr_name.c_str(),
+                png_name.empty() ? "" : " and ", png_name.c_str(), a.state.empty() ? "" : " and ",
+                a.state.c_str(), merged.spp);
 }
 
 } // namespace

@@ -31,7 +31,8 @@ namespace fs = std::filesystem;
 
 namespace et::cli {
 
-// out.exr -> (out.exr, out.png); out.png -> (out.exr, out.png).
+// out.exr -> (out.exr, out.png); out.png -> (out.exr, out.png). A build without OpenImageIO
+// writes no preview: out.pfm -> (out.pfm, "").
 std::pair<std::string, std::string> output_names(const std::string& out) {
     fs::path p(out);
     std::string ext = p.extension().string();
@@ -40,7 +41,7 @@ std::pair<std::string, std::string> output_names(const std::string& out) {
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
         return {fs::path(p).replace_extension(".exr").string(), out};
     if (ext == ".exr" || ext == ".hdr" || ext == ".pfm")
-        return {out, fs::path(p).replace_extension(".png").string()};
+        return {out, have_image_library() ? fs::path(p).replace_extension(".png").string() : ""};
     throw Error(out + ": unsupported output format '" + ext + "' (use .exr, .hdr, .pfm or .png)");
 }
 
@@ -303,7 +304,8 @@ void run(const RenderArgs& a, Globals& g) {
                                    ".exr output (-o)");
         // Fail on an unwritable destination before spending the render time.
         check_writable_format(exr_name);
-        check_writable_format(png_name);
+        if (!png_name.empty())
+            check_writable_format(png_name);
         keep_state = a.checkpoint >= 0 || a.resume || partial;
         state_path = !a.state.empty() ? a.state
                      : partial ? fs::path(exr_name).replace_extension("").string() + ".samples-" +
@@ -326,7 +328,9 @@ void run(const RenderArgs& a, Globals& g) {
         if (cl.root()) {
             std::vector<std::string> targets;
             if (!partial)
-                targets = {exr_name, png_name};
+                targets = {exr_name};
+            if (!partial && !png_name.empty())
+                targets.push_back(png_name);
             if (!a.stats_file.empty())
                 targets.push_back(a.stats_file);
             if (keep_state)
@@ -537,7 +541,8 @@ void run(const RenderArgs& a, Globals& g) {
                 write_image(*outputs, exr_name, ds.width(), ds.height(), 3, img, meta);
             }
             RgbImage film{ds.width(), ds.height(), img};
-            write_image(*outputs, png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
+            if (!png_name.empty())
+                write_image(*outputs, png_name, ds.width(), ds.height(), 3, tone_map(film, 1.0f));
         }
         if (!a.stats_file.empty()) {
             nlohmann::json j = stats_json(a, st, ds, renderer.name(), s, build, light_set, sis, spp,
@@ -578,9 +583,10 @@ void run(const RenderArgs& a, Globals& g) {
                     state_path.c_str(), static_cast<int>(first), static_cast<int>(first + done - 1),
                     a.stats_file.empty() ? "" : " and ", a.stats_file.c_str(), total.seconds());
     else
-        std::printf("\nwrote %s and %s%s%s at %d spp (total %.2f s)\n", exr_name.c_str(),
-                    png_name.c_str(), keep_state ? " and the state " : "",
-                    keep_state ? state_path.c_str() : "", spp, total.seconds());
+        std::printf("\nwrote %s%s%s%s%s at %d spp (total %.2f s)\n", exr_name.c_str(),
+                    png_name.empty() ? "" : " and ", png_name.c_str(),
+                    keep_state ? " and the state " : "", keep_state ? state_path.c_str() : "", spp,
+                    total.seconds());
     if (noise && cl.root())
         std::printf("noise target %g %s at %d spp: estimated relative error %.4g\n", a.noise_target,
                     noise_reached ? "reached" : "NOT reached", spp, noise_error);

@@ -17,7 +17,7 @@ struct RgbImage {
 };
 
 // Any format OpenImageIO reads (EXR of every compression, HDR, PNG, JPEG, ...) and PFM (read
-// here). Only regular files of at most kMaxImageBytes are opened, and the declared size is
+// here; the only format of a build without OpenImageIO). Only regular files of at most kMaxImageBytes are opened, and the declared size is
 // checked against the memory budget and the file's size before any pixel is read. 8- and 16-bit
 // images are decoded from sRGB to linear. One channel is replicated to RGB; otherwise the R, G, B
 // channels are used (the first three when they are not named so), as stored: alpha is ignored,
@@ -71,6 +71,10 @@ void write_image_channels(OutputBatch& batch, const std::string& path, int width
 // and not a folder itself. write_image checks this first; a command can call it before it
 // spends time on a render.
 void check_writable_format(const std::string& path);
+
+// False in a build without OpenImageIO (CMake ENVTRACE_OPENIMAGEIO=OFF): PFM is then the only
+// format read or written (others are refused by name), and commands write no .png previews.
+bool have_image_library();
 
 // Linear radiance to display sRGB in [0,1]: exposure scale, then a clamped sRGB curve.
 float linear_to_srgb(float v);
