@@ -57,6 +57,12 @@ static inline float etk_length3(float3 a) {
 static inline float3 etk_normalize3(float3 a) {
     return a / etk_length3(a);
 }
+// Some implementations' headers make the built-ins macros themselves (PoCL 5: every build warned
+// "macro redefined"): theirs are dropped first.
+#undef dot
+#undef cross
+#undef length
+#undef normalize
 #define dot(a, b) etk_dot3((a), (b))
 #define cross(a, b) etk_cross3((a), (b))
 #define length(a) etk_length3(a)

@@ -2,8 +2,11 @@
 
 #include "util/error.h"
 
+#include <regex>
 #include <set>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace et {
 namespace {
@@ -42,6 +45,42 @@ std::string expand_kernel_source(const std::string& name) {
     std::set<std::string> done;
     std::string out;
     expand(name, done, out);
+    return out;
+}
+
+std::string logical_locations(const std::string& log, const std::string& source) {
+    // Physical line p (1-based) of `source` -> (file, line) after the #line directives before it.
+    std::vector<std::pair<std::string, int>> where{{"", 0}};
+    const std::regex directive(R"re(^\s*#\s*line\s+(\d{1,9})(\s+"([^"]*)")?)re");
+    std::istringstream in(source);
+    std::string line, file;
+    int next = 1;
+    std::smatch m;
+    while (std::getline(in, line)) {
+        where.emplace_back(file, next);
+        if (std::regex_search(line, m, directive)) {
+            next = std::stoi(m[1].str());
+            if (m[3].matched)
+                file = m[3].str();
+        } else {
+            ++next;
+        }
+    }
+    // "<kernel>:LINE" and the like: the program's own name for a source string.
+    const std::regex location(R"(<[A-Za-z ]+>:(\d{1,9}))");
+    std::string out;
+    auto begin = log.cbegin();
+    for (std::sregex_iterator it(log.begin(), log.end(), location), end; it != end; ++it) {
+        const std::smatch& hit = *it;
+        out.append(begin, hit[0].first);
+        const size_t p = std::stoul(hit[1].str());
+        if (p < where.size() && !where[p].first.empty())
+            out += where[p].first + ":" + std::to_string(where[p].second);
+        else
+            out += hit[0].str();
+        begin = hit[0].second;
+    }
+    out.append(begin, log.cend());
     return out;
 }
 

@@ -13,4 +13,9 @@ const std::map<std::string, std::string>& embedded_kernel_sources();
 // file once), wrapped in #line directives so compiler messages name kernels/FILE and its line.
 std::string expand_kernel_source(const std::string& name);
 
+// A build log with the locations of compilers that ignore #line (NVIDIA's reports
+// "<kernel>:3:12: error") turned into the file and line that `source`'s #line directives name
+// ("kernels/broken.cl:2:12: error"). Locations that cannot be mapped are left as they are.
+std::string logical_locations(const std::string& log, const std::string& source);
+
 } // namespace et

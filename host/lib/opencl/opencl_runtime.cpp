@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -77,6 +78,8 @@ DeviceLimits query_device_limits(const cl::Device& device) {
     l.max_work_item_x = items.empty() ? l.max_work_group : items[0];
     l.little_endian = device.getInfo<CL_DEVICE_ENDIAN_LITTLE>() != CL_FALSE;
     l.host_unified = device.getInfo<CL_DEVICE_HOST_UNIFIED_MEMORY>() != CL_FALSE;
+    l.correctly_rounded_div_sqrt =
+        (device.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
     if (uint64_t v = env_bytes("ENVTRACE_CL_MAX_ALLOC"))
         l.max_alloc = std::min(l.max_alloc, v);
     if (uint64_t v = env_bytes("ENVTRACE_CL_GLOBAL_MEM"))
@@ -242,7 +245,10 @@ cl::Program ClRuntime::build(const std::string& file, const std::string& options
 cl::Program ClRuntime::build_source(const std::string& file, const std::string& source,
                                     const std::string& options, ProgramBuildInfo* info) {
     Timer timer;
-    const std::string full_options = "-cl-std=CL1.2 " + options;
+    const std::string full_options =
+        std::string("-cl-std=CL1.2 ") +
+        (limits_.correctly_rounded_div_sqrt ? "-cl-fp32-correctly-rounded-divide-sqrt " : "") +
+        options;
     const std::string key =
         cache_key(source + '\0' + full_options + '\0' + entry_.platform_name + '\0' +
                   entry_.device_name + '\0' + entry_.driver_version + '\0' + entry_.device_version);
@@ -275,8 +281,14 @@ cl::Program ClRuntime::build_source(const std::string& file, const std::string& 
     } catch (const cl::Error& e) {
         throw Error("OpenCL program kernels/" + file + " failed to build on '" +
                     entry_.device_name + "' (" + cl_error_name(e.err()) + "):\n" +
-                    build_log(program, entry_.device));
+                    logical_locations(build_log(program, entry_.device), source));
     }
+    // ENVTRACE_CL_BUILD_LOG=1: the compiler's log of a build that succeeded (its warnings), for
+    // bringing the kernels to a new device; a cached binary has none.
+    bi.log = logical_locations(build_log(program, entry_.device), source);
+    if (const char* v = std::getenv("ENVTRACE_CL_BUILD_LOG"); v && *v && std::string(v) != "0")
+        std::fprintf(stderr, "OpenCL build log of kernels/%s on '%s':\n%s\n", file.c_str(),
+                     entry_.device_name.c_str(), bi.log.c_str());
     // Store the binary atomically; a cache that cannot be written only costs time.
     try {
         auto binaries = program.getInfo<CL_PROGRAM_BINARIES>();

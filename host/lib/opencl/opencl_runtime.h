@@ -18,6 +18,10 @@ struct DeviceLimits {
     size_t max_work_item_x = 0; // CL_DEVICE_MAX_WORK_ITEM_SIZES[0]
     bool little_endian = true;  // CL_DEVICE_ENDIAN_LITTLE
     bool host_unified = false;  // CL_DEVICE_HOST_UNIFIED_MEMORY: reads host memory in place
+    // CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT in CL_DEVICE_SINGLE_FP_CONFIG: programs are then built
+    // with -cl-fp32-correctly-rounded-divide-sqrt, so that x / y and sqrt round as on the host
+    // (OpenCL otherwise allows 2.5 and 3 ulp, and NVIDIA's driver uses that latitude).
+    bool correctly_rounded_div_sqrt = false;
 };
 
 // The device's limits; ENVTRACE_CL_MAX_ALLOC and ENVTRACE_CL_GLOBAL_MEM (bytes) lower the two
@@ -63,6 +67,9 @@ struct ProgramBuildInfo {
     double seconds = 0.0;
     bool from_cache = false;
     std::string cache_file;
+    // The compiler's log of a build from source (its warnings; kernels/FILE:LINE locations), ""
+    // for a cached binary. ENVTRACE_CL_BUILD_LOG=1 prints it.
+    std::string log;
 };
 
 class ClRuntime {
