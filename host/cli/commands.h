@@ -26,5 +26,6 @@ void add_bench_command(CLI::App& app, Globals& g);
 void add_compare_command(CLI::App& app, Globals& g);
 void add_lights_command(CLI::App& app, Globals& g);
 void add_merge_command(CLI::App& app, Globals& g);
+void add_convert_command(CLI::App& app, Globals& g);
 
 } // namespace et::cli

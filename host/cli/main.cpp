@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
     et::cli::add_render_command(app, globals);
     et::cli::add_bench_command(app, globals);
     et::cli::add_compare_command(app, globals);
+    et::cli::add_convert_command(app, globals);
     et::cli::add_lights_command(app, globals);
     et::cli::add_merge_command(app, globals);
     try {
