@@ -16,6 +16,8 @@ bundle=$(realpath -m "$1")
 build=$(realpath -m "${2:-$root/build-gpu}")
 data=${ENVTRACE_DATA:-$root/../shared/data}
 host_envtrace=$root/build/envtrace # the full build reads every format, for the conversion
+[ -x "$host_envtrace" ] || { echo "make_bundle.sh: $host_envtrace: build envtrace first (README, Two commands)" >&2; exit 1; }
+[ -d "$data/envmaps" ] || { echo "make_bundle.sh: $data/envmaps: no data folder (set ENVTRACE_DATA)" >&2; exit 1; }
 mkdir -p "$bundle/bin" "$bundle/lib"
 
 cmake -S "$root" -B "$build" -DENVTRACE_OPENIMAGEIO=OFF -DENVTRACE_MARCH=x86-64-v3 \
