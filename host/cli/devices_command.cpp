@@ -1,6 +1,7 @@
 #include "commands.h"
 #include "opencl/opencl_runtime.h"
 #include "render/executor_cl.h"
+#include "util/file_check.h"
 
 #include <cstdio>
 #include <iostream>
@@ -24,6 +25,15 @@ void add_devices_command(CLI::App& app, Globals&) {
             if (!kernels)
                 continue;
             ClRuntime rt(static_cast<int>(i));
+            const DeviceLimits& l = rt.limits();
+            std::cout << "    memory:   " << byte_text(l.global_mem) << " global, largest buffer "
+                      << byte_text(l.max_alloc) << (l.host_unified ? ", shared with the host" : "")
+                      << "\n    floats:   "
+                      << (l.correctly_rounded_div_sqrt
+                              ? "x / y and sqrt correctly rounded, as on the host (built so)"
+                              : "x / y and sqrt within OpenCL's ulp bounds only: images agree "
+                                "with the native back end's statistically, not bit for bit")
+                      << "\n";
             std::cout << "    kernel          max group  preferred multiple  private bytes  "
                          "launched with\n";
             for (const StageKernelInfo& k : stage_kernel_info(rt)) {
