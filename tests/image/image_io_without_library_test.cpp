@@ -24,16 +24,6 @@ std::vector<float> ramp(int w, int h) {
     return px;
 }
 
-// The message of the et::Error that f throws ("" when it throws none).
-template <class F> std::string error_of(F f) {
-    try {
-        f();
-    } catch (const et::Error& e) {
-        return e.what();
-    }
-    return "";
-}
-
 } // namespace
 
 TEST(ImageIoWithoutLibrary, SaysSo) {
@@ -62,7 +52,7 @@ TEST(ImageIoWithoutLibrary, OtherFormatsAreRefusedNamingTheFile) {
         std::ofstream out(hdr, std::ios::binary);
         out << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 1\n" << std::string(4, '\x80');
     }
-    const std::string read_error = error_of([&] { et::read_rgb_image(hdr); });
+    const std::string read_error = ett::error_of([&] { et::read_rgb_image(hdr); });
     EXPECT_NE(read_error.find(hdr + ": cannot read image"), std::string::npos) << read_error;
     EXPECT_NE(read_error.find("without OpenImageIO"), std::string::npos) << read_error;
     EXPECT_NE(read_error.find(".pfm"), std::string::npos) << read_error;
@@ -71,10 +61,10 @@ TEST(ImageIoWithoutLibrary, OtherFormatsAreRefusedNamingTheFile) {
     const std::vector<float> px = ramp(2, 2);
     for (const char* name : {"/out.exr", "/out.png", "/out.hdr"}) {
         const std::string path = dir + name;
-        const std::string check = error_of([&] { et::check_writable_format(path); });
+        const std::string check = ett::error_of([&] { et::check_writable_format(path); });
         EXPECT_NE(check.find(path + ": cannot write"), std::string::npos) << check;
         EXPECT_NE(check.find("without OpenImageIO"), std::string::npos) << check;
-        EXPECT_FALSE(error_of([&] { et::write_image(path, 2, 2, 3, px); }).empty()) << name;
+        EXPECT_FALSE(ett::error_of([&] { et::write_image(path, 2, 2, 3, px); }).empty()) << name;
         EXPECT_FALSE(fs::exists(path)) << name;
     }
     // Nothing but the input was left behind (no temporaries of the refused writes).

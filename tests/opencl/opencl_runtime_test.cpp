@@ -1,5 +1,6 @@
-// Build errors that name kernels/FILE:LINE, every program building without a warning, and the
-// on-disk program-binary cache (keyed by source and options; a corrupt entry is rebuilt).
+// Build errors that name kernels/FILE:LINE, division and sqrt rounding as on the host, every
+// program building without a warning, and the on-disk program-binary cache (keyed by source and
+// options; a corrupt entry is rebuilt).
 #include "opencl/kernel_sources.h"
 #include "opencl/opencl_runtime.h"
 #include "test_data.h"
@@ -7,6 +8,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <cstdint>
+#include <vector>
+#include <random>
+#include <cstring>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -62,6 +68,59 @@ TEST(OpenClRuntime, BuildErrorNamesKernelFileAndLine) {
             << msg;
     }
     EXPECT_TRUE(fs::is_empty(cache.dir())) << "a failed build must not leave a cache entry";
+}
+
+TEST(OpenClRuntime, DivisionAndSqrtRoundAsOnTheHost) {
+    // Where the device reports CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT, programs are built so that
+    // x / y and sqrt(x) equal the host's bit for bit, which is what lets images of the two back
+    // ends agree exactly (without the option NVIDIA's driver gave other bits: README, "A GPU").
+    et::ClRuntime& rt = ett::runtime();
+    if (!rt.limits().correctly_rounded_div_sqrt)
+        GTEST_SKIP() << "the device does not report correctly rounded division and sqrt";
+    const std::string source =
+        "__kernel void div_sqrt(__global const float* a, __global const float* b,\n"
+        "                       __global float* q, __global float* r) {\n"
+        "    size_t i = get_global_id(0);\n"
+        "    q[i] = a[i] / b[i];\n"
+        "    r[i] = sqrt(a[i]);\n"
+        "}\n";
+    cl::Program program = rt.build_source("div_sqrt.cl", source);
+    // Random significands over 2^-40 .. 2^40: quotients stay normal, every rounding case occurs.
+    const size_t n = size_t(1) << 18;
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<uint32_t> mantissa(0, (1u << 23) - 1), exponent(87, 167);
+    auto draw = [&] {
+        const uint32_t bits = exponent(rng) << 23 | mantissa(rng);
+        float f;
+        std::memcpy(&f, &bits, sizeof f);
+        return f;
+    };
+    std::vector<float> a(n), b(n), q(n), r(n);
+    for (size_t i = 0; i < n; ++i) {
+        a[i] = draw();
+        b[i] = draw();
+    }
+    cl::Buffer da(rt.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(float),
+                  a.data());
+    cl::Buffer db(rt.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(float),
+                  b.data());
+    cl::Buffer dq(rt.context(), CL_MEM_WRITE_ONLY, n * sizeof(float));
+    cl::Buffer dr(rt.context(), CL_MEM_WRITE_ONLY, n * sizeof(float));
+    cl::Kernel k(program, "div_sqrt");
+    k.setArg(0, da);
+    k.setArg(1, db);
+    k.setArg(2, dq);
+    k.setArg(3, dr);
+    rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n));
+    rt.queue().enqueueReadBuffer(dq, CL_TRUE, 0, n * sizeof(float), q.data());
+    rt.queue().enqueueReadBuffer(dr, CL_TRUE, 0, n * sizeof(float), r.data());
+    size_t q_off = 0, r_off = 0;
+    for (size_t i = 0; i < n; ++i) {
+        q_off += q[i] != a[i] / b[i];
+        r_off += r[i] != std::sqrt(a[i]);
+    }
+    EXPECT_EQ(q_off, 0u) << "quotients differing from the host's, of " << n;
+    EXPECT_EQ(r_off, 0u) << "square roots differing from the host's, of " << n;
 }
 
 TEST(OpenClRuntime, EveryProgramBuildsWithoutWarnings) {

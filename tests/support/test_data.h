@@ -35,6 +35,16 @@ void write_raw_exr(const std::string& path, int w, int h, const std::vector<floa
 
 et::EnvMap load_map(const std::string& path, const et::DistributionOptions& options = {});
 
+// The message of the et::Error that f throws, "" when it throws none.
+template <class F> std::string error_of(F f) {
+    try {
+        f();
+    } catch (const et::Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
 // Collects et::warn messages while alive (restores the previous sink on destruction).
 class WarningCapture {
   public:

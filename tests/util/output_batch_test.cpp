@@ -33,15 +33,7 @@ size_t entries(const std::string& dir) {
 auto writes(const std::string& text) {
     return [text](const std::string& tmp) { put(tmp, text); };
 }
-// The message of the et::Error thrown by f, or "" when none was.
-template <class F> std::string error_of(F f) {
-    try {
-        f();
-    } catch (const et::Error& e) {
-        return e.what();
-    }
-    return "";
-}
+using ett::error_of;
 
 TEST(OutputBatch, NothingReachesATargetBeforeCommit) {
     const std::string dir = ett::scratch_dir("batch_commit");
@@ -101,9 +93,10 @@ TEST(OutputBatch, RefusesInputsFoldersAndTwins) {
     // ... unless the caller says it may be replaced (a render state continuing itself).
     EXPECT_EQ(error_of([&] { et::OutputBatch b({dir + "/map.exr"}, {dir + "/map.exr"}); }), "");
     // Two targets that are one file; a folder; a missing folder; an empty name.
-    EXPECT_NE(error_of([&] { et::OutputBatch b({dir + "/x.exr", dir + "/../" +
-                                                fs::path(dir).filename().string() + "/x.exr"}); })
-                  .find("same file"),
+    EXPECT_NE(error_of([&] {
+                  et::OutputBatch b({dir + "/x.exr",
+                                     dir + "/../" + fs::path(dir).filename().string() + "/x.exr"});
+              }).find("same file"),
               std::string::npos);
     fs::create_directories(dir + "/folder.exr");
     EXPECT_NE(error_of([&] { et::OutputBatch b({dir + "/folder.exr"}); }).find("is a folder"),

@@ -22,6 +22,22 @@ OIIO_NAMESPACE_USING
 namespace et::image_detail {
 namespace {
 
+// Up to `size` bytes at `offset`, retrying short reads and EINTR; fewer only at the end of the
+// file or on an error.
+size_t pread_full(int fd, void* buf, size_t size, int64_t offset) {
+    size_t done = 0;
+    while (fd >= 0 && offset >= 0 && done < size) {
+        const ssize_t n = ::pread(fd, static_cast<char*>(buf) + done, size - done,
+                                  static_cast<off_t>(offset + static_cast<int64_t>(done)));
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0)
+            break;
+        done += static_cast<size_t>(n);
+    }
+    return done;
+}
+
 // A read-only IOProxy over a file, with a buffer of its own. OpenImageIO's Radiance HDR reader
 // asks for 2 bytes per RLE run; through its default proxy each request is an fread, and those
 // cost more than the decoding (a 16384x8192 map has tens of millions of runs).
@@ -68,17 +84,7 @@ class BufferedFileProxy final : public Filesystem::IOProxy {
     }
     // Unbuffered, so that concurrent calls stay safe as IOProxy promises.
     size_t pread(void* buf, size_t size, int64_t offset) override {
-        size_t done = 0;
-        while (fd_ >= 0 && offset >= 0 && done < size) {
-            const ssize_t n = ::pread(fd_, static_cast<char*>(buf) + done, size - done,
-                                      static_cast<off_t>(offset + static_cast<int64_t>(done)));
-            if (n < 0 && errno == EINTR)
-                continue;
-            if (n <= 0)
-                break;
-            done += static_cast<size_t>(n);
-        }
-        return done;
+        return pread_full(fd_, buf, size, offset);
     }
     size_t write(const void*, size_t) override { return 0; }
     size_t pwrite(const void*, size_t, int64_t) override { return 0; }
@@ -171,14 +177,8 @@ class RgbeDecoder {
         std::memmove(buf_.data(), buf_.data() + at_, len_ - at_);
         len_ -= at_;
         at_ = 0;
-        while (len_ < buf_.size()) {
-            const ssize_t got = ::pread(fd_, buf_.data() + len_, buf_.size() - len_, pos_ + len_);
-            if (got < 0 && errno == EINTR)
-                continue;
-            if (got <= 0)
-                break;
-            len_ += static_cast<size_t>(got);
-        }
+        len_ += pread_full(fd_, buf_.data() + len_, buf_.size() - len_,
+                           pos_ + static_cast<int64_t>(len_));
         return len_;
     }
     void advance(size_t n) {

@@ -49,6 +49,8 @@ std::string expand_kernel_source(const std::string& name) {
 }
 
 std::string logical_locations(const std::string& log, const std::string& source) {
+    if (log.find('<') == std::string::npos)
+        return log; // nothing to map (a clean build's log is empty): no pass over the source
     // Physical line p (1-based) of `source` -> (file, line) after the #line directives before it.
     std::vector<std::pair<std::string, int>> where{{"", 0}};
     const std::regex directive(R"re(^\s*#\s*line\s+(\d{1,9})(\s+"([^"]*)")?)re");
