@@ -286,4 +286,12 @@ inline int isfinite(float x) {
 // Largest float below one: keeps a sample inside the cell its binary search chose.
 #define ETK_ONE_MINUS_EPS 0.99999994f
 
+ETK_BEGIN
+// 1 / n for n a power of two, built from its exponent bits: exact on every device (OpenCL's
+// float division may be off by ulps, so 1.0f / n is not).
+ETK_FN float etk_inv_pow2(uint n) {
+    return as_float((uint)(127 - (31 - (int)clz(n))) << 23); // 2^-log2(n)
+}
+ETK_END
+
 #endif

@@ -7,7 +7,8 @@
 //   pair 0: pixel jitter; for bounce d: pair 1+3d light sample, 2+3d BSDF direction (at a
 //   guided vertex: u.x also picks the guide or the BSDF, continuation_guide.h),
 //   3+3d (BSDF lobe, Russian roulette); the adaptive strategy's technique choices:
-//   ETK_PAIR_SHARE + d (etk_shade). Pairs are hashed, so these need not be contiguous.
+//   ETK_PAIR_SHARE + d (etk_shade). Split samples (etk_split_samples) come from the same pairs
+//   shifted by a lattice. Pairs are hashed, so these need not be contiguous.
 #ifndef ETK_INTEGRATOR_H
 #define ETK_INTEGRATOR_H
 #include "aov.h"
@@ -109,6 +110,62 @@ ETK_FN EtkSurface etk_path_surface(EtkScene S, EtkPaths P, EtkParams p, int slot
     return etk_surface_at(S, p, etk_xyz(P.ray_o[slot]), etk_xyz(P.ray_d[slot]), h);
 }
 
+// Splitting (the mis strategy with p.light_samples = nl, p.bsdf_samples = nb, as in a branched
+// path tracer): a non-delta vertex takes nl light and nb BSDF samples, weighted by the
+// multi-sample MIS heuristic on nl p_light and nb p_bsdf (Veach's) and divided by their count.
+// Sample 0 of each is the usual shadow ray and continuation (weighted in etk_shade and
+// etk_escaped); samples 1 .. n - 1, returned here as their sum over beta, count only the map's
+// light they see, their visibility traced at once (as a light set's, etk_shade_lights). Each
+// technique's n points are its sample point shifted by a rank-1 lattice (etk_lattice_point), so
+// they stratify the vertex's square; the BSDF's lobe choice is stratified the same way. With
+// nl = nb = 1 nothing here runs and the weights are the paper's, bit for bit. *traced: the rays
+// traced.
+ETK_FN float3 etk_split_samples(EtkScene S, EtkParams p, EtkSurface s, EtkMaterial m, float3 t,
+                                float3 b, float3 ns, int pixel, uint pair, uint* traced) {
+    float3 sum = make_float3(0.0f, 0.0f, 0.0f), wo = s.wo, ng = s.ng;
+    uint nl = (uint)p.light_samples, nb = (uint)p.bsdf_samples;
+    float fl = (float)nl, fb = (float)nb;
+    ETK_GLOBAL const float* dist = etk_light_dist(S, p);
+    float2 u = etk_dims(p, pixel, pair);
+    for (uint j = 1u; j < nl; ++j) {
+        EtkEnvSample ls = etk_env_sample(dist, p.env, etk_lattice_point(u, j, nl));
+        float3 wi = etk_to_local(ls.dir, t, b, ns);
+        if (!(ls.pdf > 0.0f) || !etk_light_side_ok(m, wi.z, dot(ls.dir, ng)))
+            continue;
+        float w = etk_mis_weight(p.heuristic, fl * ls.pdf, fb * etk_bsdf_pdf(m, wo, wi)) / fl;
+        float3 c = etk_bsdf_eval(m, wo, wi) * etk_env_radiance_uv(S.env_texels, p.env, ls.uv) *
+                   (fabs(wi.z) * w / ls.pdf);
+        if (!(etk_max3(c) > 0.0f))
+            continue;
+        ++*traced;
+        if (etk_dl_visible(S, s, ls.dir))
+            sum += c;
+    }
+    float2 ub = etk_dims(p, pixel, pair + 1u);
+    float lobe0 = etk_dims(p, pixel, pair + 2u).x;
+    float inv_nb = etk_inv_pow2(nb);
+    for (uint j = 1u; j < nb; ++j) {
+        float lobe = lobe0 + (float)j * inv_nb;
+        EtkBsdfSample bs =
+            etk_bsdf_sample(m, wo, etk_lattice_point(ub, j, nb), lobe >= 1.0f ? lobe - 1.0f : lobe);
+        if (!(bs.pdf > 0.0f) || bs.delta)
+            continue;
+        float3 wi_world = etk_from_local(bs.wi, t, b, ns);
+        if (!etk_same_side(bs.wi.z, dot(wi_world, ng)))
+            continue; // as the continuation: across the geometric surface, it would leak light
+        float2 uv = etk_env_uv(p.env, wi_world);
+        float w =
+            etk_mis_weight(p.heuristic, fb * bs.pdf, fl * etk_env_pdf_uv(dist, p.env, uv)) / fb;
+        float3 c = bs.weight * etk_env_radiance_uv(S.env_texels, p.env, uv) * w;
+        if (!(etk_max3(c) > 0.0f))
+            continue;
+        ++*traced;
+        if (etk_dl_visible(S, s, wi_world))
+            sum += c;
+    }
+    return sum;
+}
+
 // Stage 1: a camera ray for slot i.
 ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
     (void)out;
@@ -146,7 +203,9 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
             float pl = etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
             if (p.strategy == ETK_STRATEGY_VISIBILITY) // beta.w: the vertex's grid cell
                 pl *= etk_guide_factor(S, p, (int)P.beta[slot].w, uv);
-            w = etk_mis_weight(p.heuristic, d.w, pl);
+            // Sample 0 of the vertex's bsdf_samples (etk_split_samples; 1 and 1: the paper's).
+            float fb = (float)p.bsdf_samples;
+            w = etk_mis_weight(p.heuristic, fb * d.w, (float)p.light_samples * pl) / fb;
         } else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
     }
@@ -275,12 +334,16 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             // Above the surface, or below it at a dielectric (it transmits light from there).
             if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
-                float w =
-                    etk_strategy_is_mis(p.strategy)
-                        ? etk_mis_weight(
-                              p.heuristic, pdf_light,
-                              etk_cguide_mix_pdf(S, p, cell, cg, etk_bsdf_pdf(m, wo, wi), wi_world))
-                        : 1.0f;
+                // Sample 0 of the vertex's light_samples (etk_split_samples).
+                float fl = (float)p.light_samples;
+                float w = etk_strategy_is_mis(p.strategy)
+                              ? etk_mis_weight(p.heuristic, fl * pdf_light,
+                                               (float)p.bsdf_samples *
+                                                   etk_cguide_mix_pdf(S, p, cell, cg,
+                                                                      etk_bsdf_pdf(m, wo, wi),
+                                                                      wi_world)) /
+                                    fl
+                              : 1.0f;
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
                 // Visibility learning: what this direction would bring, unweighted, and where.
@@ -295,6 +358,17 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             P.shadow_d[slot] = etk_f4(wi_world, 3.0e38f);
             P.shadow_L[slot] = etk_f4(c, learn_val);
             out->slot[ETK_Q_SHADOW] = slot;
+        }
+    }
+
+    if (p.light_samples * p.bsdf_samples > 1 && !delta) {
+        uint traced = 0u;
+        float3 e = etk_split_samples(S, p, s, m, t, b, ns, pixel, pair, &traced);
+        if (traced > 0u) // counted with the light set's rays (traced in a shade stage too)
+            ETK_ATOMIC_ADD(Q.counters + ETK_Q_LIGHT_RAYS, traced);
+        if (etk_max3(e) > 0.0f) {
+            float4 r = P.radiance[slot];
+            P.radiance[slot] = etk_f4(etk_xyz(r) + beta * e, 0.0f);
         }
     }
 

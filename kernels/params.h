@@ -18,6 +18,7 @@
 #define ETK_STRATEGY_VISIBILITY 8
 #define ETK_HEURISTIC_BALANCE 0
 #define ETK_HEURISTIC_POWER 1
+#define ETK_MAX_SPLIT 64 // light and BSDF samples per vertex, at most
 // Material bins of the adaptive strategy's light shares (host/lib/render/light_share.h).
 #define ETK_SHARE_BINS 32
 
@@ -85,6 +86,9 @@ typedef struct {
     int guide_ready;
     int guide_learn; // records shadow rays' and continuations' outcomes (visibility_cache.h)
     int guide_continuation;
+    // Splitting (the mis strategy): light and BSDF samples per non-delta vertex, powers of two;
+    // 1 and 1 are the paper's estimator (etk_split_samples in integrator.h).
+    int light_samples, bsdf_samples;
 } EtkParams;
 
 // Whether a vertex at `depth` (surface interactions before it) is the path's last: its

@@ -120,12 +120,11 @@ ETK_FN int etk_cell_of(float x, int n) {
 ETK_FN float etk_cell_coordinate(int i, float t, int n) {
     // For n a power of two (most maps) dividing by n is exact scaling, a product by 1/n (no
     // division on the sample's critical path), and x n = fl(i + t) is >= i and, after the clamp,
-    // below i + 1: x is in cell i already. 1/n is built from its exponent bits, exact on every
-    // device (OpenCL's float division may be off by ulps). Otherwise rounding can be off by a
-    // float step or two, which fixed-count steps mend without branches. n is the same for every
-    // sample of a table, so the branch between the two is predicted.
+    // below i + 1: x is in cell i already (1/n exact: etk_inv_pow2). Otherwise rounding can be off
+    // by a float step or two, which fixed-count steps mend without branches. n is the same for
+    // every sample of a table, so the branch between the two is predicted.
     if ((n & (n - 1)) == 0) {
-        float inv = as_float((uint)(127 - (31 - (int)clz((uint)n))) << 23); // 2^-log2(n)
+        float inv = etk_inv_pow2((uint)n);
         float hi = (float)(i + 1) * inv;
         float x = ((float)i + t) * inv;
         return x < hi ? x : as_float(as_uint(hi) - 1u);

@@ -110,6 +110,19 @@ ETK_FN float2 etk_sample_pair(int sampler, uint seed, uint stream, uint index, u
                        etk_unit_float(etk_hash(h ^ 0xcc9e2d51u)));
 }
 
+// Point j of n (a power of two) of a sample point u shifted by a rank-1 lattice: u + (j / n,
+// (j g mod n) / n), wrapped to [0, 1)^2, g odd and near n / golden ratio (a Fibonacci-like
+// generator: the n points are well spread in both coordinates). Each point is uniform on the
+// square when u is, and together the n stratify it, so n samples of a vertex drawn from them
+// split one sample (integrator.h) while u keeps the sequence's stratification across passes.
+// Exact in float on every device (j / n: etk_inv_pow2).
+ETK_FN float2 etk_lattice_point(float2 u, uint j, uint n) {
+    uint g = ((n * 40503u) >> 16) | 1u; // 40503 / 65536 = 0.61803
+    float inv = etk_inv_pow2(n);
+    float x = u.x + (float)j * inv, y = u.y + (float)((j * g) & (n - 1u)) * inv;
+    return make_float2(x >= 1.0f ? x - 1.0f : x, y >= 1.0f ? y - 1.0f : y);
+}
+
 ETK_END
 
 #endif

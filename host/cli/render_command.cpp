@@ -53,6 +53,7 @@ struct RenderArgs {
     std::string light_share; // --light-share: "auto" or a number
     std::string lights;      // --lights: render with this directional light set
     int sis_samples = 64;
+    int light_samples = 0, bsdf_samples = 0; // --light-samples, --bsdf-samples (0: the scene's)
     int spp = 0, max_depth = 0, paths = -1, threads = 0;
     long long seed = -1;
     double time_limit = -1.0;
@@ -112,6 +113,10 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.bsdf_sampling = parse_bsdf_sampling(a.bsdf_sampling, cli);
     if (!a.light_share.empty())
         st.light_share = parse_light_share(a.light_share, cli + ": --light-share");
+    if (a.light_samples > 0)
+        st.light_samples = check_split_count(a.light_samples, cli + ": --light-samples");
+    if (a.bsdf_samples > 0)
+        st.bsdf_samples = check_split_count(a.bsdf_samples, cli + ": --bsdf-samples");
     if (a.seed >= 0)
         st.seed = static_cast<uint32_t>(a.seed);
     if (a.time_limit >= 0)
@@ -134,6 +139,7 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         warn("--lights and --strategy sis render direct lighting only: using --max-depth 1");
         st.max_depth = 1;
     }
+    check_split(st);
     if (st.strategy == Strategy::sis && st.time_limit <= 0 && st.spp % st.sis_samples != 0)
         throw Error("--strategy sis visits one stratum per sample: --spp (" +
                     std::to_string(st.spp) + ") must be a multiple of --sis-samples (" +
@@ -617,11 +623,18 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--strategy", a->strategy,
                     "light | bsdf | mis (the paper's) | compensated (MIS with a compensated light "
                     "distribution) | adaptive (compensated, light/BSDF shares learned per "
-                    "material) | uniform | sis (structured importance sampling)")
+                    "material) | visibility (MIS, learns what blocks the map) | uniform | sis "
+                    "(structured importance sampling)")
         ->check(CLI::IsMember(strategy_names()));
     cmd->add_option("--sis-samples", a->sis_samples,
                     "SIS strata (one shadow ray per sample; --spp a multiple of it)")
         ->check(CLI::Range(1, 1 << 16));
+    cmd->add_option("--light-samples", a->light_samples,
+                    "mis: light samples per vertex (splitting, a power of two up to 64; "
+                    "default 1)");
+    cmd->add_option("--bsdf-samples", a->bsdf_samples,
+                    "mis: BSDF samples per vertex (splitting, a power of two up to 64; "
+                    "default 1)");
     cmd->add_option("--lights", a->lights,
                     "Render with this directional light set ('envtrace lights'), natively");
     cmd->add_option("--mis-heuristic", a->heuristic, "balance | power")

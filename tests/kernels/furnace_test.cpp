@@ -83,6 +83,20 @@ INSTANTIATE_TEST_SUITE_P(
                std::get<2>(info.param);
     });
 
+// Splitting (mis with several light and BSDF samples per vertex): the multi-sample MIS weights
+// of each technique's samples sum to one, so the furnace still reads the map's value, with the
+// extra samples' rays traced in the shade stage on both back ends.
+TEST(Furnace, SplitSamplesRenderTheMapValue) {
+    for (const char* backend : {"cpu", "opencl"}) {
+        et::Scene s = furnace_scene(false, 48, 50, "mis");
+        s.settings.light_samples = 2;
+        s.settings.bsdf_samples = 4;
+        const FurnaceStats st = check_furnace(ett::render(s, backend, 32), 5.0);
+        std::printf("furnace %s depth 50 mis 2+4 samples: mean %.6f (z %.2f), worst pixel z %.2f\n",
+                    backend, st.mean, st.mean_z, st.worst_z);
+    }
+}
+
 // Interpolated shading normals are not the geometric normal: light sampled below the geometric
 // surface is rejected (dot(wi, ng) <= 0) while the shading cosine would have counted it, so a
 // smooth tessellated sphere loses a little energy near each triangle's edges, of the order of

@@ -1,5 +1,5 @@
-// The light, bsdf, mis, compensated and adaptive strategies (and either GGX sampling, and any
-// light share) estimate the same
+// The light, bsdf, mis, compensated and adaptive strategies (and either GGX sampling, any
+// light share, and mis split into several light and BSDF samples per vertex) estimate the same
 // integral, so they converge to the same image; and the error of an unbiased estimator with
 // independent samples falls as 1/sqrt(spp).
 //
@@ -77,6 +77,15 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     const auto adaptive_high = ett::render(high, "cpu", spp);
     // Light samples guided by learned visibility (tables from the first passes).
     const auto visibility = ett::render(scene(env, "visibility", depth, 10), "cpu", spp);
+    // Splitting: more light than BSDF samples per vertex, and the other way round (the
+    // multi-sample MIS weights on the counts; the extra samples' lattice and lobe choice).
+    et::Scene split_light = scene(env, "mis", depth, 11), split_bsdf = scene(env, "mis", depth, 12);
+    split_light.settings.light_samples = 4;
+    split_light.settings.bsdf_samples = 2;
+    split_bsdf.settings.light_samples = 1;
+    split_bsdf.settings.bsdf_samples = 8;
+    const auto mis_split_light = ett::render(split_light, "cpu", spp);
+    const auto mis_split_bsdf = ett::render(split_bsdf, "cpu", spp);
     const std::string d = " depth " + std::to_string(depth);
     // The noise estimate itself: two seeds of one strategy.
     const ett::Agreement self = ett::agreement(light, light2);
@@ -92,6 +101,8 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     expect_agree(light, adaptive_low, "light vs adaptive s=0.125" + d);
     expect_agree(mis, adaptive_high, "mis vs adaptive s=1.875" + d);
     expect_agree(mis, visibility, "mis vs visibility" + d);
+    expect_agree(light, mis_split_light, "light vs mis 4+2 samples" + d);
+    expect_agree(bsdf, mis_split_bsdf, "bsdf vs mis 1+8 samples" + d);
 }
 
 // An interior, where the visibility strategy's tables move light samples away from the map's

@@ -54,6 +54,36 @@ TEST(RenderSettings, LightShares) {
     }
 }
 
+TEST(RenderSettings, SplitCounts) {
+    for (int n : {1, 2, 4, 64})
+        EXPECT_EQ(et::check_split_count(n, "t"), n);
+    for (int bad : {0, -4, 3, 6, 128}) {
+        try {
+            et::check_split_count(bad, "command line: --light-samples");
+            ADD_FAILURE() << "accepted " << bad;
+        } catch (const et::Error& e) {
+            const std::string m = e.what();
+            EXPECT_NE(m.find("--light-samples: must be a power of two"), std::string::npos) << m;
+        }
+    }
+    // Splitting applies to mis; any other strategy with counts other than 1 is an error that
+    // names both.
+    et::RenderSettings st;
+    st.light_samples = 4;
+    et::check_split(st);
+    st.strategy = et::Strategy::compensated;
+    try {
+        et::check_split(st);
+        FAIL() << "no error";
+    } catch (const et::Error& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("(4, 1)"), std::string::npos) << m;
+        EXPECT_NE(m.find("'compensated'"), std::string::npos) << m;
+    }
+    st.light_samples = 1;
+    et::check_split(st);
+}
+
 TEST(RenderSettings, UnknownNamesAreClearErrors) {
     try {
         et::parse_strategy("lights", "scene.json: render"); // only --lights selects it

@@ -88,6 +88,23 @@ BsdfSampling resolved_bsdf_sampling(const RenderSettings& st) {
                : BsdfSampling::ndf;
 }
 
+int check_split_count(int n, const std::string& what) {
+    if (n < 1 || n > ETK_MAX_SPLIT || (n & (n - 1)) != 0)
+        throw Error(what + ": must be a power of two from 1 to " + std::to_string(ETK_MAX_SPLIT) +
+                    " (got " + std::to_string(n) + ")");
+    return n;
+}
+
+void check_split(const RenderSettings& st) {
+    check_split_count(st.light_samples, "light samples per vertex");
+    check_split_count(st.bsdf_samples, "BSDF samples per vertex");
+    if ((st.light_samples != 1 || st.bsdf_samples != 1) && st.strategy != Strategy::mis)
+        throw Error(std::string("light and BSDF samples per vertex (") +
+                    std::to_string(st.light_samples) + ", " + std::to_string(st.bsdf_samples) +
+                    ") split the mis strategy's samples; strategy '" + name_of(st.strategy) +
+                    "' takes one of each");
+}
+
 float parse_light_share(const std::string& s, const std::string& what) {
     if (s == "auto")
         return -1.0f;

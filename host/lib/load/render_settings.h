@@ -45,6 +45,9 @@ BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what);
 // "auto" (-1: learned) or a number in [0, kMaxLightShare].
 float parse_light_share(const std::string& s, const std::string& what);
 
+// A split count ("`what`: must be a power of two from 1 to 64" otherwise).
+int check_split_count(int n, const std::string& what);
+
 // The names a user may give (for the command line's choices).
 std::vector<std::string> strategy_names(); // without "lights", which --lights selects
 std::vector<std::string> heuristic_names();
@@ -57,6 +60,9 @@ constexpr float kMaxLightShare = 1.875f; // below 2: a BSDF share is always left
 struct RenderSettings;
 // bsdf_sampling with automatic resolved for the strategy.
 BsdfSampling resolved_bsdf_sampling(const RenderSettings& st);
+// Throws unless the split counts are powers of two up to ETK_MAX_SPLIT, and 1 unless the
+// strategy is mis.
+void check_split(const RenderSettings& st);
 
 struct RenderSettings {
     // From the scene's "render" block, overridden by the command line.
@@ -73,6 +79,9 @@ struct RenderSettings {
     // Adaptive strategy: expected light samples of the two at a vertex, in [0, kMaxLightShare];
     // negative: learned per material bin from the first passes (render/light_share.h).
     float light_share = -1.0f;
+    // Splitting (Strategy::mis only): light and BSDF samples per vertex, powers of two up to
+    // ETK_MAX_SPLIT (integrator.h, etk_split_samples). 1 and 1: the paper's estimator.
+    int light_samples = 1, bsdf_samples = 1;
     // From the command line only.
     Backend backend = Backend::opencl;
     int device = 0;       // OpenCL device index

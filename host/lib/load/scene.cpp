@@ -211,7 +211,8 @@ Scene load_scene(const std::string& path) {
         const json& s = *sp;
         const JsonReader rr = r.at("render");
         rr.warn_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
-                                 "time_limit", "paths", "bsdf_sampling", "light_share"});
+                                 "time_limit", "paths", "bsdf_sampling", "light_share",
+                                 "light_samples", "bsdf_samples"});
         auto& st = scene.settings;
         st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
         st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
@@ -234,6 +235,12 @@ Scene load_scene(const std::string& path) {
         st.seed = static_cast<uint32_t>(rr.integer(s, "seed", st.seed, 0, 4294967295LL));
         st.time_limit = rr.number(s, "time_limit", st.time_limit, 0.0, 1e7);
         st.paths = read_int(s, "paths", st.paths, 0, 1 << 26, rr);
+        st.light_samples =
+            check_split_count(read_int(s, "light_samples", st.light_samples, 1, ETK_MAX_SPLIT, rr),
+                              rr.at("light_samples").where());
+        st.bsdf_samples =
+            check_split_count(read_int(s, "bsdf_samples", st.bsdf_samples, 1, ETK_MAX_SPLIT, rr),
+                              rr.at("bsdf_samples").where());
     }
     scene.output = r.string(j, "output", "");
 

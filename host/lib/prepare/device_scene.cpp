@@ -225,6 +225,9 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     p.seed = st.seed;
     p.bsdf_sampling = static_cast<int>(resolved_bsdf_sampling(st));
     p.ray_epsilon = kRayEpsilon;
+    check_split(st);
+    p.light_samples = st.light_samples;
+    p.bsdf_samples = st.bsdf_samples;
     const float share = st.light_share >= 0.0f ? std::min(st.light_share, kMaxLightShare) : 1.0f;
     std::fill(p.light_share, p.light_share + ETK_SHARE_BINS, share);
     std::fill(p.bin_flags, p.bin_flags + ETK_SHARE_BINS, ETK_BIN_COMPENSATED | ETK_BIN_VNDF);
