@@ -41,6 +41,20 @@ ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
     return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
+// The MIS weight of a light sample (density pl; p_bsdf pb there) and of a BSDF sample (pb; pl),
+// each over its count: with p.light_samples = nl and p.bsdf_samples = nb per vertex (the mis
+// strategy's splitting, etk_split_samples), the multi-sample heuristic's weight on nl pl and
+// nb pb (Veach), divided by the technique's count. nl = nb = 1: the paper's weights, bit for bit.
+// Forced inline: a call would copy EtkParams, as etk_dims would (surface.h).
+ETK_FORCE_INLINE_FN float etk_light_sample_weight(EtkParams p, float pl, float pb) {
+    float nl = (float)p.light_samples;
+    return etk_mis_weight(p.heuristic, nl * pl, (float)p.bsdf_samples * pb) / nl;
+}
+ETK_FORCE_INLINE_FN float etk_bsdf_sample_weight(EtkParams p, float pb, float pl) {
+    float nb = (float)p.bsdf_samples;
+    return etk_mis_weight(p.heuristic, nb * pb, (float)p.light_samples * pl) / nb;
+}
+
 #define ETK_PAIR_SHARE 0x40000000u
 
 // The distribution light samples are drawn from, and weighted by in MIS. The compensated one
@@ -111,8 +125,8 @@ ETK_FN EtkSurface etk_path_surface(EtkScene S, EtkPaths P, EtkParams p, int slot
 }
 
 // Splitting (the mis strategy with p.light_samples = nl, p.bsdf_samples = nb, as in a branched
-// path tracer): a non-delta vertex takes nl light and nb BSDF samples, weighted by the
-// multi-sample MIS heuristic on nl p_light and nb p_bsdf (Veach's) and divided by their count.
+// path tracer): a non-delta vertex takes nl light and nb BSDF samples, each weighted by
+// etk_light_sample_weight / etk_bsdf_sample_weight.
 // Sample 0 of each is the usual shadow ray and continuation (weighted in etk_shade and
 // etk_escaped); samples 1 .. n - 1, returned here as their sum over beta, count only the map's
 // light they see, their visibility traced at once (as a light set's, etk_shade_lights). Each
@@ -124,7 +138,6 @@ ETK_FN float3 etk_split_samples(EtkScene S, EtkParams p, EtkSurface s, EtkMateri
                                 float3 b, float3 ns, int pixel, uint pair, uint* traced) {
     float3 sum = make_float3(0.0f, 0.0f, 0.0f), wo = s.wo, ng = s.ng;
     uint nl = (uint)p.light_samples, nb = (uint)p.bsdf_samples;
-    float fl = (float)nl, fb = (float)nb;
     ETK_GLOBAL const float* dist = etk_light_dist(S, p);
     float2 u = etk_dims(p, pixel, pair);
     for (uint j = 1u; j < nl; ++j) {
@@ -132,7 +145,7 @@ ETK_FN float3 etk_split_samples(EtkScene S, EtkParams p, EtkSurface s, EtkMateri
         float3 wi = etk_to_local(ls.dir, t, b, ns);
         if (!(ls.pdf > 0.0f) || !etk_light_side_ok(m, wi.z, dot(ls.dir, ng)))
             continue;
-        float w = etk_mis_weight(p.heuristic, fl * ls.pdf, fb * etk_bsdf_pdf(m, wo, wi)) / fl;
+        float w = etk_light_sample_weight(p, ls.pdf, etk_bsdf_pdf(m, wo, wi));
         float3 c = etk_bsdf_eval(m, wo, wi) * etk_env_radiance_uv(S.env_texels, p.env, ls.uv) *
                    (fabs(wi.z) * w / ls.pdf);
         if (!(etk_max3(c) > 0.0f))
@@ -154,8 +167,7 @@ ETK_FN float3 etk_split_samples(EtkScene S, EtkParams p, EtkSurface s, EtkMateri
         if (!etk_same_side(bs.wi.z, dot(wi_world, ng)))
             continue; // as the continuation: across the geometric surface, it would leak light
         float2 uv = etk_env_uv(p.env, wi_world);
-        float w =
-            etk_mis_weight(p.heuristic, fb * bs.pdf, fl * etk_env_pdf_uv(dist, p.env, uv)) / fb;
+        float w = etk_bsdf_sample_weight(p, bs.pdf, etk_env_pdf_uv(dist, p.env, uv));
         float3 c = bs.weight * etk_env_radiance_uv(S.env_texels, p.env, uv) * w;
         if (!(etk_max3(c) > 0.0f))
             continue;
@@ -203,9 +215,7 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
             float pl = etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
             if (p.strategy == ETK_STRATEGY_VISIBILITY) // beta.w: the vertex's grid cell
                 pl *= etk_guide_factor(S, p, (int)P.beta[slot].w, uv);
-            // Sample 0 of the vertex's bsdf_samples (etk_split_samples; 1 and 1: the paper's).
-            float fb = (float)p.bsdf_samples;
-            w = etk_mis_weight(p.heuristic, fb * d.w, (float)p.light_samples * pl) / fb;
+            w = etk_bsdf_sample_weight(p, d.w, pl); // sample 0 of the vertex's BSDF samples
         } else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
     }
@@ -334,16 +344,12 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             // Above the surface, or below it at a dielectric (it transmits light from there).
             if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
-                // Sample 0 of the vertex's light_samples (etk_split_samples).
-                float fl = (float)p.light_samples;
                 float w = etk_strategy_is_mis(p.strategy)
-                              ? etk_mis_weight(p.heuristic, fl * pdf_light,
-                                               (float)p.bsdf_samples *
-                                                   etk_cguide_mix_pdf(S, p, cell, cg,
-                                                                      etk_bsdf_pdf(m, wo, wi),
-                                                                      wi_world)) /
-                                    fl
-                              : 1.0f;
+                              ? etk_light_sample_weight(p, pdf_light,
+                                                        etk_cguide_mix_pdf(S, p, cell, cg,
+                                                                           etk_bsdf_pdf(m, wo, wi),
+                                                                           wi_world))
+                              : 1.0f; // sample 0 of the vertex's light samples
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
                 // Visibility learning: what this direction would bring, unweighted, and where.

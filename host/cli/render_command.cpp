@@ -178,6 +178,8 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                     {"level_samples", sis.level_samples}};
     j["sampler"] = name_of(st.sampler);
     j["bsdf_sampling"] = name_of(resolved_bsdf_sampling(st));
+    j["light_samples"] = st.light_samples; // per vertex (mis splitting; 1: the paper's)
+    j["bsdf_samples"] = st.bsdf_samples;
     if (st.strategy == Strategy::adaptive) {
         // Per material: the light share its bin rendered with after learning.
         nlohmann::json shares = nlohmann::json::object();
