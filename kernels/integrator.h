@@ -16,6 +16,7 @@
 #include "bvh.h"
 #include "compat.h"
 #include "continuation_guide.h"
+#include "portal_guide.h"
 #include "directional_lights.h"
 #include "envmap.h"
 #include "film.h"
@@ -212,9 +213,12 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
             w = etk_share_continuation_density(s, pl, d.w) *
                 etk_share_weight(p.heuristic, s, pl, d.w, from_light);
         } else if (etk_strategy_is_mis(p.strategy)) {
-            float pl = etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
-            if (p.strategy == ETK_STRATEGY_VISIBILITY) // beta.w: the vertex's grid cell
-                pl *= etk_guide_factor(S, p, (int)P.beta[slot].w, uv);
+            // The visibility strategy's density: from the vertex's grid cell (beta.w) and, for
+            // the portal table, the continuation's origin (portal_guide.h).
+            float pl = p.strategy == ETK_STRATEGY_VISIBILITY
+                           ? etk_guide_light_pdf(S, p, (int)P.beta[slot].w, etk_xyz(P.ray_o[slot]),
+                                                 etk_xyz(d), uv)
+                           : etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
             w = etk_bsdf_sample_weight(p, d.w, pl); // sample 0 of the vertex's BSDF samples
         } else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
@@ -286,6 +290,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         float3 wi_world;
         float learn_val = 0.0f;
         int learn_key = 0;
+        float2 parts = make_float2(0.0f, 0.0f); // visibility: p_vis and p_portal of the sample
         if (p.strategy == ETK_STRATEGY_SIS) {
             // One stratum per sample, every stratum once in each run of light_count samples,
             // weighted by light_count x its power.
@@ -334,8 +339,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 light_uv = etk_env_uv(p.env, wi_world);
                 pdf_light = 0.25f * ETK_INV_PI;
             } else {
-                EtkEnvSample ls =
-                    guided ? etk_guide_sample(S, p, cell, u) : etk_env_sample(dist, p.env, u);
+                EtkEnvSample ls = guided ? etk_guide_light_sample(S, p, cell, s, u, &parts)
+                                         : etk_env_sample(dist, p.env, u);
                 wi_world = ls.dir;
                 light_uv = ls.uv;
                 pdf_light = ls.pdf;
@@ -363,6 +368,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             P.shadow_o[slot] = etk_f4(etk_surface_origin(s, wi_world), as_float((uint)learn_key));
             P.shadow_d[slot] = etk_f4(wi_world, 3.0e38f);
             P.shadow_L[slot] = etk_f4(c, learn_val);
+            if (p.guide_learn)
+                P.guide_parts[slot] = parts;
             out->slot[ETK_Q_SHADOW] = slot;
         }
     }
@@ -465,6 +472,10 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
     if (p.guide_learn) { // the visibility strategy's records, in shadow-queue order (host reads)
         P.guide_key[i] = (int)as_uint(o.w);
         P.guide_val[i] = visible ? P.shadow_L[slot].w : 0.0f;
+        float t; // where an unoccluded ray leaves the scene's box: the portal table's record
+        P.guide_exit[i] =
+            visible ? etk_portal_exit(etk_portal_table(S, p), etk_xyz(o), etk_xyz(d), &t) : -1;
+        P.guide_rec_parts[i] = P.guide_parts[slot];
     }
 }
 

@@ -46,7 +46,11 @@
     X(int, learn_bin)   /* adaptive learning passes: light-share bin of the first hit, -1: none */ \
     X(int, guide_key)   /* visibility learning: per shadow ray (queue order), cell x regions +     \
                            region of its direction */                                              \
-    X(float, guide_val) /* visibility learning: its unoccluded L cos / pdf, 0 if blocked */
+    X(float, guide_val) /* visibility learning: its unoccluded L cos / pdf, 0 if blocked */        \
+    X(int,                                                                                         \
+      guide_exit) /* visibility learning: the portal cell it leaves the box by, -1: blocked */     \
+    X(float2, guide_rec_parts) /* visibility learning: its p_vis and p_portal (portal_guide.h) */  \
+    X(float2, guide_parts)     /* the same per path slot, written by the shade stage */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces; the others keep one buffer each for the whole render (the back ends

@@ -7,6 +7,7 @@
 // the order records arrive in (host/lib/render/visibility_cache.h).
 #include "chi2.h"
 #include "kernels/continuation_guide.h"
+#include "kernels/portal_guide.h"
 #include "kernels/visibility_guide.h"
 #include "load/env_distribution.h"
 #include "render/visibility_cache.h"
@@ -14,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -137,6 +139,80 @@ TEST_P(VisibilityGuide, SamplesMatchTheirDensity) {
     EXPECT_NEAR(mean, 4.0 * M_PI, 5.0 * std::sqrt(var / n)) << "sd " << std::sqrt(var / n);
 }
 
+// The light sample with learned portals (kernels/portal_guide.h): the mixture of the cell's
+// distribution and the portal table, from a surface point inside the box. The density it
+// reports is the one the escaped stage evaluates for MIS (from the origin on the direction's
+// side), E[1 / pdf] is the sphere's area and E[g / pdf] the integral of a smooth g: nothing is
+// drawn more or less often than reported. And with the portal share 0 the sample is the cell's
+// own, bit for bit.
+TEST_P(VisibilityGuide, PortalMixtureIsUnbiased) {
+    const auto [w, h] = GetParam();
+    Fixture f;
+    make(f, w, h, 9u + w);
+    // The portal table after the cell's: a box around the point, light through one face's
+    // middle cells (a window) and a few others.
+    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {4.0f, 3.0f, 5.0f};
+    const std::array<float, 6> box = et::guide_portal_box(lo, hi);
+    f.cells.resize(ETK_GUIDE_CELL_FLOATS + etk::etk_portal_size(1), 0.0f);
+    float* t = f.cells.data() + etk::etk_portal_offset(1, 0);
+    std::copy(box.begin(), box.end(), t);
+    t[ETK_PORTAL_ON] = 1.0f;
+    std::vector<double> wt(ETK_PORTAL_CELLS, 0.0);
+    for (int i = 12; i < 20; ++i)
+        for (int j = 10; j < 16; ++j)
+            wt[(4 * ETK_PORTAL_N + i) * ETK_PORTAL_N + j] = 1.0; // face -z
+    wt[7] = wt[3000] = 5.0;
+    double run = 0.0;
+    for (int k = 0; k < ETK_PORTAL_CELLS; ++k) {
+        run += wt[k] / 50.0;
+        t[ETK_PORTAL_CDF + k + 1] = static_cast<float>(run);
+    }
+    f.S.guide_cells = f.cells.data();
+    etk::EtkSurface s{};
+    s.ng = etk::make_float3(0.0f, 1.0f, 0.0f);
+    s.origin = etk::make_float3(1.0f, 0.5f + 1e-4f, 3.0f);
+    s.origin_back = etk::make_float3(1.0f, 0.5f - 1e-4f, 3.0f);
+    const int n = 1 << 20;
+    std::mt19937 rng(4048u + w);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    for (float b : {0.0f, 0.5f}) {
+        t[ETK_PORTAL_SHARES] = b;
+        double inv = 0.0, inv2 = 0.0, g = 0.0, g2 = 0.0;
+        int mismatched = 0, portal = 0, same = 0;
+        for (int i = 0; i < n; ++i) {
+            const etk::float2 u =
+                etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
+            etk::float2 parts;
+            const etk::EtkEnvSample r = etk::etk_guide_light_sample(f.S, f.p, 0, s, u, &parts);
+            ASSERT_TRUE(r.pdf > 0.0f && std::isfinite(r.pdf));
+            const float again = etk::etk_guide_light_pdf(
+                f.S, f.p, 0, etk::etk_surface_origin(s, r.dir), r.dir, r.uv);
+            mismatched += std::fabs(again - r.pdf) > 1e-4f * r.pdf;
+            portal += u.x < b;
+            if (b == 0.0f) {
+                const etk::EtkEnvSample c = etk::etk_guide_sample(f.S, f.p, 0, u);
+                same += c.pdf == r.pdf && c.uv.x == r.uv.x && c.uv.y == r.uv.y;
+            }
+            const double x = 1.0 / r.pdf, y = (1.0 + r.dir.x) * (1.0 + r.dir.x) / r.pdf;
+            inv += x;
+            inv2 += x * x;
+            g += y;
+            g2 += y * y;
+        }
+        // The vis part's density comes from the sample's own sin theta, the evaluation's from
+        // uv: a few in 10^5 differ beyond 1e-4 (as etk_env_sample's do).
+        EXPECT_LE(mismatched, n / 10000) << "share " << b;
+        if (b == 0.0f)
+            EXPECT_EQ(same, n);
+        else
+            EXPECT_GT(portal, n / 3);
+        const double mi = inv / n, sdi = std::sqrt((inv2 / n - mi * mi) / n);
+        const double mg = g / n, sdg = std::sqrt((g2 / n - mg * mg) / n);
+        EXPECT_NEAR(mi, 4.0 * M_PI, 5.0 * sdi) << "share " << b;
+        EXPECT_NEAR(mg, 16.0 * M_PI / 3.0, 5.0 * sdg) << "share " << b; // (1 + x)^2 over S^2
+    }
+}
+
 // 64 x 32: regions of 4 x 4 cells; 50 x 27: regions of unequal sizes (floor boundaries).
 INSTANTIATE_TEST_SUITE_P(Sizes, VisibilityGuide,
                          ::testing::Values(std::make_pair(64, 32), std::make_pair(50, 27)));
@@ -234,7 +310,8 @@ INSTANTIATE_TEST_SUITE_P(Sizes, VisibilityColumn,
 TEST(VisibilityGuideTables, PriorIsTheMap) {
     Fixture f;
     make(f, 64, 32, 3u);
-    f.cells = et::guide_prior_cells(f.regions, 1, false);
+    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.0f, 1.0f, 1.0f};
+    f.cells = et::guide_prior_cells(f.regions, 1, false, et::guide_portal_box(lo, hi));
     f.S.guide_cells = f.cells.data();
     for (int r = 0; r < 32; ++r)
         for (int c = 0; c < 64; ++c) {
@@ -259,6 +336,16 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
         keys[i] = static_cast<int>(rng() % (o.slots * K));
         values[i] = (rng() % 3 == 0) ? 0.0f : std::ldexp(float(rng() % 1000 + 1), -int(rng() % 20));
     }
+    // Where the unoccluded ones left the box (some not at all), and their densities p_vis,
+    // p_portal (the portal table's sums and the portal shares' second moments).
+    std::vector<int> exits(keys.size());
+    std::vector<float> parts(2 * keys.size());
+    for (size_t i = 0; i < keys.size(); ++i) {
+        exits[i] = values[i] > 0.0f && rng() % 4 != 0 ? int(rng() % ETK_PORTAL_CELLS) : -1;
+        parts[2 * i] = std::ldexp(float(rng() % 1000 + 1), -int(rng() % 12));
+        parts[2 * i + 1] =
+            rng() % 5 == 0 ? 0.0f : std::ldexp(float(rng() % 1000 + 1), -int(rng() % 12));
+    }
     const int dark = o.slots / 2 - 1;
     std::vector<int> dcount(o.slots, 0);
     for (size_t i = 0; i < dkeys.size(); ++i) {
@@ -268,8 +355,10 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
                          : std::ldexp(float(rng() % 1000 + 1), -int(rng() % 20));
         ++dcount[dkeys[i] / K];
     }
-    et::VisibilityCache a(o, f.regions, 3.0), b(o, f.regions, 3.0);
-    a.add(keys.data(), values.data(), static_cast<int>(keys.size()));
+    const float lo[3] = {-1.0f, 0.0f, 2.0f}, hi[3] = {3.0f, 1.0f, 2.5f};
+    const std::array<float, 6> box = et::guide_portal_box(lo, hi);
+    et::VisibilityCache a(o, f.regions, 3.0, box), b(o, f.regions, 3.0, box);
+    a.add(keys.data(), values.data(), exits.data(), parts.data(), static_cast<int>(keys.size()));
     a.add_continuations(dkeys.data(), dvalues.data(), static_cast<int>(dkeys.size()));
     // The same records into b, shuffled, in uneven batches, the two kinds interleaved.
     auto batches = [&](const std::vector<int>& kk0, const std::vector<float>& vv0, bool dir,
@@ -279,25 +368,42 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
             order[i] = i;
         std::shuffle(order.begin(), order.end(), rng);
         for (size_t k = first; k < order.size(); k += step) {
-            std::vector<int> kk;
-            std::vector<float> vv;
+            std::vector<int> kk, ee;
+            std::vector<float> vv, pp;
             for (size_t j = k; j < std::min(order.size(), k + step); ++j) {
                 kk.push_back(kk0[order[j]]);
                 vv.push_back(vv0[order[j]]);
+                if (!dir) {
+                    ee.push_back(exits[order[j]]);
+                    pp.push_back(parts[2 * order[j]]);
+                    pp.push_back(parts[2 * order[j] + 1]);
+                }
             }
             if (dir)
                 b.add_continuations(kk.data(), vv.data(), static_cast<int>(kk.size()));
             else
-                b.add(kk.data(), vv.data(), static_cast<int>(kk.size()));
+                b.add(kk.data(), vv.data(), ee.data(), pp.data(), static_cast<int>(kk.size()));
         }
     };
     batches(dkeys, dvalues, true, 0, 41);
     batches(keys, values, false, 0, 37);
-    const std::vector<float> ta = a.tables(), tb = b.tables();
-    ASSERT_EQ(ta.size(), et::guide_cells_size(o.slots, true));
-    ASSERT_EQ(ta.size(), static_cast<size_t>(o.slots) * (2 * K + 3));
+    // Twice: the second update also depends on the portal shares the first chose.
+    std::vector<float> ta = a.tables(), tb = b.tables();
     ASSERT_EQ(ta.size(), tb.size());
     EXPECT_TRUE(ta == tb);
+    a.add(keys.data(), values.data(), exits.data(), parts.data(), static_cast<int>(keys.size()));
+    batches(keys, values, false, 0, 53);
+    ta = a.tables();
+    tb = b.tables();
+    ASSERT_EQ(ta.size(), et::guide_cells_size(o.slots, true));
+    ASSERT_EQ(ta.size(), static_cast<size_t>(o.slots) * (2 * K + 3) +
+                             static_cast<size_t>(etk::etk_portal_size(o.slots)));
+    ASSERT_EQ(ta.size(), tb.size());
+    EXPECT_TRUE(ta == tb);
+    // Some cells chose portals, some not.
+    const float* shares = ta.data() + etk::etk_portal_offset(o.slots, 1) + ETK_PORTAL_SHARES;
+    EXPECT_GT(std::count(shares, shares + o.slots, 0.0f), 0);
+    EXPECT_LT(std::count(shares, shares + o.slots, 0.0f), o.slots);
     // Every cell's two tables are CDFs from 0 to 1; the guided share is continuation_share x
     // n / (n + n0) where light came back, 0 elsewhere.
     for (int s = 0; s < o.slots; ++s) {

@@ -187,10 +187,13 @@ void ClDevice::read_learning(int n, int* bins) {
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_learn_bin], CL_TRUE, 0, sizeof(cl_int) * n, bins);
 }
 
-void ClDevice::read_guide(int n, int* keys, float* values) {
+void ClDevice::read_guide(int n, int* keys, float* values, int* exits, float* parts) {
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_rec_parts], CL_TRUE, 0, sizeof(cl_float2) * n,
+                             parts);
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_key], CL_TRUE, 0, sizeof(cl_int) * n, keys);
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_val], CL_TRUE, 0, sizeof(cl_float) * n,
                              values);
+    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_exit], CL_TRUE, 0, sizeof(cl_int) * n, exits);
 }
 
 void ClDevice::read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) {

@@ -50,7 +50,7 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     void reset_counters() override;
     void read_counters(uint32_t* counters) override;
     void read_learning(int n, int* bins) override;
-    void read_guide(int n, int* keys, float* values) override;
+    void read_guide(int n, int* keys, float* values, int* exits, float* parts) override;
     void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) override;
     void upload_guide(const std::vector<float>& cells) override;
     void launch(int stage, int n, const etk::EtkParams& params) override;

@@ -53,9 +53,12 @@ class CpuDevice::Lane : public StageExecutor {
     void read_learning(int n, int* bins) override {
         std::copy(learn_bin_.get(), learn_bin_.get() + n, bins);
     }
-    void read_guide(int n, int* keys, float* values) override {
+    void read_guide(int n, int* keys, float* values, int* exits, float* parts) override {
+        std::copy(reinterpret_cast<const float*>(guide_rec_parts_.get()),
+                  reinterpret_cast<const float*>(guide_rec_parts_.get() + n), parts);
         std::copy(guide_key_.get(), guide_key_.get() + n, keys);
         std::copy(guide_val_.get(), guide_val_.get() + n, values);
+        std::copy(guide_exit_.get(), guide_exit_.get() + n, exits);
     }
     void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) override {
         auto copy = [n](const etk::float4* from, float* to) {

@@ -9,6 +9,7 @@
 
 namespace et {
 
+using etk::float2;
 using etk::float4;
 
 // Film fields (by kernel argument, etk::ETK_ARG_film_*) that only a render keeping AOVs reads

@@ -21,8 +21,13 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
     guide_ = scene.settings.strategy == Strategy::visibility;
     if (guide_) {
         guide_options_.continuation = scene.params.guide_continuation != 0;
+        std::array<float, 6> box;
+        const float* table =
+            scene.guide_cells.data() +
+            etk::etk_portal_offset(guide_options_.slots, guide_options_.continuation ? 1 : 0);
+        std::copy(table, table + 6, box.begin());
         cache_ = std::make_unique<VisibilityCache>(guide_options_, scene.guide_regions,
-                                                   scene.guide_map_power);
+                                                   scene.guide_map_power, box);
         stats_.guide_host_bytes = cache_->bytes();
         stats_.guide_device_bytes =
             (scene.guide_cells.size() + scene.guide_regions.size()) * sizeof(float);

@@ -19,7 +19,7 @@ const char* stage_name(int stage) {
     return stage >= 0 && stage < etk::ETK_STAGE_COUNT ? names[stage] : "?";
 }
 
-void StageExecutor::read_guide(int, int*, float*) {
+void StageExecutor::read_guide(int, int*, float*, int*, float*) {
     throw Error("this back end cannot read the visibility strategy's records");
 }
 
@@ -105,6 +105,8 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     p.first_pixel = first;
     std::vector<int> keys;
     std::vector<float> values;
+    std::vector<int> exits;
+    std::vector<float> parts;
     // A light set sums all its lights at a hit; every other strategy takes one light sample.
     const int shade =
         p.strategy == ETK_STRATEGY_LIGHTS ? etk::ETK_STAGE_shade_lights : etk::ETK_STAGE_shade_hits;
@@ -133,8 +135,10 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
             const int m = static_cast<int>(c[etk::ETK_Q_SHADOW]);
             keys.resize(m);
             values.resize(m);
-            ex.read_guide(m, keys.data(), values.data());
-            guide->add(keys.data(), values.data(), m);
+            exits.resize(m);
+            parts.resize(2 * static_cast<size_t>(m));
+            ex.read_guide(m, keys.data(), values.data(), exits.data(), parts.data());
+            guide->add(keys.data(), values.data(), exits.data(), parts.data(), m);
         }
         if (recorder && !etk::etk_last_bounce(p, bounce)) // the last vertex is never guided
             recorder->after_bounce(ex, bounce);

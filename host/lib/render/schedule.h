@@ -30,8 +30,9 @@ class StageExecutor {
     // Learning passes of the adaptive strategy: the first hit's bin of path slots 0 .. n-1.
     virtual void read_learning(int n, int* bins) = 0;
     // Learning passes of the visibility strategy: the records of shadow rays 0 .. n-1 (in queue
-    // order) of the last trace_shadows launch.
-    virtual void read_guide(int n, int* keys, float* values);
+    // order) of the last trace_shadows launch: cell and region, value, portal cell (-1: none),
+    // and the densities p_vis, p_portal of its direction (2 n floats).
+    virtual void read_guide(int n, int* keys, float* values, int* exits, float* parts);
     // Learning passes of the continuation guide: ray_o, ray_d, beta and radiance of path slots
     // 0 .. n-1 (4 n floats each; a null pointer skips its field).
     virtual void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance);

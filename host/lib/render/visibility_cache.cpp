@@ -88,11 +88,51 @@ void write_cdf(const std::vector<double>& prob, float* cdf) {
 
 size_t guide_cells_size(int slots, bool continuation) {
     return static_cast<size_t>(slots) *
-           (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0));
+               (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0)) +
+           static_cast<size_t>(etk::etk_portal_size(slots));
 }
 
+std::array<float, 6> guide_portal_box(const float lo[3], const float hi[3]) {
+    float longest = 0.0f;
+    for (int k = 0; k < 3; ++k)
+        longest = std::max(longest, hi[k] - lo[k]);
+    // 1/1000 of the scene, and never less than float rounding at the corners' magnitude.
+    std::array<float, 6> box{};
+    for (int k = 0; k < 3; ++k) {
+        const float scale = std::max({std::fabs(lo[k]), std::fabs(hi[k]), longest, 1e-6f});
+        const float margin = std::max(1e-3f * longest, 1e-5f * scale);
+        box[k] = lo[k] - margin;
+        box[3 + k] = hi[k] + margin;
+    }
+    return box;
+}
+
+namespace {
+
+// The portal table: box, whether it is on, CDF over the cells from sums (uniform if all are
+// zero: then it is off), the slots' shares.
+void write_portal(const std::array<float, 6>& box, const std::vector<float>& shares,
+                  const std::vector<double>& sums, float* out) {
+    std::fill(out, out + ETK_PORTAL_SHARES, 0.0f);
+    std::copy(box.begin(), box.end(), out);
+    double total = 0.0;
+    for (double x : sums)
+        total += x;
+    out[ETK_PORTAL_ON] = total > 0.0 ? 1.0f : 0.0f;
+    std::copy(shares.begin(), shares.end(), out + ETK_PORTAL_SHARES);
+    float* cdf = out + ETK_PORTAL_CDF;
+    double run = 0.0;
+    for (int k = 0; k < ETK_PORTAL_CELLS; ++k) {
+        run += total > 0.0 ? sums[k] : 1.0;
+        cdf[k + 1] = static_cast<float>(run / (total > 0.0 ? total : double(ETK_PORTAL_CELLS)));
+    }
+    cdf[ETK_PORTAL_CELLS] = 1.0f;
+}
+
+} // namespace
+
 std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots,
-                                     bool continuation) {
+                                     bool continuation, const std::array<float, 6>& box) {
     std::vector<double> prob(regions.begin(), regions.begin() + K);
     std::vector<float> light(ETK_GUIDE_CELL_FLOATS), dir(ETK_GUIDE_DIR_FLOATS, 0.0f);
     write_cdf(prob, light.data());
@@ -104,12 +144,18 @@ std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slot
         if (continuation)
             std::copy(dir.begin(), dir.end(), out.begin() + etk::etk_guide_dir_offset(slots, s));
     }
+    write_portal(box, std::vector<float>(slots, 0.0f), std::vector<double>(ETK_PORTAL_CELLS, 0.0),
+                 out.data() + etk::etk_portal_offset(slots, continuation ? 1 : 0));
     return out;
 }
 
 VisibilityCache::VisibilityCache(const VisibilityOptions& options,
-                                 const std::vector<float>& regions, double scale)
-    : opt_(options), mass_(regions.begin(), regions.begin() + K),
+                                 const std::vector<float>& regions, double scale,
+                                 const std::array<float, 6>& box)
+    : opt_(options), mass_(regions.begin(), regions.begin() + K), box_(box),
+      portal_(ETK_PORTAL_CELLS, 0),
+      moments_(static_cast<size_t>(options.slots) * options.portal_shares.size(), 0),
+      moment_counts_(options.slots, 0), shares_(options.slots, 0.0f),
       inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0) {
     light_.sums.assign(static_cast<size_t>(options.slots) * K, 0);
     light_.counts.assign(options.slots, 0);
@@ -135,19 +181,62 @@ void VisibilityCache::add_to(RegionSums& to, const int* keys, const float* value
     }
 }
 
-void VisibilityCache::add(const int* keys, const float* values, int n) {
+void VisibilityCache::add(const int* keys, const float* values, const int* exits,
+                          const float* parts, int n) {
     add_to(light_, keys, values, n);
+    std::lock_guard<std::mutex> lock(mutex_);
+    const size_t C = opt_.portal_shares.size();
+    for (int i = 0; i < n; ++i) {
+        const int key = keys[i];
+        if (key < 0 || key >= opt_.slots * K)
+            continue;
+        const int s = key / K;
+        ++moment_counts_[s];
+        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
+        const double pv = parts[2 * i], pp = parts[2 * i + 1];
+        if (!(v > 0.0) || !std::isfinite(pv) || !std::isfinite(pp))
+            continue;
+        // v = g / p_rec (g = luminance(L) cos, unoccluded); the second moment of the light
+        // sample with share b is E_rec[g^2 / (p_rec p_b)] = E_rec[v^2 p_rec / p_b].
+        const double b0 = shares_[s];
+        const double prec = (1.0 - b0) * pv + b0 * pp;
+        for (size_t j = 0; j < C; ++j) {
+            const double b = opt_.portal_shares[j];
+            const double pb = (1.0 - b) * pv + b * pp;
+            const double m = pb > 0.0 ? v * inv_scale_ * v * inv_scale_ * prec / pb : kMaxValue;
+            moments_[s * C + j] +=
+                static_cast<uint64_t>(std::llround(std::min(m, kMaxValue) * kUnit));
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        if (exits[i] < 0 || exits[i] >= ETK_PORTAL_CELLS)
+            continue;
+        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
+        portal_[exits[i]] +=
+            static_cast<uint64_t>(std::llround(std::min(v * inv_scale_, kMaxValue) * kUnit));
+    }
 }
 
 void VisibilityCache::add_continuations(const int* keys, const float* values, int n) {
     add_to(dir_, keys, values, n);
 }
 
-std::vector<float> VisibilityCache::tables() const {
+std::vector<float> VisibilityCache::tables() {
     std::lock_guard<std::mutex> lock(mutex_);
+    const size_t C = opt_.portal_shares.size();
+    for (int s = 0; s < opt_.slots; ++s) {
+        if (moment_counts_[s] >= static_cast<uint32_t>(opt_.portal_records)) {
+            size_t best = 0; // the least second moment; a tie keeps the smaller share
+            for (size_t j = 1; j < C; ++j)
+                best = moments_[s * C + j] < moments_[s * C + best] ? j : best;
+            shares_[s] = static_cast<float>(opt_.portal_shares[best]);
+        }
+        moment_counts_[s] = 0;
+        std::fill(moments_.begin() + s * C, moments_.begin() + (s + 1) * C, 0);
+    }
     const bool continuation = !dir_.sums.empty();
     // Cells without records keep the prior tables (most cells of a scene).
-    std::vector<float> out = guide_prior_cells(mass_, opt_.slots, continuation);
+    std::vector<float> out = guide_prior_cells(mass_, opt_.slots, continuation, box_);
     std::vector<double> prob(K);
     const std::vector<float> uniform(K, 1.0f / K);
     // Slot s's P = own x S / sum S + (1 - own) x prior, own = n / (n + n0) (0 if nothing came
@@ -177,6 +266,8 @@ std::vector<float> VisibilityCache::tables() const {
             dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
         }
     }
+    write_portal(box_, shares_, std::vector<double>(portal_.begin(), portal_.end()),
+                 out.data() + etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0));
     return out;
 }
 

@@ -28,9 +28,23 @@
 // radiance x cos: the mixture's BSDF half brings the cosine. Per cell,
 // P(R) = n / (n + n0) S(R) / sum S + n0 / (n + n0) / K (uniform where it knows little) and the
 // guided share c = continuation_share x n / (n + n0), 0 where the cell saw no light come back.
+//
+// Portals (kernels/portal_guide.h): every unoccluded shadow-ray record also names the cell of the
+// scene's box the ray left by; its value is summed there (the same fixed point), and the table
+// over the box's cells is the CDF of those sums -- where the light the scene receives gets in.
+// Which share b of a hash-grid cell's light samples goes to it is chosen per cell at each update
+// among options.portal_shares: the one of least second moment of the light sample,
+//   M(b) = sum over the cell's records since the last update of v^2 p_rec / p_b,
+// v = g / p_rec the record's value, p_rec its density when drawn (the cell's last share) and
+// p_b = (1 - b) p_vis + b p_portal from the two densities the record carries -- an importance-
+// sampled estimate of the integral of g^2 / p_b. Open scenes, where light gets in everywhere,
+// keep b = 0 (the portal table is then a poor density); a point that sees the sky through a
+// window takes b > 0. The sums are fixed point, so the choice is order-independent too.
 #pragma once
+#include "kernels/portal_guide.h"
 #include "kernels/visibility_guide.h"
 
+#include <array>
 #include <cstdint>
 #include <mutex>
 #include <vector>
@@ -50,6 +64,11 @@ struct VisibilityOptions {
     // The guided share of a well-learned cell's continuations (0.3 / 0.5 / 0.7 measured:
     // docs/results.md, issue 11).
     double continuation_share = 0.5;
+    // Portals (kernels/portal_guide.h): each cell's share of light samples drawn from the learned
+    // portal table is the one of these whose light sample has the least second moment on the
+    // cell's records since the last update (0 for cells with fewer than portal_records).
+    std::array<double, 4> portal_shares{{0.0, 0.25, 0.5, 0.75}};
+    int portal_records = 64;
 };
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).
@@ -62,25 +81,37 @@ double guide_map_power(const std::vector<float>& rgb, int w, int h);
 // guide's if it is on (kernels/visibility_guide.h).
 size_t guide_cells_size(int slots, bool continuation);
 
+// The portal table's box: the scene's bounds lo, hi enlarged so that every surface point lies
+// strictly inside (a ray from it has a positive distance to the face it leaves by).
+std::array<float, 6> guide_portal_box(const float lo[3], const float hi[3]);
+
 // Every cell's tables before anything is learned: the map's region masses (the map's own
 // distribution) and, with the continuation guide, uniform regions with a share of 0.
+// The portal table follows, over `box` (guide_portal_box), with a share of 0.
 std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots,
-                                     bool continuation);
+                                     bool continuation, const std::array<float, 6>& box);
 
 class VisibilityCache {
   public:
-    // regions: guide_region_tables; scale: the map's power (values are kept relative to it).
+    // regions: guide_region_tables; scale: the map's power (values are kept relative to it);
+    // box: the portal table's (guide_portal_box).
     VisibilityCache(const VisibilityOptions& options, const std::vector<float>& regions,
-                    double scale);
-    // One bounce's shadow-ray records (thread-safe).
-    void add(const int* keys, const float* values, int n);
+                    double scale, const std::array<float, 6>& box);
+    // One bounce's shadow-ray records (thread-safe): cell x K + region, value, the portal cell
+    // the ray left the box by (-1: blocked) and the densities p_vis, p_portal of its direction
+    // (2 n floats).
+    void add(const int* keys, const float* values, const int* exits, const float* parts, int n);
     // One wave's continuation records (thread-safe).
     void add_continuations(const int* keys, const float* values, int n);
     // The cells' tables from everything recorded so far (guide_cells_size floats): the CDFs of Q,
     // then, with options.continuation, the continuation guide's CDFs and shares.
-    std::vector<float> tables() const;
+    // Each update also chooses the cells' portal shares and starts their measure afresh.
+    std::vector<float> tables();
     // Host memory of the sums, bytes.
-    uint64_t bytes() const { return light_.bytes() + dir_.bytes(); }
+    uint64_t bytes() const {
+        return light_.bytes() + dir_.bytes() + portal_.size() * 8 + moments_.size() * 8 +
+               moment_counts_.size() * 4 + shares_.size() * 4;
+    }
     uint64_t records() const { return light_.records; } // shadow-ray records
     uint64_t continuation_records() const { return dir_.records; }
     // Whether the table should be rebuilt after learning pass `pass` (0-based): 1, 2, 4, ...
@@ -97,6 +128,12 @@ class VisibilityCache {
     void add_to(RegionSums& to, const int* keys, const float* values, int n);
     VisibilityOptions opt_;
     std::vector<float> mass_; // M_R
+    std::array<float, 6> box_;
+    std::vector<uint64_t> portal_; // per portal cell, fixed point
+    // Per slot and candidate share, the light sample's second moment (fixed point), records.
+    std::vector<uint64_t> moments_;
+    std::vector<uint32_t> moment_counts_;
+    std::vector<float> shares_; // the portal shares of the last update, per slot
     double inv_scale_;
     RegionSums light_, dir_; // the light sample's (shadow rays), the continuation guide's
     mutable std::mutex mutex_;

@@ -1,0 +1,180 @@
+// Learned portals (the visibility strategy; issue 11). In a room lit through windows the light
+// that reaches a point comes through a few openings, and from across the room a window is a
+// small solid angle that no fixed set of direction regions resolves (visibility_guide.h's are
+// 22.5 degrees wide, coarser than a window seen from across the room, and their cells are
+// 1/8 of the room wide, so the window's direction moves inside one). Where the light gets in is
+// a property of the scene, not of the receiving point: every unoccluded shadow ray leaves the
+// scene's (slightly enlarged) bounding box through the opening it passed. So the box's six faces
+// are split into ETK_PORTAL_N x ETK_PORTAL_N cells each, and one table for the whole scene,
+// learned from where the unoccluded shadow rays of the learning passes leave the box
+// (host/lib/render/visibility_cache.h), is a distribution over those cells: in effect portals
+// placed by the renderer itself. A point x samples it by choosing a cell, a point y uniformly
+// in it, and the direction towards y; parallax is exact, because y is a point, not a direction.
+// Its solid-angle density is
+//   p_portal(w) = P(k) / A(k) x t^2 / |w . n_face|,
+// k the cell where the ray from x along w leaves the box, t its distance there, A(k) the cell's
+// area: the ray from a point inside the box leaves it exactly once, so every direction has one
+// cell and the density integrates to one over the sphere.
+// The light sample of the visibility strategy is then the one-sample mixture
+//   p(w) = (1 - b) p_vis(w) + b p_portal(w),
+// p_vis the hash-grid cell's mixture (visibility_guide.h), positive wherever the map is, so the
+// estimator stays unbiased whatever the portal table holds; b is the table's share (0 until
+// something is learned). It is drawn by inversion of u.x (below b: the portal, else the cell's
+// mixture, u.x rescaled either way) and its density is evaluated the same way by the escaped
+// stage for the BSDF sample's MIS weight, from the continuation's origin: the light sample's
+// direction is aimed from that same point (the surface's origin on the direction's side).
+//
+// Table (ETK_PORTAL_FLOATS, after the cells' tables in guide_cells): the box's low and high
+// corners, the share b, one unused float, then the CDF over the 6 N^2 cells (face f = 2 axis +
+// (outward along +axis), then i along axis + 1, j along axis + 2, modulo 3).
+#ifndef ETK_PORTAL_GUIDE_H
+#define ETK_PORTAL_GUIDE_H
+#include "compat.h"
+#include "envmap.h"
+#include "params.h"
+#include "path_state.h"
+#include "piecewise_constant.h"
+#include "surface.h"
+#include "visibility_guide.h"
+
+#define ETK_PORTAL_N 32
+#define ETK_PORTAL_CELLS (6 * ETK_PORTAL_N * ETK_PORTAL_N)
+#define ETK_PORTAL_ON 6 // 1 once the table holds something learned
+#define ETK_PORTAL_CDF 8
+#define ETK_PORTAL_SHARES (ETK_PORTAL_CDF + ETK_PORTAL_CELLS + 1)
+
+ETK_BEGIN
+
+// Where the portal table starts in guide_cells: after the light sample's and the continuation
+// guide's halves (visibility_guide.h).
+ETK_FN int etk_portal_offset(int slots, int continuation) {
+    return slots * (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0));
+}
+ETK_FN ETK_GLOBAL const float* etk_portal_table(EtkScene S, EtkParams p) {
+    return S.guide_cells + etk_portal_offset(p.guide_slots, p.guide_continuation);
+}
+// Floats of the portal table for `slots` hash-grid cells.
+ETK_FN int etk_portal_size(int slots) {
+    return ETK_PORTAL_SHARES + slots;
+}
+// The share b of light samples a vertex in hash-grid `cell` draws from the portal table.
+ETK_FN float etk_portal_share(EtkScene S, EtkParams p, int cell) {
+    ETK_GLOBAL const float* box = etk_portal_table(S, p);
+    return p.guide_ready && box[ETK_PORTAL_ON] > 0.0f ? box[ETK_PORTAL_SHARES + cell] : 0.0f;
+}
+
+// Component a (0, 1, 2) of v: OpenCL C has no run-time component index.
+ETK_FN float etk_portal_comp(float3 v, int a) {
+    return a == 0 ? v.x : (a == 1 ? v.y : v.z);
+}
+
+// The cell where the ray from o (inside the box) along unit d leaves the box; *t: its distance.
+ETK_FN int etk_portal_exit(ETK_GLOBAL const float* box, float3 o, float3 d, float* t) {
+    float best = 3.0e38f;
+    int axis = 0;
+    for (int a = 0; a < 3; ++a) {
+        float da = etk_portal_comp(d, a);
+        float ta =
+            da != 0.0f ? ((da > 0.0f ? box[3 + a] : box[a]) - etk_portal_comp(o, a)) / da : 3.0e38f;
+        axis = ta < best ? a : axis;
+        best = fmin(ta, best);
+    }
+    best = fmax(best, 0.0f);
+    float3 y = o + d * best;
+    int a1 = axis == 2 ? 0 : axis + 1, a2 = axis == 0 ? 2 : axis - 1;
+    float f1 = (etk_portal_comp(y, a1) - box[a1]) / (box[3 + a1] - box[a1]);
+    float f2 = (etk_portal_comp(y, a2) - box[a2]) / (box[3 + a2] - box[a2]);
+    int i = clamp((int)floor(f1 * (float)ETK_PORTAL_N), 0, ETK_PORTAL_N - 1);
+    int j = clamp((int)floor(f2 * (float)ETK_PORTAL_N), 0, ETK_PORTAL_N - 1);
+    int face = 2 * axis + (etk_portal_comp(d, axis) > 0.0f ? 1 : 0);
+    *t = best;
+    return (face * ETK_PORTAL_N + i) * ETK_PORTAL_N + j;
+}
+
+// The area of a cell of face `face`.
+ETK_FN float etk_portal_cell_area(ETK_GLOBAL const float* box, int face) {
+    int axis = face / 2;
+    int a1 = axis == 2 ? 0 : axis + 1, a2 = axis == 0 ? 2 : axis - 1;
+    return (box[3 + a1] - box[a1]) * (box[3 + a2] - box[a2]) *
+           (1.0f / (float)(ETK_PORTAL_N * ETK_PORTAL_N));
+}
+
+// p_portal of unit direction d from o.
+ETK_FN float etk_portal_pdf(ETK_GLOBAL const float* box, float3 o, float3 d) {
+    float t;
+    int k = etk_portal_exit(box, o, d, &t);
+    int face = k / (ETK_PORTAL_N * ETK_PORTAL_N);
+    float P = box[ETK_PORTAL_CDF + k + 1] - box[ETK_PORTAL_CDF + k];
+    float c = fabs(etk_portal_comp(d, face / 2));
+    return P > 0.0f && c > 0.0f ? P / etk_portal_cell_area(box, face) * (t * t / c) : 0.0f;
+}
+
+// A point on the box's surface from u in [0,1)^2: the cell by inverting the table with u.x,
+// then uniformly inside it (u.x rescaled across the cell's i, u.y across its j).
+ETK_FN float3 etk_portal_point(ETK_GLOBAL const float* box, float2 u) {
+    ETK_GLOBAL const float* cdf = box + ETK_PORTAL_CDF;
+    int k = etk_find_interval(cdf, ETK_PORTAL_CELLS, u.x);
+    float fi = etk_guide_rescale(u.x, cdf[k], cdf[k + 1]);
+    int face = k / (ETK_PORTAL_N * ETK_PORTAL_N), rest = k % (ETK_PORTAL_N * ETK_PORTAL_N);
+    int i = rest / ETK_PORTAL_N, j = rest % ETK_PORTAL_N;
+    int axis = face / 2;
+    int a1 = axis == 2 ? 0 : axis + 1, a2 = axis == 0 ? 2 : axis - 1;
+    float plane = (face & 1) ? box[3 + axis] : box[axis];
+    float c1 = box[a1] + ((float)i + fi) * (1.0f / ETK_PORTAL_N) * (box[3 + a1] - box[a1]);
+    float c2 = box[a2] + ((float)j + u.y) * (1.0f / ETK_PORTAL_N) * (box[3 + a2] - box[a2]);
+    float x = axis == 0 ? plane : (a1 == 0 ? c1 : c2);
+    float y = axis == 1 ? plane : (a1 == 1 ? c1 : c2);
+    float z = axis == 2 ? plane : (a1 == 2 ? c1 : c2);
+    return make_float3(x, y, z);
+}
+
+// The direction from surface s towards a point drawn from the table: aimed from the surface's
+// origin on the side it leaves by (the origin its shadow ray, or its continuation, starts from).
+ETK_FN float3 etk_portal_sample_dir(ETK_GLOBAL const float* box, EtkSurface s, float2 u) {
+    float3 y = etk_portal_point(box, u);
+    return normalize(y - etk_surface_origin(s, normalize(y - s.origin)));
+}
+
+// The light sample's density at a vertex in hash-grid `cell` whose ray towards d (unit; map
+// coordinates uv) starts at o: the cell's mixture, and the portal table's share of it.
+ETK_FN float etk_guide_light_pdf(EtkScene S, EtkParams p, int cell, float3 o, float3 d, float2 uv) {
+    float pv = etk_env_pdf_uv(S.env_dist, p.env, uv) * etk_guide_factor(S, p, cell, uv);
+    float b = etk_portal_share(S, p, cell);
+    return b > 0.0f ? (1.0f - b) * pv + b * etk_portal_pdf(etk_portal_table(S, p), o, d) : pv;
+}
+
+// The visibility strategy's light sample at surface s in `cell`, from u in [0,1)^2: with
+// probability b (u.x < b) towards the portal table's point, else the cell's mixture
+// (etk_guide_sample); pdf: the whole mixture's. *parts: the densities of its two parts, p_vis
+// and p_portal (the latter only while learning or where b > 0), for the learning's choice of b.
+ETK_FN EtkEnvSample etk_guide_light_sample(EtkScene S, EtkParams p, int cell, EtkSurface s,
+                                           float2 u, float2* parts) {
+    float b = etk_portal_share(S, p, cell);
+    ETK_GLOBAL const float* box = etk_portal_table(S, p);
+    EtkEnvSample r;
+    float pv;
+    if (!(b > 0.0f)) {
+        r = etk_guide_sample(S, p, cell, u);
+        *parts = make_float2(
+            r.pdf, p.guide_learn ? etk_portal_pdf(box, etk_surface_origin(s, r.dir), r.dir) : 0.0f);
+        return r;
+    }
+    if (u.x < b) {
+        r.dir = etk_portal_sample_dir(box, s, make_float2(etk_guide_rescale(u.x, 0.0f, b), u.y));
+        r.uv = etk_env_uv(p.env, r.dir);
+        r.row = etk_cell_of(r.uv.y, p.env.dist_h);
+        r.col = etk_cell_of(r.uv.x, p.env.dist_w);
+        pv = etk_env_pdf_uv(S.env_dist, p.env, r.uv) * etk_guide_factor(S, p, cell, r.uv);
+    } else {
+        r = etk_guide_sample(S, p, cell, make_float2(etk_guide_rescale(u.x, b, 1.0f), u.y));
+        pv = r.pdf;
+    }
+    float pp = etk_portal_pdf(box, etk_surface_origin(s, r.dir), r.dir);
+    r.pdf = (1.0f - b) * pv + b * pp;
+    *parts = make_float2(pv, pp);
+    return r;
+}
+
+ETK_END
+
+#endif
