@@ -12,6 +12,16 @@
 // The mixture is sampled by inversion (u.x < c: the guide, else the BSDF, u.x rescaled), the
 // region by inverting the cell's CDF as the light sample's regions are (etk_guide_pick_region),
 // then uniformly in the region's solid angle.
+//
+// Secondary sources as points. The regions are 22.5 degrees wide and fixed to the cell, while the
+// sunlit patch on a floor is a place: from across a cell it moves through several regions. So the
+// guide's share is itself a mixture, (1 - q) p_guide + q p_spot, where p_spot is a second
+// scene-wide table of the scene box's cells with portal_guide.h's layout and density (a cell, a
+// point in it, the direction towards it: parallax exact), learned from where the continuations of
+// the learning passes left the box with the light they brought back: where indirect light comes
+// from, projected onto the box (exactly, where the source is on the box: a floor, a wall). q is
+// chosen per hash-grid cell by the host (visibility_cache.h), 0 until the table holds something:
+//   p(w) = c ((1 - q) p_guide(w) + q p_spot(w)) + (1 - c) p_bsdf(w).
 #ifndef ETK_CONTINUATION_GUIDE_H
 #define ETK_CONTINUATION_GUIDE_H
 #include "bsdf.h"
@@ -19,6 +29,7 @@
 #include "latlong.h"
 #include "params.h"
 #include "path_state.h"
+#include "portal_guide.h"
 #include "trig.h"
 #include "visibility_guide.h"
 
@@ -64,10 +75,28 @@ ETK_FN float etk_cguide_pdf(EtkScene S, EtkParams p, int cell, float3 d) {
     return (cdf[R + 1] - cdf[R]) * (ETK_GUIDE_REGIONS * 0.25f * ETK_INV_PI);
 }
 
-// The mixture's density c p_guide + (1 - c) p_bsdf of world direction d.
-ETK_FN float etk_cguide_mix_pdf(EtkScene S, EtkParams p, int cell, float c, float pdf_bsdf,
-                                float3 d) {
-    return c > 0.0f ? c * etk_cguide_pdf(S, p, cell, d) + (1.0f - c) * pdf_bsdf : pdf_bsdf;
+// The point table of secondary sources (after the portal table in guide_cells; the same
+// layout, its per-slot entries the share q) and a vertex's q.
+ETK_FORCE_INLINE_FN ETK_GLOBAL const float* etk_spot_table(EtkScene S, EtkParams p) {
+    return etk_portal_table(S, p) + etk_portal_size(p.guide_slots);
+}
+ETK_FORCE_INLINE_FN float etk_spot_share(EtkScene S, EtkParams p, int cell) {
+    ETK_GLOBAL const float* box = etk_spot_table(S, p);
+    return box[ETK_PORTAL_ON] > 0.0f ? box[ETK_PORTAL_SHARES + cell] : 0.0f;
+}
+
+// The mixture's density c ((1 - q) p_guide + q p_spot) + (1 - c) p_bsdf of world direction d
+// (unit), whose ray starts at o (etk_surface_origin: the point the spot table's density is
+// measured from).
+ETK_FORCE_INLINE_FN float etk_cguide_mix_pdf(EtkScene S, EtkParams p, int cell, float c,
+                                             float pdf_bsdf, float3 o, float3 d) {
+    if (!(c > 0.0f))
+        return pdf_bsdf;
+    float q = etk_spot_share(S, p, cell);
+    float pg = etk_cguide_pdf(S, p, cell, d);
+    if (q > 0.0f)
+        pg = (1.0f - q) * pg + q * etk_portal_pdf(etk_spot_table(S, p), o, d);
+    return c * pg + (1.0f - c) * pdf_bsdf;
 }
 
 // A direction from the guide of `cell`, from u in [0,1)^2.
@@ -77,23 +106,28 @@ ETK_FN float3 etk_cguide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
     return etk_cguide_region_dir(R, t);
 }
 
-// A continuation drawn from the mixture at a vertex with shading frame (t, b, n): the guide with
-// probability c (u.x < c), else the BSDF, u.x rescaled either way. pdf: the mixture's density
-// of the direction, pdf_bsdf the BSDF's (both 0: no sample).
+// A continuation drawn from the mixture at surface s (shading frame t, b, n): the guide with
+// probability c (u.x < c; within it the spot table's point with probability q), else the BSDF,
+// u.x rescaled at each choice. pdf: the mixture's density of the direction, pdf_bsdf the BSDF's
+// (both 0: no sample).
 typedef struct {
     float3 wi_world, wi; // the direction in the world and in the shading frame
     float pdf, pdf_bsdf;
 } EtkGuidedSample;
 
 ETK_FN EtkGuidedSample etk_cguide_sample_mixture(EtkScene S, EtkParams p, int cell, float c,
-                                                 EtkMaterial m, float3 wo, float3 t, float3 b,
+                                                 EtkMaterial m, EtkSurface s, float3 t, float3 b,
                                                  float3 n, float2 u, float lobe) {
     EtkGuidedSample g;
     g.pdf = 0.0f;
     g.pdf_bsdf = 0.0f;
+    float3 wo = s.wo;
     if (u.x < c) {
+        float x = etk_guide_rescale(u.x, 0.0f, c), q = etk_spot_share(S, p, cell);
         g.wi_world =
-            etk_cguide_sample(S, p, cell, make_float2(etk_guide_rescale(u.x, 0.0f, c), u.y));
+            x < q ? etk_portal_sample_dir(etk_spot_table(S, p), s,
+                                          make_float2(etk_guide_rescale(x, 0.0f, q), u.y))
+                  : etk_cguide_sample(S, p, cell, make_float2(etk_guide_rescale(x, q, 1.0f), u.y));
         g.wi = etk_to_local(g.wi_world, t, b, n);
         g.pdf_bsdf = etk_bsdf_pdf(m, wo, g.wi);
     } else {
@@ -105,7 +139,8 @@ ETK_FN EtkGuidedSample etk_cguide_sample_mixture(EtkScene S, EtkParams p, int ce
             return g;
         g.pdf_bsdf = bs.pdf;
     }
-    g.pdf = etk_cguide_mix_pdf(S, p, cell, c, g.pdf_bsdf, g.wi_world);
+    g.pdf = etk_cguide_mix_pdf(S, p, cell, c, g.pdf_bsdf, etk_surface_origin(s, g.wi_world),
+                               g.wi_world);
     return g;
 }
 

@@ -350,10 +350,10 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
                 float w = etk_strategy_is_mis(p.strategy)
-                              ? etk_light_sample_weight(p, pdf_light,
-                                                        etk_cguide_mix_pdf(S, p, cell, cg,
-                                                                           etk_bsdf_pdf(m, wo, wi),
-                                                                           wi_world))
+                              ? etk_light_sample_weight(
+                                    p, pdf_light,
+                                    etk_cguide_mix_pdf(S, p, cell, cg, etk_bsdf_pdf(m, wo, wi),
+                                                       etk_surface_origin(s, wi_world), wi_world))
                               : 1.0f; // sample 0 of the vertex's light samples
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
@@ -414,7 +414,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
         b_from_light = 1;
     } else if (cg > 0.0f) {
         // A guided vertex: the mixture of the cell's learned directions and the BSDF.
-        EtkGuidedSample g = etk_cguide_sample_mixture(S, p, cell, cg, m, wo, t, b, ns, u, rr.x);
+        EtkGuidedSample g = etk_cguide_sample_mixture(S, p, cell, cg, m, s, t, b, ns, u, rr.x);
         if (!(g.pdf > 0.0f) || !(g.pdf_bsdf > 0.0f))
             return; // below the surface: nothing a diffuse surface reflects
         wi_world = g.wi_world;

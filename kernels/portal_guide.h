@@ -99,14 +99,19 @@ ETK_FN float etk_portal_cell_area(ETK_GLOBAL const float* box, int face) {
            (1.0f / (float)(ETK_PORTAL_N * ETK_PORTAL_N));
 }
 
-// p_portal of unit direction d from o.
-ETK_FN float etk_portal_pdf(ETK_GLOBAL const float* box, float3 o, float3 d) {
-    float t;
-    int k = etk_portal_exit(box, o, d, &t);
+// p_portal of unit direction d whose ray leaves the box by cell k at distance t.
+ETK_FN float etk_portal_pdf_exit(ETK_GLOBAL const float* box, float3 d, int k, float t) {
     int face = k / (ETK_PORTAL_N * ETK_PORTAL_N);
     float P = box[ETK_PORTAL_CDF + k + 1] - box[ETK_PORTAL_CDF + k];
     float c = fabs(etk_portal_comp(d, face / 2));
     return P > 0.0f && c > 0.0f ? P / etk_portal_cell_area(box, face) * (t * t / c) : 0.0f;
+}
+
+// p_portal of unit direction d from o.
+ETK_FN float etk_portal_pdf(ETK_GLOBAL const float* box, float3 o, float3 d) {
+    float t;
+    int k = etk_portal_exit(box, o, d, &t);
+    return etk_portal_pdf_exit(box, d, k, t);
 }
 
 // A point on the box's surface from u in [0,1)^2: the cell by inverting the table with u.x,

@@ -357,9 +357,24 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     }
     const float lo[3] = {-1.0f, 0.0f, 2.0f}, hi[3] = {3.0f, 1.0f, 2.5f};
     const std::array<float, 6> box = et::guide_portal_box(lo, hi);
+    // The continuations' rays (origin in the box, 0, unit direction, density): the
+    // secondary-source table's records and its shares' second moments.
+    std::vector<float> drays(8 * dkeys.size());
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    for (size_t i = 0; i < dkeys.size(); ++i) {
+        float* r = &drays[8 * i];
+        for (int k = 0; k < 3; ++k)
+            r[k] = lo[k] + (hi[k] - lo[k]) * U(rng);
+        etk::float3 d =
+            etk::normalize(etk::make_float3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f));
+        r[4] = d.x;
+        r[5] = d.y;
+        r[6] = d.z;
+        r[7] = std::ldexp(float(rng() % 1000 + 1), -int(rng() % 12));
+    }
     et::VisibilityCache a(o, f.regions, 3.0, box), b(o, f.regions, 3.0, box);
     a.add(keys.data(), values.data(), exits.data(), parts.data(), static_cast<int>(keys.size()));
-    a.add_continuations(dkeys.data(), dvalues.data(), static_cast<int>(dkeys.size()));
+    a.add_continuations(dkeys.data(), dvalues.data(), drays.data(), static_cast<int>(dkeys.size()));
     // The same records into b, shuffled, in uneven batches, the two kinds interleaved.
     auto batches = [&](const std::vector<int>& kk0, const std::vector<float>& vv0, bool dir,
                        size_t first, size_t step) {
@@ -369,18 +384,20 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
         std::shuffle(order.begin(), order.end(), rng);
         for (size_t k = first; k < order.size(); k += step) {
             std::vector<int> kk, ee;
-            std::vector<float> vv, pp;
+            std::vector<float> vv, pp, rr;
             for (size_t j = k; j < std::min(order.size(), k + step); ++j) {
                 kk.push_back(kk0[order[j]]);
                 vv.push_back(vv0[order[j]]);
-                if (!dir) {
+                if (dir)
+                    rr.insert(rr.end(), &drays[8 * order[j]], &drays[8 * order[j]] + 8);
+                else {
                     ee.push_back(exits[order[j]]);
                     pp.push_back(parts[2 * order[j]]);
                     pp.push_back(parts[2 * order[j] + 1]);
                 }
             }
             if (dir)
-                b.add_continuations(kk.data(), vv.data(), static_cast<int>(kk.size()));
+                b.add_continuations(kk.data(), vv.data(), rr.data(), static_cast<int>(kk.size()));
             else
                 b.add(kk.data(), vv.data(), ee.data(), pp.data(), static_cast<int>(kk.size()));
         }
@@ -393,17 +410,42 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     EXPECT_TRUE(ta == tb);
     a.add(keys.data(), values.data(), exits.data(), parts.data(), static_cast<int>(keys.size()));
     batches(keys, values, false, 0, 53);
+    a.add_continuations(dkeys.data(), dvalues.data(), drays.data(), static_cast<int>(dkeys.size()));
+    batches(dkeys, dvalues, true, 0, 29);
     ta = a.tables();
     tb = b.tables();
     ASSERT_EQ(ta.size(), et::guide_cells_size(o.slots, true));
     ASSERT_EQ(ta.size(), static_cast<size_t>(o.slots) * (2 * K + 3) +
-                             static_cast<size_t>(etk::etk_portal_size(o.slots)));
+                             2 * static_cast<size_t>(etk::etk_portal_size(o.slots)));
     ASSERT_EQ(ta.size(), tb.size());
     EXPECT_TRUE(ta == tb);
     // Some cells chose portals, some not.
     const float* shares = ta.data() + etk::etk_portal_offset(o.slots, 1) + ETK_PORTAL_SHARES;
     EXPECT_GT(std::count(shares, shares + o.slots, 0.0f), 0);
     EXPECT_LT(std::count(shares, shares + o.slots, 0.0f), o.slots);
+    // The secondary-source table is on, a CDF over the box's cells, with a share per slot from
+    // the candidates (0 where a slot had no continuation records).
+    {
+        etk::EtkScene S{};
+        S.guide_cells = ta.data();
+        etk::EtkParams p{};
+        p.guide_slots = o.slots;
+        p.guide_continuation = 1;
+        const float* spot = etk::etk_spot_table(S, p);
+        EXPECT_EQ(spot[ETK_PORTAL_ON], 1.0f);
+        EXPECT_EQ(spot[ETK_PORTAL_CDF], 0.0f);
+        EXPECT_EQ(spot[ETK_PORTAL_CDF + ETK_PORTAL_CELLS], 1.0f);
+        for (int k = 0; k < ETK_PORTAL_CELLS; ++k)
+            ASSERT_LE(spot[ETK_PORTAL_CDF + k], spot[ETK_PORTAL_CDF + k + 1]);
+        for (int s = 0; s < o.slots; ++s) {
+            const float q = etk::etk_spot_share(S, p, s);
+            EXPECT_TRUE(std::count(o.spot_shares.begin(), o.spot_shares.end(), double(q)) == 1)
+                << "slot " << s << ": " << q;
+            if (dcount[s] == 0) {
+                EXPECT_EQ(q, 0.0f) << "slot " << s;
+            }
+        }
+    }
     // Every cell's two tables are CDFs from 0 to 1; the guided share is continuation_share x
     // n / (n + n0) where light came back, 0 elsewhere.
     for (int s = 0; s < o.slots; ++s) {
@@ -423,7 +465,7 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
             for (int R = 0; R < K; ++R)
                 EXPECT_LE(cdf[R], cdf[R + 1]);
         }
-        const double n = dcount[s];
+        const double n = 2.0 * dcount[s]; // every continuation record was added twice
         const double share = s == dark || n == 0 ? 0.0 : o.continuation_share * n / (n + o.prior);
         EXPECT_NEAR(etk::etk_cguide_share(S, p, s, diffuse), share, 1e-6) << "slot " << s;
         if (share == 0.0) { // nothing learned: uniform over the regions

@@ -57,7 +57,11 @@ class ContinuationRecorder {
             for (int k = 0; k < 3; ++k) {
                 v.beta[k] = b[k];
                 v.radiance[k] = r_[4 * s + k];
+                v.ray[k] = o[k];
+                v.ray[4 + k] = d[k];
             }
+            v.ray[3] = 0.0f;
+            v.ray[7] = d[3];
             vertices_.push_back(v);
         }
     }
@@ -66,23 +70,27 @@ class ContinuationRecorder {
     void finish(StageExecutor& ex, VisibilityCache& guide) {
         ex.read_paths(n_, nullptr, nullptr, nullptr, r_.data());
         std::vector<int> keys;
-        std::vector<float> values;
+        std::vector<float> values, rays;
         keys.reserve(vertices_.size());
         values.reserve(vertices_.size());
+        rays.reserve(8 * vertices_.size());
         for (const Vertex& v : vertices_) {
             float L[3];
             for (int k = 0; k < 3; ++k)
                 L[k] = v.beta[k] > 0.0f ? (r_[4 * v.slot + k] - v.radiance[k]) / v.beta[k] : 0.0f;
             keys.push_back(v.key);
             values.push_back(etk::etk_luma(etk::make_float3(L[0], L[1], L[2])) * v.inv_pdf);
+            rays.insert(rays.end(), v.ray, v.ray + 8);
         }
-        guide.add_continuations(keys.data(), values.data(), static_cast<int>(keys.size()));
+        guide.add_continuations(keys.data(), values.data(), rays.data(),
+                                static_cast<int>(keys.size()));
     }
 
   private:
     struct Vertex {
         int slot, key;
         float inv_pdf, beta[3], radiance[3];
+        float ray[8]; // the continuation's origin, 0, direction, density
     };
     int n_;
     std::vector<float> o_, d_, b_, r_;

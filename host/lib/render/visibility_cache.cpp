@@ -1,9 +1,11 @@
 #include "render/visibility_cache.h"
 
+#include "kernels/continuation_guide.h"
 #include "util/error.h"
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace et {
 namespace {
@@ -89,7 +91,7 @@ void write_cdf(const std::vector<double>& prob, float* cdf) {
 size_t guide_cells_size(int slots, bool continuation) {
     return static_cast<size_t>(slots) *
                (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0)) +
-           static_cast<size_t>(etk::etk_portal_size(slots));
+           static_cast<size_t>(etk::etk_portal_size(slots)) * (continuation ? 2 : 1);
 }
 
 std::array<float, 6> guide_portal_box(const float lo[3], const float hi[3]) {
@@ -144,8 +146,13 @@ std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slot
         if (continuation)
             std::copy(dir.begin(), dir.end(), out.begin() + etk::etk_guide_dir_offset(slots, s));
     }
+    float* portal = out.data() + etk::etk_portal_offset(slots, continuation ? 1 : 0);
     write_portal(box, std::vector<float>(slots, 0.0f), std::vector<double>(ETK_PORTAL_CELLS, 0.0),
-                 out.data() + etk::etk_portal_offset(slots, continuation ? 1 : 0));
+                 portal);
+    if (continuation) // the secondary-source table, off
+        write_portal(box, std::vector<float>(slots, 0.0f),
+                     std::vector<double>(ETK_PORTAL_CELLS, 0.0),
+                     portal + etk::etk_portal_size(slots));
     return out;
 }
 
@@ -162,63 +169,146 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
     if (options.continuation) {
         dir_.sums = light_.sums;
         dir_.counts = light_.counts;
+        spot_.assign(ETK_PORTAL_CELLS, 0);
+        spot_moments_.assign(static_cast<size_t>(options.slots) * options.spot_shares.size(), 0);
+        spot_counts_.assign(options.slots, 0);
+        spot_shares_.assign(options.slots, 0.0f);
+        last_ = guide_prior_cells(mass_, options.slots, true, box);
     }
 }
 
-void VisibilityCache::add_to(RegionSums& to, const int* keys, const float* values, int n) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (to.sums.empty())
-        throw Error("continuation records for a visibility cache built without the guide");
+// Increments of the fixed-point sums, computed outside the lock (the arithmetic is most of the
+// work, and the lanes of a pass add their records concurrently); integer additions commute, so
+// the sums do not depend on which lane takes the lock first.
+struct VisibilityCache::Increments {
+    std::vector<std::pair<uint32_t, uint64_t>> sums, moments, portal;
+    std::vector<uint32_t> slots; // one record counted in each
+};
+
+namespace {
+
+// v >= 0 in fixed point, capped (llround's value for these non-negative values, without the
+// call: v kUnit + 0.5 is exact below 2^52).
+uint64_t fixed_point(double v) {
+    return static_cast<uint64_t>(std::min(v, kMaxValue) * kUnit + 0.5);
+}
+
+double record_value(float v) {
+    return std::isfinite(v) ? std::max(0.0, double(v)) : 0.0;
+}
+
+} // namespace
+
+void VisibilityCache::region_increments(const int* keys, const float* values, int n,
+                                        Increments& inc) const {
     for (int i = 0; i < n; ++i) {
         const int key = keys[i];
         if (key < 0 || key >= opt_.slots * K)
             continue;
-        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
-        to.sums[key] +=
-            static_cast<uint64_t>(std::llround(std::min(v * inv_scale_, kMaxValue) * kUnit));
-        ++to.counts[key / K];
-        ++to.records;
+        inc.sums.emplace_back(key, fixed_point(record_value(values[i]) * inv_scale_));
+        inc.slots.push_back(static_cast<uint32_t>(key / K));
     }
+}
+
+void VisibilityCache::apply(RegionSums& to, std::vector<uint64_t>* moments,
+                            std::vector<uint32_t>* moment_counts, std::vector<uint64_t>* cells,
+                            const Increments& inc) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (to.sums.empty())
+        throw Error("continuation records for a visibility cache built without the guide");
+    for (const auto& [k, v] : inc.sums)
+        to.sums[k] += v;
+    for (uint32_t s : inc.slots) {
+        ++to.counts[s];
+        if (moment_counts)
+            ++(*moment_counts)[s];
+    }
+    to.records += inc.slots.size();
+    for (const auto& [k, v] : inc.moments)
+        (*moments)[k] += v;
+    for (const auto& [k, v] : inc.portal)
+        (*cells)[k] += v;
 }
 
 void VisibilityCache::add(const int* keys, const float* values, const int* exits,
                           const float* parts, int n) {
-    add_to(light_, keys, values, n);
-    std::lock_guard<std::mutex> lock(mutex_);
+    Increments inc;
+    region_increments(keys, values, n, inc);
     const size_t C = opt_.portal_shares.size();
     for (int i = 0; i < n; ++i) {
         const int key = keys[i];
         if (key < 0 || key >= opt_.slots * K)
             continue;
         const int s = key / K;
-        ++moment_counts_[s];
-        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
+        const double v = record_value(values[i]);
         const double pv = parts[2 * i], pp = parts[2 * i + 1];
         if (!(v > 0.0) || !std::isfinite(pv) || !std::isfinite(pp))
             continue;
         // v = g / p_rec (g = luminance(L) cos, unoccluded); the second moment of the light
-        // sample with share b is E_rec[g^2 / (p_rec p_b)] = E_rec[v^2 p_rec / p_b].
+        // sample with share b is E_rec[g^2 / (p_rec p_b)] = E_rec[v^2 p_rec / p_b]. shares_ only
+        // changes in tables(), between passes.
         const double b0 = shares_[s];
         const double prec = (1.0 - b0) * pv + b0 * pp;
         for (size_t j = 0; j < C; ++j) {
             const double b = opt_.portal_shares[j];
             const double pb = (1.0 - b) * pv + b * pp;
             const double m = pb > 0.0 ? v * inv_scale_ * v * inv_scale_ * prec / pb : kMaxValue;
-            moments_[s * C + j] +=
-                static_cast<uint64_t>(std::llround(std::min(m, kMaxValue) * kUnit));
+            inc.moments.emplace_back(static_cast<uint32_t>(s * C + j), fixed_point(m));
         }
     }
     for (int i = 0; i < n; ++i) {
         if (exits[i] < 0 || exits[i] >= ETK_PORTAL_CELLS)
             continue;
-        const double v = std::isfinite(values[i]) ? std::max(0.0, double(values[i])) : 0.0;
-        portal_[exits[i]] +=
-            static_cast<uint64_t>(std::llround(std::min(v * inv_scale_, kMaxValue) * kUnit));
+        inc.portal.emplace_back(exits[i], fixed_point(record_value(values[i]) * inv_scale_));
     }
+    apply(light_, &moments_, &moment_counts_, &portal_, inc);
 }
 
-void VisibilityCache::add_continuations(const int* keys, const float* values, int n) {
-    add_to(dir_, keys, values, n);
+void VisibilityCache::add_continuations(const int* keys, const float* values, const float* rays,
+                                        int n) {
+    if (dir_.sums.empty())
+        throw Error("continuation records for a visibility cache built without the guide");
+    Increments inc;
+    region_increments(keys, values, n, inc);
+    const size_t C = opt_.spot_shares.size();
+    // The tables the records were drawn with (last_ only changes in tables(), between passes).
+    const float* spot =
+        last_.data() + etk::etk_portal_offset(opt_.slots, 1) + etk::etk_portal_size(opt_.slots);
+    const double c1 = opt_.continuation_share;
+    for (int i = 0; i < n; ++i) {
+        const int key = keys[i];
+        if (key < 0 || key >= opt_.slots * K)
+            continue;
+        const float* r = rays + 8 * static_cast<size_t>(i);
+        const etk::float3 o = etk::make_float3(r[0], r[1], r[2]);
+        const etk::float3 d = etk::make_float3(r[4], r[5], r[6]);
+        const double v = record_value(values[i]);
+        float t;
+        const int exit = etk::etk_portal_exit(spot, o, d, &t);
+        if (exit >= 0 && exit < ETK_PORTAL_CELLS)
+            inc.portal.emplace_back(exit, fixed_point(v * inv_scale_));
+        // The densities the record was drawn with: the cell's guide, the spot table, the BSDF's.
+        const int s = key / K;
+        const float* dir = last_.data() + etk::etk_guide_dir_offset(opt_.slots, s);
+        const double c = dir[ETK_GUIDE_DIR_SHARE];
+        const double q = spot[ETK_PORTAL_ON] > 0.0f ? spot[ETK_PORTAL_SHARES + s] : 0.0f;
+        const int R = etk::etk_cguide_region(d);
+        const double pg = (double(dir[R + 1]) - double(dir[R])) * (K * 0.25 / M_PI);
+        const double ps = etk::etk_portal_pdf_exit(spot, d, exit, t);
+        const double prec = r[7];
+        const double pb =
+            c < 1.0 ? std::max(0.0, (prec - c * ((1.0 - q) * pg + q * ps)) / (1.0 - c)) : 0.0;
+        if (!(v > 0.0) || !(pb > 0.0) || !std::isfinite(prec * ps * pg))
+            continue;
+        const double vs = v * inv_scale_;
+        for (size_t j = 0; j < C; ++j) {
+            const double qj = opt_.spot_shares[j];
+            const double pq = c1 * ((1.0 - qj) * pg + qj * ps) + (1.0 - c1) * pb;
+            const double m = pq > 0.0 ? vs * vs * prec * pb * pb / pq : kMaxValue;
+            inc.moments.emplace_back(static_cast<uint32_t>(s * C + j), fixed_point(m));
+        }
+    }
+    apply(dir_, &spot_moments_, &spot_counts_, &spot_, inc);
 }
 
 std::vector<float> VisibilityCache::tables() {
@@ -266,8 +356,30 @@ std::vector<float> VisibilityCache::tables() {
             dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
         }
     }
-    write_portal(box_, shares_, std::vector<double>(portal_.begin(), portal_.end()),
-                 out.data() + etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0));
+    float* portal = out.data() + etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0);
+    write_portal(box_, shares_, std::vector<double>(portal_.begin(), portal_.end()), portal);
+    if (continuation) {
+        const size_t Cs = opt_.spot_shares.size();
+        for (int s = 0; s < opt_.slots; ++s) {
+            if (spot_counts_[s] >= static_cast<uint32_t>(opt_.portal_records)) {
+                // The least second moment, a share q > 0 charged for what it costs (a point
+                // table's density at every guided vertex): it must save spot_cost of it.
+                size_t best = 0;
+                double least = double(spot_moments_[s * Cs]);
+                for (size_t j = 1; j < Cs; ++j) {
+                    const double m = double(spot_moments_[s * Cs + j]) / (1.0 - opt_.spot_cost);
+                    best = m < least ? j : best;
+                    least = std::min(m, least);
+                }
+                spot_shares_[s] = static_cast<float>(opt_.spot_shares[best]);
+            }
+            spot_counts_[s] = 0;
+            std::fill(spot_moments_.begin() + s * Cs, spot_moments_.begin() + (s + 1) * Cs, 0);
+        }
+        write_portal(box_, spot_shares_, std::vector<double>(spot_.begin(), spot_.end()),
+                     portal + etk::etk_portal_size(opt_.slots));
+        last_ = out;
+    }
     return out;
 }
 

@@ -40,6 +40,18 @@
 // sampled estimate of the integral of g^2 / p_b. Open scenes, where light gets in everywhere,
 // keep b = 0 (the portal table is then a poor density); a point that sees the sky through a
 // window takes b > 0. The sums are fixed point, so the choice is order-independent too.
+//
+// Secondary sources (kernels/continuation_guide.h): every continuation record also names the
+// cell of the box its ray leaves by (from its origin and direction); its value is summed there, a
+// second scene-wide table of the same layout: where the indirect light comes from (the sunlit
+// patch on a floor). Each hash-grid cell's share q of its guided continuations drawn from it is
+// chosen among options.spot_shares the same way, by the least second moment of the continuation
+// over the cell's records since the last update:
+//   M(q) = sum v^2 p_rec p_b^2 / p_q,   p_q = c' ((1 - q) p_guide + q p_spot) + (1 - c') p_b,
+// v = luminance(L_in) / p_rec, the integrand f cos L_in being proportional to p_b luminance(L_in)
+// at a diffuse vertex (p_b = cos / pi), p_b recovered from the record's density and the tables it
+// was drawn with, c' = options.continuation_share (the share a well-learned cell will have); a
+// share q > 0 is taken only where M(q) (1 - spot_cost) < M(0).
 #pragma once
 #include "kernels/portal_guide.h"
 #include "kernels/visibility_guide.h"
@@ -69,6 +81,15 @@ struct VisibilityOptions {
     // cell's records since the last update (0 for cells with fewer than portal_records).
     std::array<double, 4> portal_shares{{0.0, 0.25, 0.5, 0.75}};
     int portal_records = 64;
+    // The secondary-source table's share of a cell's guided continuations: chosen among these
+    // as the portal share is (0 for cells with fewer than portal_records continuation records),
+    // except that a share q > 0 must lower the second moment by spot_cost of it, the extra time
+    // its density costs at every guided vertex of the cell (equal-spp relative variance, 320 x
+    // 240, 128 spp: skylight_room 0.0346 -> 0.0218 / 0.0239 / 0.0322 with a cost of 0 / 0.15 /
+    // 0.3, window_room 0.0187 -> 0.0177 / 0.0185 / 0.0186, while a cost of 0 took ~15% more
+    // time per sample: docs/results.md, issue 11).
+    std::array<double, 4> spot_shares{{0.0, 0.25, 0.5, 0.75}};
+    double spot_cost = 0.15;
 };
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).
@@ -78,7 +99,8 @@ std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, in
 double guide_map_power(const std::vector<float>& rgb, int w, int h);
 
 // Floats of the cells' tables (EtkScene.guide_cells): the light sample's, then the continuation
-// guide's if it is on (kernels/visibility_guide.h).
+// guide's if it is on (kernels/visibility_guide.h), the portal table, and with the continuation
+// guide the secondary-source table (kernels/continuation_guide.h).
 size_t guide_cells_size(int slots, bool continuation);
 
 // The portal table's box: the scene's bounds lo, hi enlarged so that every surface point lies
@@ -87,7 +109,8 @@ std::array<float, 6> guide_portal_box(const float lo[3], const float hi[3]);
 
 // Every cell's tables before anything is learned: the map's region masses (the map's own
 // distribution) and, with the continuation guide, uniform regions with a share of 0.
-// The portal table follows, over `box` (guide_portal_box), with a share of 0.
+// The portal table follows, over `box` (guide_portal_box), with a share of 0, and with the
+// continuation guide the secondary-source table, off.
 std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots,
                                      bool continuation, const std::array<float, 6>& box);
 
@@ -101,8 +124,9 @@ class VisibilityCache {
     // the ray left the box by (-1: blocked) and the densities p_vis, p_portal of its direction
     // (2 n floats).
     void add(const int* keys, const float* values, const int* exits, const float* parts, int n);
-    // One wave's continuation records (thread-safe).
-    void add_continuations(const int* keys, const float* values, int n);
+    // One wave's continuation records (thread-safe): cell x K + region, value luminance(L_in) /
+    // p, and per record 8 floats: the ray's origin, 0, its direction and density p.
+    void add_continuations(const int* keys, const float* values, const float* rays, int n);
     // The cells' tables from everything recorded so far (guide_cells_size floats): the CDFs of Q,
     // then, with options.continuation, the continuation guide's CDFs and shares.
     // Each update also chooses the cells' portal shares and starts their measure afresh.
@@ -110,7 +134,9 @@ class VisibilityCache {
     // Host memory of the sums, bytes.
     uint64_t bytes() const {
         return light_.bytes() + dir_.bytes() + portal_.size() * 8 + moments_.size() * 8 +
-               moment_counts_.size() * 4 + shares_.size() * 4;
+               moment_counts_.size() * 4 + shares_.size() * 4 + spot_.size() * 8 +
+               spot_moments_.size() * 8 + spot_counts_.size() * 4 + spot_shares_.size() * 4 +
+               last_.size() * 4;
     }
     uint64_t records() const { return light_.records; } // shadow-ray records
     uint64_t continuation_records() const { return dir_.records; }
@@ -125,7 +151,12 @@ class VisibilityCache {
         uint64_t records = 0;
         uint64_t bytes() const { return sums.size() * sizeof(uint64_t) + counts.size() * 4; }
     };
-    void add_to(RegionSums& to, const int* keys, const float* values, int n);
+    struct Increments;
+    void region_increments(const int* keys, const float* values, int n, Increments& inc) const;
+    // Adds the increments to `to` (and the second moments, their record counts per slot and the
+    // box-cell sums of the same kind of records) under the lock.
+    void apply(RegionSums& to, std::vector<uint64_t>* moments, std::vector<uint32_t>* moment_counts,
+               std::vector<uint64_t>* cells, const Increments& inc);
     VisibilityOptions opt_;
     std::vector<float> mass_; // M_R
     std::array<float, 6> box_;
@@ -134,6 +165,11 @@ class VisibilityCache {
     std::vector<uint64_t> moments_;
     std::vector<uint32_t> moment_counts_;
     std::vector<float> shares_; // the portal shares of the last update, per slot
+    // The secondary-source table's sums and, per slot, moments, records and shares.
+    std::vector<uint64_t> spot_, spot_moments_;
+    std::vector<uint32_t> spot_counts_;
+    std::vector<float> spot_shares_;
+    std::vector<float> last_; // the tables the passes since the last update were drawn with
     double inv_scale_;
     RegionSums light_, dir_; // the light sample's (shadow rays), the continuation guide's
     mutable std::mutex mutex_;
