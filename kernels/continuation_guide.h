@@ -68,11 +68,14 @@ ETK_FN float etk_cguide_share(EtkScene S, EtkParams p, int cell, EtkMaterial m) 
                : 0.0f;
 }
 
-// p_guide of world direction d (unit) in `cell`.
-ETK_FN float etk_cguide_pdf(EtkScene S, EtkParams p, int cell, float3 d) {
-    ETK_GLOBAL const float* cdf = etk_cguide_cdf(S, p, cell);
+// p_guide of world direction d (unit) for a cell's directional CDF (host and device).
+ETK_FN float etk_cguide_region_pdf(ETK_GLOBAL const float* cdf, float3 d) {
     int R = etk_cguide_region(d);
     return (cdf[R + 1] - cdf[R]) * (ETK_GUIDE_REGIONS * 0.25f * ETK_INV_PI);
+}
+// p_guide of world direction d (unit) in `cell`.
+ETK_FN float etk_cguide_pdf(EtkScene S, EtkParams p, int cell, float3 d) {
+    return etk_cguide_region_pdf(etk_cguide_cdf(S, p, cell), d);
 }
 
 // The point table of secondary sources (after the portal table in guide_cells; the same
@@ -85,6 +88,11 @@ ETK_FORCE_INLINE_FN float etk_spot_share(EtkScene S, EtkParams p, int cell) {
     return box[ETK_PORTAL_ON] > 0.0f ? box[ETK_PORTAL_SHARES + cell] : 0.0f;
 }
 
+// The mixture's density from its parts (the host's learning evaluates candidate shares with it).
+ETK_FN float etk_cguide_mix(float c, float q, float pg, float ps, float pb) {
+    return c * ((1.0f - q) * pg + q * ps) + (1.0f - c) * pb;
+}
+
 // The mixture's density c ((1 - q) p_guide + q p_spot) + (1 - c) p_bsdf of world direction d
 // (unit), whose ray starts at o (etk_surface_origin: the point the spot table's density is
 // measured from).
@@ -93,10 +101,8 @@ ETK_FORCE_INLINE_FN float etk_cguide_mix_pdf(EtkScene S, EtkParams p, int cell, 
     if (!(c > 0.0f))
         return pdf_bsdf;
     float q = etk_spot_share(S, p, cell);
-    float pg = etk_cguide_pdf(S, p, cell, d);
-    if (q > 0.0f)
-        pg = (1.0f - q) * pg + q * etk_portal_pdf(etk_spot_table(S, p), o, d);
-    return c * pg + (1.0f - c) * pdf_bsdf;
+    float ps = q > 0.0f ? etk_portal_pdf(etk_spot_table(S, p), o, d) : 0.0f;
+    return etk_cguide_mix(c, q, etk_cguide_pdf(S, p, cell, d), ps, pdf_bsdf);
 }
 
 // A direction from the guide of `cell`, from u in [0,1)^2.

@@ -475,4 +475,17 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     }
 }
 
+// The share choice of both tables: the least second moment, a share > 0 charged `cost` of it;
+// ties keep the smaller share.
+TEST(VisibilityGuideTables, LeastMomentShareChargesTheCost) {
+    const uint64_t m[4] = {100, 90, 80, 95};
+    EXPECT_EQ(et::least_moment_share(m, 4, 0.0), 2u);
+    EXPECT_EQ(et::least_moment_share(m, 4, 0.15), 2u); // 80 / 0.85 = 94 < 100
+    EXPECT_EQ(et::least_moment_share(m, 4, 0.25), 0u); // 80 / 0.75 = 107 > 100
+    const uint64_t tie[3] = {50, 50, 60};
+    EXPECT_EQ(et::least_moment_share(tie, 3, 0.0), 0u);
+    const uint64_t later[3] = {50, 40, 40};
+    EXPECT_EQ(et::least_moment_share(later, 3, 0.0), 1u);
+}
+
 } // namespace

@@ -214,8 +214,6 @@ void VisibilityCache::apply(RegionSums& to, std::vector<uint64_t>* moments,
                             std::vector<uint32_t>* moment_counts, std::vector<uint64_t>* cells,
                             const Increments& inc) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (to.sums.empty())
-        throw Error("continuation records for a visibility cache built without the guide");
     for (const auto& [k, v] : inc.sums)
         to.sums[k] += v;
     for (uint32_t s : inc.slots) {
@@ -274,7 +272,7 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
     // The tables the records were drawn with (last_ only changes in tables(), between passes).
     const float* spot =
         last_.data() + etk::etk_portal_offset(opt_.slots, 1) + etk::etk_portal_size(opt_.slots);
-    const double c1 = opt_.continuation_share;
+    const float c1 = static_cast<float>(opt_.continuation_share);
     for (int i = 0; i < n; ++i) {
         const int key = keys[i];
         if (key < 0 || key >= opt_.slots * K)
@@ -290,20 +288,21 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
         // The densities the record was drawn with: the cell's guide, the spot table, the BSDF's.
         const int s = key / K;
         const float* dir = last_.data() + etk::etk_guide_dir_offset(opt_.slots, s);
-        const double c = dir[ETK_GUIDE_DIR_SHARE];
-        const double q = spot[ETK_PORTAL_ON] > 0.0f ? spot[ETK_PORTAL_SHARES + s] : 0.0f;
-        const int R = etk::etk_cguide_region(d);
-        const double pg = (double(dir[R + 1]) - double(dir[R])) * (K * 0.25 / M_PI);
-        const double ps = etk::etk_portal_pdf_exit(spot, d, exit, t);
+        const float c = dir[ETK_GUIDE_DIR_SHARE];
+        const float q = spot[ETK_PORTAL_ON] > 0.0f ? spot[ETK_PORTAL_SHARES + s] : 0.0f;
+        const float pg = etk::etk_cguide_region_pdf(dir, d);
+        const float ps = etk::etk_portal_pdf_exit(spot, d, exit, t);
         const double prec = r[7];
+        // p_b from the mixture the record was drawn with (its BSDF part taken out).
         const double pb =
-            c < 1.0 ? std::max(0.0, (prec - c * ((1.0 - q) * pg + q * ps)) / (1.0 - c)) : 0.0;
+            c < 1.0f ? std::max(0.0, (prec - etk::etk_cguide_mix(c, q, pg, ps, 0.0f)) / (1.0 - c))
+                     : 0.0;
         if (!(v > 0.0) || !(pb > 0.0) || !std::isfinite(prec * ps * pg))
             continue;
         const double vs = v * inv_scale_;
         for (size_t j = 0; j < C; ++j) {
-            const double qj = opt_.spot_shares[j];
-            const double pq = c1 * ((1.0 - qj) * pg + qj * ps) + (1.0 - c1) * pb;
+            const double pq = etk::etk_cguide_mix(c1, static_cast<float>(opt_.spot_shares[j]), pg,
+                                                  ps, static_cast<float>(pb));
             const double m = pq > 0.0 ? vs * vs * prec * pb * pb / pq : kMaxValue;
             inc.moments.emplace_back(static_cast<uint32_t>(s * C + j), fixed_point(m));
         }
@@ -311,19 +310,34 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
     apply(dir_, &spot_moments_, &spot_counts_, &spot_, inc);
 }
 
+size_t least_moment_share(const uint64_t* moments, size_t n, double cost) {
+    size_t best = 0;
+    double least = double(moments[0]);
+    for (size_t j = 1; j < n; ++j) {
+        const double m = double(moments[j]) / (1.0 - cost);
+        best = m < least ? j : best; // a tie keeps the smaller share
+        least = std::min(m, least);
+    }
+    return best;
+}
+
+void VisibilityCache::choose_shares(const double* candidates, size_t n, double cost,
+                                    int min_records, std::vector<uint64_t>& moments,
+                                    std::vector<uint32_t>& counts, std::vector<float>& shares) {
+    for (int s = 0; s < opt_.slots; ++s) {
+        if (counts[s] >= static_cast<uint32_t>(min_records))
+            shares[s] =
+                static_cast<float>(candidates[least_moment_share(moments.data() + s * n, n, cost)]);
+        counts[s] = 0;
+        std::fill(moments.begin() + s * n, moments.begin() + (s + 1) * n, 0);
+    }
+}
+
 std::vector<float> VisibilityCache::tables() {
     std::lock_guard<std::mutex> lock(mutex_);
     const size_t C = opt_.portal_shares.size();
-    for (int s = 0; s < opt_.slots; ++s) {
-        if (moment_counts_[s] >= static_cast<uint32_t>(opt_.portal_records)) {
-            size_t best = 0; // the least second moment; a tie keeps the smaller share
-            for (size_t j = 1; j < C; ++j)
-                best = moments_[s * C + j] < moments_[s * C + best] ? j : best;
-            shares_[s] = static_cast<float>(opt_.portal_shares[best]);
-        }
-        moment_counts_[s] = 0;
-        std::fill(moments_.begin() + s * C, moments_.begin() + (s + 1) * C, 0);
-    }
+    choose_shares(opt_.portal_shares.data(), C, 0.0, opt_.portal_records, moments_, moment_counts_,
+                  shares_);
     const bool continuation = !dir_.sums.empty();
     // Cells without records keep the prior tables (most cells of a scene).
     std::vector<float> out = guide_prior_cells(mass_, opt_.slots, continuation, box_);
@@ -359,23 +373,8 @@ std::vector<float> VisibilityCache::tables() {
     float* portal = out.data() + etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0);
     write_portal(box_, shares_, std::vector<double>(portal_.begin(), portal_.end()), portal);
     if (continuation) {
-        const size_t Cs = opt_.spot_shares.size();
-        for (int s = 0; s < opt_.slots; ++s) {
-            if (spot_counts_[s] >= static_cast<uint32_t>(opt_.portal_records)) {
-                // The least second moment, a share q > 0 charged for what it costs (a point
-                // table's density at every guided vertex): it must save spot_cost of it.
-                size_t best = 0;
-                double least = double(spot_moments_[s * Cs]);
-                for (size_t j = 1; j < Cs; ++j) {
-                    const double m = double(spot_moments_[s * Cs + j]) / (1.0 - opt_.spot_cost);
-                    best = m < least ? j : best;
-                    least = std::min(m, least);
-                }
-                spot_shares_[s] = static_cast<float>(opt_.spot_shares[best]);
-            }
-            spot_counts_[s] = 0;
-            std::fill(spot_moments_.begin() + s * Cs, spot_moments_.begin() + (s + 1) * Cs, 0);
-        }
+        choose_shares(opt_.spot_shares.data(), opt_.spot_shares.size(), opt_.spot_cost,
+                      opt_.portal_records, spot_moments_, spot_counts_, spot_shares_);
         write_portal(box_, spot_shares_, std::vector<double>(spot_.begin(), spot_.end()),
                      portal + etk::etk_portal_size(opt_.slots));
         last_ = out;

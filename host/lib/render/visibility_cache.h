@@ -92,6 +92,11 @@ struct VisibilityOptions {
     double spot_cost = 0.15;
 };
 
+// Which of n candidate shares has the least second moment (moments[j], fixed point), a share
+// j > 0 charged for what it costs: it must save `cost` of the moment of share 0 (the portal
+// shares: 0; the secondary-source shares: spot_cost). A tie keeps the smaller share.
+size_t least_moment_share(const uint64_t* moments, size_t n, double cost);
+
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).
 std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, int h);
 
@@ -151,6 +156,11 @@ class VisibilityCache {
         uint64_t records = 0;
         uint64_t bytes() const { return sums.size() * sizeof(uint64_t) + counts.size() * 4; }
     };
+    // Each slot with at least min_records records since the last update takes the candidate
+    // share of least_moment_share; the moments and counts start afresh.
+    void choose_shares(const double* candidates, size_t n, double cost, int min_records,
+                       std::vector<uint64_t>& moments, std::vector<uint32_t>& counts,
+                       std::vector<float>& shares);
     struct Increments;
     void region_increments(const int* keys, const float* values, int n, Increments& inc) const;
     // Adds the increments to `to` (and the second moments, their record counts per slot and the
