@@ -6,9 +6,10 @@
 // Sample dimensions (pairs, regenerated from pixel, sample index, pair; never stored):
 //   pair 0: pixel jitter; for bounce d: pair 1+3d light sample, 2+3d BSDF direction (at a
 //   guided vertex: u.x also picks the guide or the BSDF, continuation_guide.h),
-//   3+3d (BSDF lobe, Russian roulette); the adaptive strategy's technique choices:
-//   ETK_PAIR_SHARE + d (etk_shade). Split samples (etk_split_samples) come from the same pairs
-//   shifted by a lattice. Pairs are hashed, so these need not be contiguous.
+//   3+3d (BSDF lobe, Russian roulette); the adaptive strategy's technique choices and the
+//   visibility strategy's choice to take the light sample: ETK_PAIR_SHARE + d (etk_shade). Split
+//   samples (etk_split_samples) come from the same pairs shifted by a lattice. Pairs are hashed, so
+//   these need not be contiguous.
 #ifndef ETK_INTEGRATOR_H
 #define ETK_INTEGRATOR_H
 #include "aov.h"
@@ -214,11 +215,14 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
                 etk_share_weight(p.heuristic, s, pl, d.w, from_light);
         } else if (etk_strategy_is_mis(p.strategy)) {
             // The visibility strategy's density: from the vertex's grid cell (beta.w) and, for
-            // the portal table, the continuation's origin (portal_guide.h).
-            float pl = p.strategy == ETK_STRATEGY_VISIBILITY
-                           ? etk_guide_light_pdf(S, p, (int)P.beta[slot].w, etk_xyz(P.ray_o[slot]),
-                                                 etk_xyz(d), uv)
-                           : etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
+            // the portal table, the continuation's origin (portal_guide.h), times the cell's
+            // expected light samples (etk_guide_light_count).
+            int cell = (int)P.beta[slot].w;
+            float pl =
+                p.strategy == ETK_STRATEGY_VISIBILITY
+                    ? etk_guide_light_pdf(S, p, cell, etk_xyz(P.ray_o[slot]), etk_xyz(d), uv) *
+                          etk_guide_light_count(S, p, cell)
+                    : etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
             w = etk_bsdf_sample_weight(p, d.w, pl); // sample 0 of the vertex's BSDF samples
         } else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
@@ -283,8 +287,13 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     // only gathers the map's light, which the light sample already draws from a learned table.
     float cg = guided && !last ? etk_cguide_share(S, p, cell, m) : 0.0f;
 
+    // The visibility strategy's expected light samples at this vertex (etk_guide_light_count):
+    // below 1 the light sample is taken with that probability, on a sample dimension of its own.
+    float lc = guided ? etk_guide_light_count(S, p, cell) : 1.0f;
+    int take_light = !(lc < 1.0f) || etk_dims(p, pixel, ETK_PAIR_SHARE + (uint)depth).x < lc;
+
     // Light sample (sample A of the adaptive strategy).
-    if (p.strategy != ETK_STRATEGY_BSDF && !delta) {
+    if (p.strategy != ETK_STRATEGY_BSDF && !delta && take_light) {
         float2 u = etk_dims(p, pixel, pair);
         float3 c = make_float3(0.0f, 0.0f, 0.0f);
         float3 wi_world;
@@ -349,14 +358,15 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             // Above the surface, or below it at a dielectric (it transmits light from there).
             if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
+                float pn = lc * pdf_light; // taken with probability lc: as if drawn with lc p
                 float w = etk_strategy_is_mis(p.strategy)
                               ? etk_light_sample_weight(
-                                    p, pdf_light,
+                                    p, pn,
                                     etk_cguide_mix_pdf(S, p, cell, cg, etk_bsdf_pdf(m, wo, wi),
                                                        etk_surface_origin(s, wi_world), wi_world))
                               : 1.0f; // sample 0 of the vertex's light samples
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
-                c = beta * f * L * (fabs(wi.z) * w / pdf_light);
+                c = beta * f * L * (fabs(wi.z) * w / pn);
                 // Visibility learning: what this direction would bring, unweighted, and where.
                 learn_val = etk_luma(L) * fabs(wi.z) / pdf_light;
                 learn_key = cell * ETK_GUIDE_REGIONS + etk_guide_region(p.env, light_uv);

@@ -31,10 +31,11 @@
 // took three or four, for the same column (etk_guide_column).
 // guide_cells: per slot, ETK_GUIDE_CELL_FLOATS = K + 1 CDF entries of Q over the regions (0 ...
 // 1), row-major (R = row band x ETK_GUIDE_COLS + column), so entry ETK_GUIDE_COLS x b is the CDF
-// of the row bands; then, when the continuation is guided (continuation_guide.h), per slot
-// ETK_GUIDE_DIR_FLOATS: K + 1 CDF entries over the sphere's equal-area regions, same layout, and
-// the share of continuations drawn from it. Two halves rather than one record per slot, so that
-// the light sample's tables stay as compact as they were.
+// of the row bands, and the cell's light-sample count (etk_guide_light_count); then, when the
+// continuation is guided (continuation_guide.h), per slot ETK_GUIDE_DIR_FLOATS: K + 1 CDF entries
+// over the sphere's equal-area regions, same layout, and the share of continuations drawn from it.
+// Two halves rather than one record per slot, so that the light sample's tables stay as compact as
+// they were.
 #ifndef ETK_VISIBILITY_GUIDE_H
 #define ETK_VISIBILITY_GUIDE_H
 #include "color.h"
@@ -49,7 +50,8 @@
 #define ETK_GUIDE_REGIONS (ETK_GUIDE_ROWS * ETK_GUIDE_COLS)
 #define ETK_GUIDE_SPLITS 4
 #define ETK_GUIDE_SUBBANDS (ETK_GUIDE_COLS * ETK_GUIDE_SPLITS)
-#define ETK_GUIDE_CELL_FLOATS (ETK_GUIDE_REGIONS + 1)
+#define ETK_GUIDE_CELL_FLOATS (ETK_GUIDE_REGIONS + 2)
+#define ETK_GUIDE_LIGHT_COUNT (ETK_GUIDE_REGIONS + 1) // within a slot's ETK_GUIDE_CELL_FLOATS
 #define ETK_GUIDE_DIR_FLOATS (ETK_GUIDE_REGIONS + 2)
 #define ETK_GUIDE_DIR_SHARE (ETK_GUIDE_REGIONS + 1) // within a slot's ETK_GUIDE_DIR_FLOATS
 
@@ -123,6 +125,19 @@ ETK_FN float etk_guide_factor(EtkScene S, EtkParams p, int cell, float2 uv) {
     float M = S.guide_regions[R];
     ETK_GLOBAL const float* cdf = S.guide_cells + cell * ETK_GUIDE_CELL_FLOATS;
     return M > 0.0f ? (cdf[R + 1] - cdf[R]) / M : 1.0f;
+}
+
+// The expected number of light samples n in (0, 1] a vertex in `cell` takes: the light sample is
+// drawn only when a sample dimension of its own falls below n, and then counts f cos L w / (n p)
+// with its MIS weight w on n p against the continuation's density -- as if it had been drawn with
+// density n p, which is what the weights, the division and the escaped ray's weight all use
+// (etk_shade, etk_escaped): unbiased for any n > 0, the multi-sample heuristic with a count of n
+// (Veach). The host learns n per cell where light samples are mostly wasted: cells that face
+// away from every opening of a room, whose shadow rays are nearly all blocked while the light
+// arrives through the continuation (host/lib/render/visibility_cache.h). 1 until then.
+ETK_FN float etk_guide_light_count(EtkScene S, EtkParams p, int cell) {
+    return p.guide_ready ? S.guide_cells[cell * ETK_GUIDE_CELL_FLOATS + ETK_GUIDE_LIGHT_COUNT]
+                         : 1.0f;
 }
 
 // The column of x in a row whose CDF is ccdf and sub-band table split, within column band Rc

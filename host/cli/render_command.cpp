@@ -197,14 +197,19 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                             {"learning_passes_extra", s.learning_passes},
                             {"materials", shares}};
     }
-    if (st.strategy == Strategy::visibility)
+    if (st.strategy == Strategy::visibility) {
+        nlohmann::json counts = nlohmann::json::object();
+        for (const auto& [n, cells] : s.guide_light_counts)
+            counts[std::to_string(n).substr(0, 5)] = cells;
         j["visibility"] = {{"learning_passes_extra", s.learning_passes},
                            {"learning_seconds", s.guide_learning_seconds},
                            {"update_seconds", s.guide_update_seconds},
                            {"records", s.guide_records},
                            {"continuation_records", s.guide_continuation_records},
                            {"host_bytes", s.guide_host_bytes},
-                           {"device_bytes", s.guide_device_bytes}};
+                           {"device_bytes", s.guide_device_bytes},
+                           {"cells_with_fewer_light_samples", counts}};
+    }
     j["render_seconds"] = render_s;
     j["seconds_per_spp"] = render_s / std::max(1, rendered);
     j["nonfinite_samples"] = s.nonfinite_samples;

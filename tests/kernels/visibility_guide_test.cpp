@@ -415,7 +415,7 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     ta = a.tables();
     tb = b.tables();
     ASSERT_EQ(ta.size(), et::guide_cells_size(o.slots, true));
-    ASSERT_EQ(ta.size(), static_cast<size_t>(o.slots) * (2 * K + 3) +
+    ASSERT_EQ(ta.size(), static_cast<size_t>(o.slots) * (2 * K + 4) +
                              2 * static_cast<size_t>(etk::etk_portal_size(o.slots)));
     ASSERT_EQ(ta.size(), tb.size());
     EXPECT_TRUE(ta == tb);
@@ -486,6 +486,74 @@ TEST(VisibilityGuideTables, LeastMomentShareChargesTheCost) {
     EXPECT_EQ(et::least_moment_share(tie, 3, 0.0), 0u);
     const uint64_t later[3] = {50, 40, 40};
     EXPECT_EQ(et::least_moment_share(later, 3, 0.0), 1u);
+}
+
+// The light-sample count: the candidate of least (m_cont + m_light / n) (1 + cost n).
+TEST(VisibilityGuideTables, LightSampleCountFollowsTheModel) {
+    const double n[4] = {1.0, 0.5, 0.25, 0.125};
+    EXPECT_EQ(et::light_sample_count(0.0, 1.0, 0.25, n, 4), 0.125); // light never gets through
+    EXPECT_EQ(et::light_sample_count(1.0, 0.0, 0.25, n, 4), 1.0);   // all light is direct
+    // 1.1 x 1.25 = 1.375, 1.2 x 1.125 = 1.35, 1.4 x 1.0625 = 1.4875, 1.8 x 1.03 = 1.86.
+    EXPECT_EQ(et::light_sample_count(0.1, 1.0, 0.25, n, 4), 0.5);
+    EXPECT_EQ(et::light_sample_count(0.0, 1.0, 0.0, n, 4), 1.0);  // free light samples: a tie
+    EXPECT_EQ(et::light_sample_count(0.0, 0.0, 0.25, n, 4), 1.0); // no light at all: a tie too
+}
+
+// Each cell's light-sample count in the tables the kernels read (etk_guide_light_count): the
+// model's choice where both kinds of records are plentiful, 1 elsewhere.
+TEST(VisibilityGuideTables, LightSampleCountPerCell) {
+    Fixture f;
+    make(f, 64, 32, 5u);
+    et::VisibilityOptions o;
+    o.slots = 4;
+    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.0f, 1.0f, 1.0f};
+    et::VisibilityCache cache(o, f.regions, 1.0, et::guide_portal_box(lo, hi));
+    // Slot 0: every shadow ray blocked, light comes back along the continuations. Slot 1: bright
+    // unblocked light samples, dim continuations. Slot 2: blocked, but too few light records.
+    // Slot 3: no records.
+    std::vector<int> keys, exits, dkeys;
+    std::vector<float> values, parts, dvalues, drays;
+    auto light = [&](int slot, float v, int n) {
+        for (int i = 0; i < n; ++i) {
+            keys.push_back(slot * K + i % K);
+            values.push_back(v);
+            exits.push_back(v > 0.0f ? i % ETK_PORTAL_CELLS : -1);
+            parts.push_back(0.5f);
+            parts.push_back(0.5f);
+        }
+    };
+    auto cont = [&](int slot, float v, int n) {
+        for (int i = 0; i < n; ++i) {
+            dkeys.push_back(slot * K + i % K);
+            dvalues.push_back(v);
+            const float r[8] = {0.5f, 0.5f, 0.5f, 0.0f, 0.0f, 1.0f, 0.0f, 0.3f};
+            drays.insert(drays.end(), r, r + 8);
+        }
+    };
+    const int n = 2 * o.portal_records;
+    light(0, 0.0f, n);
+    cont(0, 1.0f, n);
+    light(1, 10.0f, n);
+    cont(1, 0.01f, n);
+    light(2, 0.0f, o.portal_records - 1);
+    cont(2, 1.0f, n);
+    cache.add(keys.data(), values.data(), exits.data(), parts.data(),
+              static_cast<int>(keys.size()));
+    cache.add_continuations(dkeys.data(), dvalues.data(), drays.data(),
+                            static_cast<int>(dkeys.size()));
+    const std::vector<float> t = cache.tables();
+    etk::EtkScene S{};
+    S.guide_cells = t.data();
+    etk::EtkParams p{};
+    p.guide_slots = o.slots;
+    p.guide_continuation = 1;
+    p.guide_ready = 1;
+    EXPECT_EQ(etk::etk_guide_light_count(S, p, 0), 0.125f);
+    EXPECT_EQ(etk::etk_guide_light_count(S, p, 1), 1.0f);
+    EXPECT_EQ(etk::etk_guide_light_count(S, p, 2), 1.0f);
+    EXPECT_EQ(etk::etk_guide_light_count(S, p, 3), 1.0f);
+    p.guide_ready = 0; // before the first tables: every vertex takes its light sample
+    EXPECT_EQ(etk::etk_guide_light_count(S, p, 0), 1.0f);
 }
 
 } // namespace

@@ -16,6 +16,8 @@
 #include <glm/glm.hpp>
 
 #include <cmath>
+#include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -76,18 +78,24 @@ struct RenderResult {
     std::vector<float> mean; // RGB per pixel
     std::vector<double> var; // sample variance of one pass, per pixel and channel
     int spp = 0;
+    // The visibility strategy's learned cells that take fewer light samples, per count.
+    std::map<float, uint64_t> light_counts;
     // Variance of the mean of pixel channel i.
     double var_mean(size_t i) const { return var[i] / spp; }
 };
 
 // Renders `spp` passes; measures the per-pass variance when `variance` (one image() read per
 // pass).
+// `prepared`, if given, may change the prepared scene first (e.g. its visibility options).
 inline RenderResult render(const et::Scene& scene, const std::string& backend, int spp,
-                           bool variance = true) {
+                           bool variance = true,
+                           const std::function<void(et::DeviceScene&)>& prepared = {}) {
     et::RenderSettings st = scene.settings;
     st.backend = et::parse_backend(backend, "test");
     st.threads = 2;
-    const et::DeviceScene ds = et::prepare_device_scene(scene, st);
+    et::DeviceScene ds = et::prepare_device_scene(scene, st);
+    if (prepared)
+        prepared(ds);
     auto r = et::make_renderer(ds);
     RenderResult out;
     out.spp = spp;
@@ -109,6 +117,7 @@ inline RenderResult render(const et::Scene& scene, const std::string& backend, i
     out.mean = r->image();
     // The film drops non-finite samples instead of writing NaN; none may occur.
     EXPECT_EQ(r->stats().nonfinite_samples, 0u) << backend << ": non-finite samples dropped";
+    out.light_counts = r->stats().guide_light_counts;
     out.var.assign(n, 0.0);
     if (variance && spp > 1)
         for (size_t i = 0; i < n; ++i)

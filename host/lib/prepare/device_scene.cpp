@@ -175,7 +175,7 @@ void add_strata(const VoronoiStrata& v, DeviceScene& d) {
 // the cells' initial tables (the map's own distribution; the continuation guide's, at depth > 1,
 // uniform with a guided share of 0).
 void add_visibility_guide(const Scene& scene, DeviceScene& d) {
-    const VisibilityOptions opt;
+    const VisibilityOptions& opt = d.guide_options;
     glm::vec3 lo(0.0f), hi(0.0f);
     if (!scene.triangles.positions.empty()) {
         lo = hi = scene.triangles.positions[0];

@@ -6,6 +6,7 @@
 #include "load/scene.h"
 #include "prepare/light_set.h"
 #include "prepare/sis.h"
+#include "render/visibility_cache.h"
 
 #include <vector>
 
@@ -25,6 +26,9 @@ struct DeviceScene {
     int map_width = 0, map_height = 0;
     double map_build_seconds = 0.0;
     double guide_map_power = 0.0; // visibility strategy: the learning's unit
+    // Visibility strategy: its grid (slots and resolution are fixed here, by the tables sized for
+    // them) and how it learns (the rest may be changed before a renderer is made).
+    VisibilityOptions guide_options;
     struct {
         int nodes = 0, depth = 0;
         double sah_cost = 0.0, build_seconds = 0.0;

@@ -20,6 +20,7 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
     options_.last_bounce = scene.settings.max_depth <= 1;
     guide_ = scene.settings.strategy == Strategy::visibility;
     if (guide_) {
+        guide_options_ = scene.guide_options;
         guide_options_.continuation = scene.params.guide_continuation != 0;
         std::array<float, 6> box;
         const float* table =
@@ -82,8 +83,16 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         // The tables for the passes that follow: rebuilt after passes 1, 2, 4, ... L.
         if (VisibilityCache::update_after(next_learning_pass_, guide_options_.learning_passes)) {
             Timer t;
-            device_->upload_guide(cache_->tables());
+            const std::vector<float> tables = cache_->tables();
+            device_->upload_guide(tables);
             guide_ready_ = true;
+            stats_.guide_light_counts.clear();
+            for (int s = 0; s < guide_options_.slots; ++s) {
+                const float n =
+                    tables[static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS + ETK_GUIDE_LIGHT_COUNT];
+                if (n < 1.0f)
+                    ++stats_.guide_light_counts[n];
+            }
             stats_.guide_update_seconds += t.seconds();
         }
         stats_.guide_records = cache_->records();

@@ -16,6 +16,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,6 +36,8 @@ struct RenderStats {
     double guide_learning_seconds = 0.0, guide_update_seconds = 0.0;
     uint64_t guide_records = 0, guide_continuation_records = 0;
     uint64_t guide_host_bytes = 0, guide_device_bytes = 0;
+    // The learned tables' cells that take fewer light samples (etk_guide_light_count), per count.
+    std::map<float, uint64_t> guide_light_counts;
     // Time per stage (seconds): device time from profiling events for OpenCL, thread time natively.
     std::vector<std::pair<std::string, double>> stage_seconds;
     uint64_t rays() const { return camera_rays + continuation_rays + shadow_rays; }

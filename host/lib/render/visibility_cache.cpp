@@ -138,6 +138,7 @@ std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slot
     std::vector<double> prob(regions.begin(), regions.begin() + K);
     std::vector<float> light(ETK_GUIDE_CELL_FLOATS), dir(ETK_GUIDE_DIR_FLOATS, 0.0f);
     write_cdf(prob, light.data());
+    light[ETK_GUIDE_LIGHT_COUNT] = 1.0f;                // every vertex takes its light sample
     write_cdf(std::vector<double>(K, 1.0), dir.data()); // uniform, share 0: not guided
     std::vector<float> out(guide_cells_size(slots, continuation));
     for (int s = 0; s < slots; ++s) {
@@ -162,7 +163,7 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
     : opt_(options), mass_(regions.begin(), regions.begin() + K), box_(box),
       portal_(ETK_PORTAL_CELLS, 0),
       moments_(static_cast<size_t>(options.slots) * options.portal_shares.size(), 0),
-      moment_counts_(options.slots, 0), shares_(options.slots, 0.0f),
+      moment_counts_(options.slots, 0), shares_(options.slots, 0.0f), light_m2_(options.slots, 0),
       inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0) {
     light_.sums.assign(static_cast<size_t>(options.slots) * K, 0);
     light_.counts.assign(options.slots, 0);
@@ -173,6 +174,7 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
         spot_moments_.assign(static_cast<size_t>(options.slots) * options.spot_shares.size(), 0);
         spot_counts_.assign(options.slots, 0);
         spot_shares_.assign(options.slots, 0.0f);
+        cont_m2_.assign(options.slots, 0);
         last_ = guide_prior_cells(mass_, options.slots, true, box);
     }
 }
@@ -181,7 +183,7 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
 // work, and the lanes of a pass add their records concurrently); integer additions commute, so
 // the sums do not depend on which lane takes the lock first.
 struct VisibilityCache::Increments {
-    std::vector<std::pair<uint32_t, uint64_t>> sums, moments, portal;
+    std::vector<std::pair<uint32_t, uint64_t>> sums, moments, portal, m2;
     std::vector<uint32_t> slots; // one record counted in each
 };
 
@@ -212,7 +214,7 @@ void VisibilityCache::region_increments(const int* keys, const float* values, in
 
 void VisibilityCache::apply(RegionSums& to, std::vector<uint64_t>* moments,
                             std::vector<uint32_t>* moment_counts, std::vector<uint64_t>* cells,
-                            const Increments& inc) {
+                            std::vector<uint64_t>* m2, const Increments& inc) {
     std::lock_guard<std::mutex> lock(mutex_);
     for (const auto& [k, v] : inc.sums)
         to.sums[k] += v;
@@ -226,6 +228,8 @@ void VisibilityCache::apply(RegionSums& to, std::vector<uint64_t>* moments,
         (*moments)[k] += v;
     for (const auto& [k, v] : inc.portal)
         (*cells)[k] += v;
+    for (const auto& [k, v] : inc.m2)
+        (*m2)[k] += v;
 }
 
 void VisibilityCache::add(const int* keys, const float* values, const int* exits,
@@ -242,6 +246,10 @@ void VisibilityCache::add(const int* keys, const float* values, const int* exits
         const double pv = parts[2 * i], pp = parts[2 * i + 1];
         if (!(v > 0.0) || !std::isfinite(pv) || !std::isfinite(pp))
             continue;
+        // A diffuse vertex's light sample estimates (albedo / pi) v: its second moment, in the
+        // unit light_sample_count shares with the continuation's (albedo^2 dropped).
+        const double e = v * inv_scale_ * (1.0 / M_PI);
+        inc.m2.emplace_back(static_cast<uint32_t>(s), fixed_point(e * e));
         // v = g / p_rec (g = luminance(L) cos, unoccluded); the second moment of the light
         // sample with share b is E_rec[g^2 / (p_rec p_b)] = E_rec[v^2 p_rec / p_b]. shares_ only
         // changes in tables(), between passes.
@@ -259,7 +267,7 @@ void VisibilityCache::add(const int* keys, const float* values, const int* exits
             continue;
         inc.portal.emplace_back(exits[i], fixed_point(record_value(values[i]) * inv_scale_));
     }
-    apply(light_, &moments_, &moment_counts_, &portal_, inc);
+    apply(light_, &moments_, &moment_counts_, &portal_, &light_m2_, inc);
 }
 
 void VisibilityCache::add_continuations(const int* keys, const float* values, const float* rays,
@@ -300,6 +308,9 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
         if (!(v > 0.0) || !(pb > 0.0) || !std::isfinite(prec * ps * pg))
             continue;
         const double vs = v * inv_scale_;
+        // The continuation's estimate at a diffuse vertex, f cos L / p = albedo p_bsdf v (p_bsdf =
+        // cos / pi): its second moment in light_sample_count's unit.
+        inc.m2.emplace_back(static_cast<uint32_t>(s), fixed_point(pb * vs * pb * vs));
         for (size_t j = 0; j < C; ++j) {
             const double pq = etk::etk_cguide_mix(c1, static_cast<float>(opt_.spot_shares[j]), pg,
                                                   ps, static_cast<float>(pb));
@@ -307,7 +318,20 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
             inc.moments.emplace_back(static_cast<uint32_t>(s * C + j), fixed_point(m));
         }
     }
-    apply(dir_, &spot_moments_, &spot_counts_, &spot_, inc);
+    apply(dir_, &spot_moments_, &spot_counts_, &spot_, &cont_m2_, inc);
+}
+
+double light_sample_count(double m_light, double m_cont, double cost, const double* counts,
+                          size_t n) {
+    double best = counts[0], least = 0.0;
+    for (size_t j = 0; j < n; ++j) {
+        const double e = (m_cont + m_light / counts[j]) * (1.0 + cost * counts[j]);
+        if (j == 0 || e < least) {
+            best = counts[j];
+            least = e;
+        }
+    }
+    return best;
 }
 
 size_t least_moment_share(const uint64_t* moments, size_t n, double cost) {
@@ -361,7 +385,16 @@ std::vector<float> VisibilityCache::tables() {
             learned(light_, s, mass_);
             for (int R = 0; R < K; ++R)
                 prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];
-            write_cdf(prob, out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS);
+            float* cell = out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
+            write_cdf(prob, cell);
+            const uint32_t nl = light_.counts[s], nc = continuation ? dir_.counts[s] : 0;
+            const auto min_records = static_cast<uint32_t>(opt_.portal_records);
+            cell[ETK_GUIDE_LIGHT_COUNT] =
+                nl >= min_records && nc >= min_records
+                    ? static_cast<float>(light_sample_count(
+                          double(light_m2_[s]) / nl, double(cont_m2_[s]) / nc, opt_.light_cost,
+                          opt_.light_counts.data(), opt_.light_counts.size()))
+                    : 1.0f;
         }
         if (continuation && dir_.counts[s] > 0) { // the continuation guide and its share
             float* dir = out.data() + etk::etk_guide_dir_offset(opt_.slots, s);
