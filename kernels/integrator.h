@@ -44,17 +44,19 @@ ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
 }
 
 // The MIS weight of a light sample (density pl; p_bsdf pb there) and of a BSDF sample (pb; pl),
-// each over its count: with p.light_samples = nl and p.bsdf_samples = nb per vertex (the mis
-// strategy's splitting, etk_split_samples), the multi-sample heuristic's weight on nl pl and
-// nb pb (Veach), divided by the technique's count. nl = nb = 1: the paper's weights, bit for bit.
+// each over its count: with nl = lc x p.light_samples light samples and nb = p.bsdf_samples BSDF
+// samples expected per vertex (the mis strategy's splitting, etk_split_samples; lc < 1 where the
+// visibility strategy takes its light sample with probability lc, etk_guide_light_count), the
+// multi-sample heuristic's weight on nl pl and nb pb (Veach), divided by the technique's count.
+// nl = nb = 1: the paper's weights, bit for bit.
 // Forced inline: a call would copy EtkParams, as etk_dims would (surface.h).
-ETK_FORCE_INLINE_FN float etk_light_sample_weight(EtkParams p, float pl, float pb) {
-    float nl = (float)p.light_samples;
+ETK_FORCE_INLINE_FN float etk_light_sample_weight(EtkParams p, float lc, float pl, float pb) {
+    float nl = lc * (float)p.light_samples;
     return etk_mis_weight(p.heuristic, nl * pl, (float)p.bsdf_samples * pb) / nl;
 }
-ETK_FORCE_INLINE_FN float etk_bsdf_sample_weight(EtkParams p, float pb, float pl) {
+ETK_FORCE_INLINE_FN float etk_bsdf_sample_weight(EtkParams p, float lc, float pb, float pl) {
     float nb = (float)p.bsdf_samples;
-    return etk_mis_weight(p.heuristic, nb * pb, (float)p.light_samples * pl) / nb;
+    return etk_mis_weight(p.heuristic, nb * pb, lc * (float)p.light_samples * pl) / nb;
 }
 
 #define ETK_PAIR_SHARE 0x40000000u
@@ -147,7 +149,7 @@ ETK_FN float3 etk_split_samples(EtkScene S, EtkParams p, EtkSurface s, EtkMateri
         float3 wi = etk_to_local(ls.dir, t, b, ns);
         if (!(ls.pdf > 0.0f) || !etk_light_side_ok(m, wi.z, dot(ls.dir, ng)))
             continue;
-        float w = etk_light_sample_weight(p, ls.pdf, etk_bsdf_pdf(m, wo, wi));
+        float w = etk_light_sample_weight(p, 1.0f, ls.pdf, etk_bsdf_pdf(m, wo, wi));
         float3 c = etk_bsdf_eval(m, wo, wi) * etk_env_radiance_uv(S.env_texels, p.env, ls.uv) *
                    (fabs(wi.z) * w / ls.pdf);
         if (!(etk_max3(c) > 0.0f))
@@ -169,7 +171,7 @@ ETK_FN float3 etk_split_samples(EtkScene S, EtkParams p, EtkSurface s, EtkMateri
         if (!etk_same_side(bs.wi.z, dot(wi_world, ng)))
             continue; // as the continuation: across the geometric surface, it would leak light
         float2 uv = etk_env_uv(p.env, wi_world);
-        float w = etk_bsdf_sample_weight(p, bs.pdf, etk_env_pdf_uv(dist, p.env, uv));
+        float w = etk_bsdf_sample_weight(p, 1.0f, bs.pdf, etk_env_pdf_uv(dist, p.env, uv));
         float3 c = bs.weight * etk_env_radiance_uv(S.env_texels, p.env, uv) * w;
         if (!(etk_max3(c) > 0.0f))
             continue;
@@ -215,15 +217,14 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
                 etk_share_weight(p.heuristic, s, pl, d.w, from_light);
         } else if (etk_strategy_is_mis(p.strategy)) {
             // The visibility strategy's density: from the vertex's grid cell (beta.w) and, for
-            // the portal table, the continuation's origin (portal_guide.h), times the cell's
-            // expected light samples (etk_guide_light_count).
-            int cell = (int)P.beta[slot].w;
-            float pl =
-                p.strategy == ETK_STRATEGY_VISIBILITY
-                    ? etk_guide_light_pdf(S, p, cell, etk_xyz(P.ray_o[slot]), etk_xyz(d), uv) *
-                          etk_guide_light_count(S, p, cell)
-                    : etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
-            w = etk_bsdf_sample_weight(p, d.w, pl); // sample 0 of the vertex's BSDF samples
+            // the portal table, the continuation's origin (portal_guide.h); the cell's light
+            // samples are the weight's count.
+            int guided = p.strategy == ETK_STRATEGY_VISIBILITY, cell = (int)P.beta[slot].w;
+            float pl = guided
+                           ? etk_guide_light_pdf(S, p, cell, etk_xyz(P.ray_o[slot]), etk_xyz(d), uv)
+                           : etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
+            float lc = guided ? etk_guide_light_count(S, p, cell) : 1.0f;
+            w = etk_bsdf_sample_weight(p, lc, d.w, pl); // sample 0 of the vertex's BSDF samples
         } else if (p.strategy != ETK_STRATEGY_BSDF)
             w = 0.0f; // light sampling alone accounts for this direction
     }
@@ -358,15 +359,14 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
             // Above the surface, or below it at a dielectric (it transmits light from there).
             if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
-                float pn = lc * pdf_light; // taken with probability lc: as if drawn with lc p
                 float w = etk_strategy_is_mis(p.strategy)
                               ? etk_light_sample_weight(
-                                    p, pn,
+                                    p, lc, pdf_light,
                                     etk_cguide_mix_pdf(S, p, cell, cg, etk_bsdf_pdf(m, wo, wi),
                                                        etk_surface_origin(s, wi_world), wi_world))
                               : 1.0f; // sample 0 of the vertex's light samples
                 float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
-                c = beta * f * L * (fabs(wi.z) * w / pn);
+                c = beta * f * L * (fabs(wi.z) * w / pdf_light);
                 // Visibility learning: what this direction would bring, unweighted, and where.
                 learn_val = etk_luma(L) * fabs(wi.z) / pdf_light;
                 learn_key = cell * ETK_GUIDE_REGIONS + etk_guide_region(p.env, light_uv);

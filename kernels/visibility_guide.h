@@ -128,13 +128,13 @@ ETK_FN float etk_guide_factor(EtkScene S, EtkParams p, int cell, float2 uv) {
 }
 
 // The expected number of light samples n in (0, 1] a vertex in `cell` takes: the light sample is
-// drawn only when a sample dimension of its own falls below n, and then counts f cos L w / (n p)
-// with its MIS weight w on n p against the continuation's density -- as if it had been drawn with
-// density n p, which is what the weights, the division and the escaped ray's weight all use
-// (etk_shade, etk_escaped): unbiased for any n > 0, the multi-sample heuristic with a count of n
-// (Veach). The host learns n per cell where light samples are mostly wasted: cells that face
-// away from every opening of a room, whose shadow rays are nearly all blocked while the light
-// arrives through the continuation (host/lib/render/visibility_cache.h). 1 until then.
+// drawn only when a sample dimension of its own falls below n, and both its MIS weight and the
+// escaped continuation's count it as n samples (etk_light_sample_weight, etk_bsdf_sample_weight:
+// the multi-sample heuristic with a count of n, Veach), so the light sample counts
+// f cos L / (n p) x its weight: unbiased for any n > 0. The host learns n per cell where light
+// samples are mostly wasted: cells that face away from every opening of a room, whose shadow rays
+// are nearly all blocked while the light arrives through the continuation
+// (host/lib/render/visibility_cache.h). 1 until then.
 ETK_FN float etk_guide_light_count(EtkScene S, EtkParams p, int cell) {
     return p.guide_ready ? S.guide_cells[cell * ETK_GUIDE_CELL_FLOATS + ETK_GUIDE_LIGHT_COUNT]
                          : 1.0f;

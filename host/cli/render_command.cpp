@@ -200,7 +200,7 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
     if (st.strategy == Strategy::visibility) {
         nlohmann::json counts = nlohmann::json::object();
         for (const auto& [n, cells] : s.guide_light_counts)
-            counts[std::to_string(n).substr(0, 5)] = cells;
+            counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
         j["visibility"] = {{"learning_passes_extra", s.learning_passes},
                            {"learning_seconds", s.guide_learning_seconds},
                            {"update_seconds", s.guide_update_seconds},

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <random>
 
 namespace {
@@ -552,6 +553,8 @@ TEST(VisibilityGuideTables, LightSampleCountPerCell) {
     EXPECT_EQ(etk::etk_guide_light_count(S, p, 1), 1.0f);
     EXPECT_EQ(etk::etk_guide_light_count(S, p, 2), 1.0f);
     EXPECT_EQ(etk::etk_guide_light_count(S, p, 3), 1.0f);
+    // What the render summary reports: the cells below one light sample, per count.
+    EXPECT_EQ(cache.fewer_light_samples(), (std::map<float, uint64_t>{{0.125f, 1u}}));
     p.guide_ready = 0; // before the first tables: every vertex takes its light sample
     EXPECT_EQ(etk::etk_guide_light_count(S, p, 0), 1.0f);
 }

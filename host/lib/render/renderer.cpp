@@ -83,16 +83,9 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         // The tables for the passes that follow: rebuilt after passes 1, 2, 4, ... L.
         if (VisibilityCache::update_after(next_learning_pass_, guide_options_.learning_passes)) {
             Timer t;
-            const std::vector<float> tables = cache_->tables();
-            device_->upload_guide(tables);
+            device_->upload_guide(cache_->tables());
             guide_ready_ = true;
-            stats_.guide_light_counts.clear();
-            for (int s = 0; s < guide_options_.slots; ++s) {
-                const float n =
-                    tables[static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS + ETK_GUIDE_LIGHT_COUNT];
-                if (n < 1.0f)
-                    ++stats_.guide_light_counts[n];
-            }
+            stats_.guide_light_counts = cache_->fewer_light_samples();
             stats_.guide_update_seconds += t.seconds();
         }
         stats_.guide_records = cache_->records();

@@ -323,14 +323,10 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
 
 double light_sample_count(double m_light, double m_cont, double cost, const double* counts,
                           size_t n) {
-    double best = counts[0], least = 0.0;
-    for (size_t j = 0; j < n; ++j) {
-        const double e = (m_cont + m_light / counts[j]) * (1.0 + cost * counts[j]);
-        if (j == 0 || e < least) {
-            best = counts[j];
-            least = e;
-        }
-    }
+    auto model = [&](double c) { return (m_cont + m_light / c) * (1.0 + cost * c); };
+    double best = counts[0];
+    for (size_t j = 1; j < n; ++j)
+        best = model(counts[j]) < model(best) ? counts[j] : best;
     return best;
 }
 
@@ -363,6 +359,7 @@ std::vector<float> VisibilityCache::tables() {
     choose_shares(opt_.portal_shares.data(), C, 0.0, opt_.portal_records, moments_, moment_counts_,
                   shares_);
     const bool continuation = !dir_.sums.empty();
+    fewer_.clear();
     // Cells without records keep the prior tables (most cells of a scene).
     std::vector<float> out = guide_prior_cells(mass_, opt_.slots, continuation, box_);
     std::vector<double> prob(K);
@@ -389,12 +386,15 @@ std::vector<float> VisibilityCache::tables() {
             write_cdf(prob, cell);
             const uint32_t nl = light_.counts[s], nc = continuation ? dir_.counts[s] : 0;
             const auto min_records = static_cast<uint32_t>(opt_.portal_records);
-            cell[ETK_GUIDE_LIGHT_COUNT] =
+            const float count =
                 nl >= min_records && nc >= min_records
                     ? static_cast<float>(light_sample_count(
                           double(light_m2_[s]) / nl, double(cont_m2_[s]) / nc, opt_.light_cost,
                           opt_.light_counts.data(), opt_.light_counts.size()))
                     : 1.0f;
+            cell[ETK_GUIDE_LIGHT_COUNT] = count;
+            if (count < 1.0f)
+                ++fewer_[count];
         }
         if (continuation && dir_.counts[s] > 0) { // the continuation guide and its share
             float* dir = out.data() + etk::etk_guide_dir_offset(opt_.slots, s);

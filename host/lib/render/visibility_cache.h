@@ -58,6 +58,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <mutex>
 #include <vector>
 
@@ -104,8 +105,8 @@ struct VisibilityOptions {
 
 // The candidate light-sample count n that minimises the efficiency model (m_cont + m_light / n)
 // x (1 + cost n): the second moments, per vertex, of the continuation's estimate and of one
-// light sample's (taking the light sample with probability n divides its second moment by n
-// and its cost by 1 / n). A tie keeps the larger count (the first candidate).
+// light sample's (taking the light sample with probability n multiplies its second moment by
+// 1 / n and its cost by n). A tie keeps the earlier candidate.
 double light_sample_count(double m_light, double m_cont, double cost, const double* counts,
                           size_t n);
 
@@ -160,6 +161,8 @@ class VisibilityCache {
                spot_moments_.size() * 8 + spot_counts_.size() * 4 + spot_shares_.size() * 4 +
                last_.size() * 4 + light_m2_.size() * 8 + cont_m2_.size() * 8;
     }
+    // The cells of the last tables() that take fewer than one light sample, per count.
+    const std::map<float, uint64_t>& fewer_light_samples() const { return fewer_; }
     uint64_t records() const { return light_.records; } // shadow-ray records
     uint64_t continuation_records() const { return dir_.records; }
     // Whether the table should be rebuilt after learning pass `pass` (0-based): 1, 2, 4, ...
@@ -199,6 +202,7 @@ class VisibilityCache {
     // Per slot, the second moments of one light sample's and one continuation's estimate (fixed
     // point, in the common unit of light_sample_count).
     std::vector<uint64_t> light_m2_, cont_m2_;
+    std::map<float, uint64_t> fewer_;
     std::vector<float> last_; // the tables the passes since the last update were drawn with
     double inv_scale_;
     RegionSums light_, dir_; // the light sample's (shadow rays), the continuation guide's
