@@ -39,7 +39,9 @@ namespace {
 // each continuation is the path's final radiance less that.
 class ContinuationRecorder {
   public:
-    explicit ContinuationRecorder(int n) : n_(n), o_(4 * n), d_(4 * n), b_(4 * n), r_(4 * n) {}
+    explicit ContinuationRecorder(int n) : n_(n), o_(4 * n), d_(4 * n), b_(4 * n), r_(4 * n) {
+        vertices_.reserve(2 * static_cast<size_t>(n)); // about two guided vertices per path
+    }
 
     void after_bounce(StageExecutor& ex, int bounce) {
         ex.read_paths(n_, o_.data(), d_.data(), b_.data(), r_.data());

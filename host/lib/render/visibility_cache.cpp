@@ -179,14 +179,6 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
     }
 }
 
-// Increments of the fixed-point sums, computed outside the lock (the arithmetic is most of the
-// work, and the lanes of a pass add their records concurrently); integer additions commute, so
-// the sums do not depend on which lane takes the lock first.
-struct VisibilityCache::Increments {
-    std::vector<std::pair<uint32_t, uint64_t>> sums, moments, portal, m2;
-    std::vector<uint32_t> slots; // one record counted in each
-};
-
 namespace {
 
 // v >= 0 in fixed point, capped (llround's value for these non-negative values, without the
@@ -199,57 +191,80 @@ double record_value(float v) {
     return std::isfinite(v) ? std::max(0.0, double(v)) : 0.0;
 }
 
-} // namespace
-
-void VisibilityCache::region_increments(const int* keys, const float* values, int n,
-                                        Increments& inc) const {
-    for (int i = 0; i < n; ++i) {
-        const int key = keys[i];
-        if (key < 0 || key >= opt_.slots * K)
-            continue;
-        inc.sums.emplace_back(key, fixed_point(record_value(values[i]) * inv_scale_));
-        inc.slots.push_back(static_cast<uint32_t>(key / K));
-    }
+// The lanes of a pass add their records concurrently, straight into the sums: integer additions
+// commute, so the sums do not depend on which lane adds first (tables() reads them between
+// passes, when no lane adds).
+template <typename T> void add_to(std::vector<T>& sums, size_t i, T v) {
+    __atomic_fetch_add(&sums[i], v, __ATOMIC_RELAXED);
 }
 
-void VisibilityCache::apply(RegionSums& to, std::vector<uint64_t>* moments,
-                            std::vector<uint32_t>* moment_counts, std::vector<uint64_t>* cells,
-                            std::vector<uint64_t>* m2, const Increments& inc) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& [k, v] : inc.sums)
-        to.sums[k] += v;
-    for (uint32_t s : inc.slots) {
-        ++to.counts[s];
-        if (moment_counts)
-            ++(*moment_counts)[s];
+// The box-cell tables are small and both lanes add to the same cells (a window's): atomic adds
+// there would pass their lines back and forth between cores. A call's records are summed per
+// cell in the thread's own dense copy, and each touched cell is added once.
+class CellBatch {
+  public:
+    CellBatch() { sums_.resize(ETK_PORTAL_CELLS, 0); }
+    void add(int cell, uint64_t v) {
+        if (v == 0)
+            return;
+        if (sums_[cell] == 0)
+            touched_.push_back(cell);
+        sums_[cell] += v;
     }
-    to.records += inc.slots.size();
-    for (const auto& [k, v] : inc.moments)
-        (*moments)[k] += v;
-    for (const auto& [k, v] : inc.portal)
-        (*cells)[k] += v;
-    for (const auto& [k, v] : inc.m2)
-        (*m2)[k] += v;
+    void flush(std::vector<uint64_t>& to) {
+        for (int c : touched_) {
+            add_to(to, static_cast<size_t>(c), sums_[c]);
+            sums_[c] = 0;
+        }
+        touched_.clear();
+    }
+
+  private:
+    std::vector<uint64_t> sums_;
+    std::vector<int> touched_;
+};
+
+// Records arrive in queue order, their keys scattered over megabytes of sums: each atomic add
+// waits for its line. The lines of the record kPrefetch ahead are requested first.
+constexpr int kPrefetch = 8;
+
+} // namespace
+
+int VisibilityCache::add_region(RegionSums& to, int key, double v, std::vector<uint32_t>& counts) {
+    const int s = key / K;
+    add_to(to.sums, static_cast<size_t>(key), fixed_point(v * inv_scale_));
+    add_to(to.counts, static_cast<size_t>(s), 1u);
+    add_to(counts, static_cast<size_t>(s), 1u);
+    return s;
 }
 
 void VisibilityCache::add(const int* keys, const float* values, const int* exits,
                           const float* parts, int n) {
-    Increments inc;
-    region_increments(keys, values, n, inc);
     const size_t C = opt_.portal_shares.size();
+    uint64_t records = 0;
+    thread_local CellBatch cells;
     for (int i = 0; i < n; ++i) {
+        if (i + kPrefetch < n && keys[i + kPrefetch] >= 0 && keys[i + kPrefetch] < opt_.slots * K) {
+            const int k = keys[i + kPrefetch];
+            __builtin_prefetch(&light_.sums[static_cast<size_t>(k)], 1);
+            __builtin_prefetch(&moments_[(k / K) * C], 1);
+            __builtin_prefetch(&light_m2_[k / K], 1);
+        }
+        const double v = record_value(values[i]);
+        if (exits[i] >= 0 && exits[i] < ETK_PORTAL_CELLS)
+            cells.add(exits[i], fixed_point(v * inv_scale_));
         const int key = keys[i];
         if (key < 0 || key >= opt_.slots * K)
             continue;
-        const int s = key / K;
-        const double v = record_value(values[i]);
+        ++records;
+        const int s = add_region(light_, key, v, moment_counts_);
         const double pv = parts[2 * i], pp = parts[2 * i + 1];
         if (!(v > 0.0) || !std::isfinite(pv) || !std::isfinite(pp))
             continue;
         // A diffuse vertex's light sample estimates (albedo / pi) v: its second moment, in the
         // unit light_sample_count shares with the continuation's (albedo^2 dropped).
         const double e = v * inv_scale_ * (1.0 / M_PI);
-        inc.m2.emplace_back(static_cast<uint32_t>(s), fixed_point(e * e));
+        add_to(light_m2_, static_cast<size_t>(s), fixed_point(e * e));
         // v = g / p_rec (g = luminance(L) cos, unoccluded); the second moment of the light
         // sample with share b is E_rec[g^2 / (p_rec p_b)] = E_rec[v^2 p_rec / p_b]. shares_ only
         // changes in tables(), between passes.
@@ -259,42 +274,47 @@ void VisibilityCache::add(const int* keys, const float* values, const int* exits
             const double b = opt_.portal_shares[j];
             const double pb = (1.0 - b) * pv + b * pp;
             const double m = pb > 0.0 ? v * inv_scale_ * v * inv_scale_ * prec / pb : kMaxValue;
-            inc.moments.emplace_back(static_cast<uint32_t>(s * C + j), fixed_point(m));
+            add_to(moments_, s * C + j, fixed_point(m));
         }
     }
-    for (int i = 0; i < n; ++i) {
-        if (exits[i] < 0 || exits[i] >= ETK_PORTAL_CELLS)
-            continue;
-        inc.portal.emplace_back(exits[i], fixed_point(record_value(values[i]) * inv_scale_));
-    }
-    apply(light_, &moments_, &moment_counts_, &portal_, &light_m2_, inc);
+    cells.flush(portal_);
+    __atomic_fetch_add(&light_.records, records, __ATOMIC_RELAXED);
 }
 
 void VisibilityCache::add_continuations(const int* keys, const float* values, const float* rays,
                                         int n) {
     if (dir_.sums.empty())
         throw Error("continuation records for a visibility cache built without the guide");
-    Increments inc;
-    region_increments(keys, values, n, inc);
     const size_t C = opt_.spot_shares.size();
     // The tables the records were drawn with (last_ only changes in tables(), between passes).
     const float* spot =
         last_.data() + etk::etk_portal_offset(opt_.slots, 1) + etk::etk_portal_size(opt_.slots);
     const float c1 = static_cast<float>(opt_.continuation_share);
+    uint64_t records = 0;
+    thread_local CellBatch cells;
     for (int i = 0; i < n; ++i) {
+        if (i + kPrefetch < n && keys[i + kPrefetch] >= 0 && keys[i + kPrefetch] < opt_.slots * K) {
+            const int k = keys[i + kPrefetch], ks = k / K;
+            __builtin_prefetch(&dir_.sums[static_cast<size_t>(k)], 1);
+            __builtin_prefetch(&spot_moments_[ks * C], 1);
+            __builtin_prefetch(&cont_m2_[ks], 1);
+            // The record's region entries of the cell's table (its key's region is its ray's).
+            __builtin_prefetch(&last_[etk::etk_guide_dir_offset(opt_.slots, ks) + k % K], 0);
+        }
         const int key = keys[i];
         if (key < 0 || key >= opt_.slots * K)
             continue;
+        ++records;
+        const double v = record_value(values[i]);
+        const int s = add_region(dir_, key, v, spot_counts_);
         const float* r = rays + 8 * static_cast<size_t>(i);
         const etk::float3 o = etk::make_float3(r[0], r[1], r[2]);
         const etk::float3 d = etk::make_float3(r[4], r[5], r[6]);
-        const double v = record_value(values[i]);
         float t;
         const int exit = etk::etk_portal_exit(spot, o, d, &t);
         if (exit >= 0 && exit < ETK_PORTAL_CELLS)
-            inc.portal.emplace_back(exit, fixed_point(v * inv_scale_));
+            cells.add(exit, fixed_point(v * inv_scale_));
         // The densities the record was drawn with: the cell's guide, the spot table, the BSDF's.
-        const int s = key / K;
         const float* dir = last_.data() + etk::etk_guide_dir_offset(opt_.slots, s);
         const float c = dir[ETK_GUIDE_DIR_SHARE];
         const float q = spot[ETK_PORTAL_ON] > 0.0f ? spot[ETK_PORTAL_SHARES + s] : 0.0f;
@@ -310,15 +330,16 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
         const double vs = v * inv_scale_;
         // The continuation's estimate at a diffuse vertex, f cos L / p = albedo p_bsdf v (p_bsdf =
         // cos / pi): its second moment in light_sample_count's unit.
-        inc.m2.emplace_back(static_cast<uint32_t>(s), fixed_point(pb * vs * pb * vs));
+        add_to(cont_m2_, static_cast<size_t>(s), fixed_point(pb * vs * pb * vs));
         for (size_t j = 0; j < C; ++j) {
             const double pq = etk::etk_cguide_mix(c1, static_cast<float>(opt_.spot_shares[j]), pg,
                                                   ps, static_cast<float>(pb));
             const double m = pq > 0.0 ? vs * vs * prec * pb * pb / pq : kMaxValue;
-            inc.moments.emplace_back(static_cast<uint32_t>(s * C + j), fixed_point(m));
+            add_to(spot_moments_, s * C + j, fixed_point(m));
         }
     }
-    apply(dir_, &spot_moments_, &spot_counts_, &spot_, &cont_m2_, inc);
+    cells.flush(spot_);
+    __atomic_fetch_add(&dir_.records, records, __ATOMIC_RELAXED);
 }
 
 double light_sample_count(double m_light, double m_cont, double cost, const double* counts,

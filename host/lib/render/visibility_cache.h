@@ -181,12 +181,9 @@ class VisibilityCache {
     void choose_shares(const double* candidates, size_t n, double cost, int min_records,
                        std::vector<uint64_t>& moments, std::vector<uint32_t>& counts,
                        std::vector<float>& shares);
-    struct Increments;
-    void region_increments(const int* keys, const float* values, int n, Increments& inc) const;
-    // Adds the increments to `to` (and the second moments, their record counts per slot and the
-    // box-cell sums of the same kind of records) under the lock.
-    void apply(RegionSums& to, std::vector<uint64_t>* moments, std::vector<uint32_t>* moment_counts,
-               std::vector<uint64_t>* cells, std::vector<uint64_t>* m2, const Increments& inc);
+    // Adds one record of value v (>= 0) at key (slot x K + region) to `to` and counts it in
+    // `counts` (the slot's records since the last update); returns the slot.
+    int add_region(RegionSums& to, int key, double v, std::vector<uint32_t>& counts);
     VisibilityOptions opt_;
     std::vector<float> mass_; // M_R
     std::array<float, 6> box_;
