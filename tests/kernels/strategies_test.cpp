@@ -157,7 +157,7 @@ TEST(Strategies, VisibilityWithFewLightSamplesConverges) {
     const auto few =
         ett::render(interior(env, "visibility", 3), "cpu", spp, true, [](et::DeviceScene& d) {
             d.guide_options.light_counts.fill(0.125);
-            d.guide_options.portal_records = 1;
+            d.guide_options.min_records = 1;
         });
     uint64_t eighth = 0;
     for (const auto& [n, cells] : few.light_counts)

@@ -19,6 +19,8 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -489,6 +491,21 @@ TEST(VisibilityGuideTables, LeastMomentShareChargesTheCost) {
     EXPECT_EQ(et::least_moment_share(later, 3, 0.0), 1u);
 }
 
+// The kernels' view of a cache's tables (guide_cells), ready: read through the kernels' own
+// accessors, so the layout is the one the kernels read.
+struct KernelView {
+    std::vector<float> tables;
+    etk::EtkScene S{};
+    etk::EtkParams p{};
+    KernelView(std::vector<float> t, int slots, bool continuation) : tables(std::move(t)) {
+        S.guide_cells = tables.data();
+        p.guide_slots = slots;
+        p.guide_continuation = continuation ? 1 : 0;
+        p.guide_ready = 1;
+    }
+    KernelView(const KernelView&) = delete; // S points into tables
+};
+
 // The light-sample count: the candidate of least (m_cont + m_light / n) (1 + cost n).
 TEST(VisibilityGuideTables, LightSampleCountFollowsTheModel) {
     const double n[4] = {1.0, 0.5, 0.25, 0.125};
@@ -531,32 +548,59 @@ TEST(VisibilityGuideTables, LightSampleCountPerCell) {
             drays.insert(drays.end(), r, r + 8);
         }
     };
-    const int n = 2 * o.portal_records;
+    const int n = 2 * o.min_records;
     light(0, 0.0f, n);
     cont(0, 1.0f, n);
     light(1, 10.0f, n);
     cont(1, 0.01f, n);
-    light(2, 0.0f, o.portal_records - 1);
+    light(2, 0.0f, o.min_records - 1);
     cont(2, 1.0f, n);
     cache.add(keys.data(), values.data(), exits.data(), parts.data(),
               static_cast<int>(keys.size()));
     cache.add_continuations(dkeys.data(), dvalues.data(), drays.data(),
                             static_cast<int>(dkeys.size()));
-    const std::vector<float> t = cache.tables();
-    etk::EtkScene S{};
-    S.guide_cells = t.data();
-    etk::EtkParams p{};
-    p.guide_slots = o.slots;
-    p.guide_continuation = 1;
-    p.guide_ready = 1;
-    EXPECT_EQ(etk::etk_guide_light_count(S, p, 0), 0.125f);
-    EXPECT_EQ(etk::etk_guide_light_count(S, p, 1), 1.0f);
-    EXPECT_EQ(etk::etk_guide_light_count(S, p, 2), 1.0f);
-    EXPECT_EQ(etk::etk_guide_light_count(S, p, 3), 1.0f);
+    KernelView v(cache.tables(), o.slots, true);
+    EXPECT_EQ(etk::etk_guide_light_count(v.S, v.p, 0), 0.125f);
+    EXPECT_EQ(etk::etk_guide_light_count(v.S, v.p, 1), 1.0f);
+    EXPECT_EQ(etk::etk_guide_light_count(v.S, v.p, 2), 1.0f);
+    EXPECT_EQ(etk::etk_guide_light_count(v.S, v.p, 3), 1.0f);
     // What the render summary reports: the cells below one light sample, per count.
     EXPECT_EQ(cache.fewer_light_samples(), (std::map<float, uint64_t>{{0.125f, 1u}}));
-    p.guide_ready = 0; // before the first tables: every vertex takes its light sample
-    EXPECT_EQ(etk::etk_guide_light_count(S, p, 0), 1.0f);
+    v.p.guide_ready = 0; // before the first tables: every vertex takes its light sample
+    EXPECT_EQ(etk::etk_guide_light_count(v.S, v.p, 0), 1.0f);
+}
+
+// A cell chooses its portal share from the records since the last update: min_records - 1 before
+// it and one after are too few (the share stays 0), min_records after the next are enough.
+TEST(VisibilityGuideTables, SharesCountTheRecordsSinceTheLastUpdate) {
+    Fixture f;
+    make(f, 64, 32, 5u);
+    et::VisibilityOptions o;
+    o.slots = 4;
+    o.continuation = false;
+    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.0f, 1.0f, 1.0f};
+    et::VisibilityCache cache(o, f.regions, 1.0, et::guide_portal_box(lo, hi));
+    // Unblocked records of slot 0 whose direction the portal table draws 100 times more often
+    // than the cell's mixture: the largest portal share has the least second moment.
+    auto records = [&](int n) {
+        std::vector<int> keys(n, 3), exits(n, 7);
+        std::vector<float> values(n, 1.0f), parts;
+        for (int i = 0; i < n; ++i) {
+            parts.push_back(0.01f);
+            parts.push_back(1.0f);
+        }
+        cache.add(keys.data(), values.data(), exits.data(), parts.data(), n);
+    };
+    auto share = [&] {
+        KernelView v(cache.tables(), o.slots, false);
+        return etk::etk_portal_share(v.S, v.p, 0);
+    };
+    records(o.min_records - 1);
+    EXPECT_EQ(share(), 0.0f);
+    records(1);
+    EXPECT_EQ(share(), 0.0f) << "one record since the last update chose a share";
+    records(o.min_records);
+    EXPECT_EQ(share(), static_cast<float>(o.portal_shares.back()));
 }
 
 } // namespace

@@ -163,16 +163,17 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
     : opt_(options), mass_(regions.begin(), regions.begin() + K), box_(box),
       portal_(ETK_PORTAL_CELLS, 0),
       moments_(static_cast<size_t>(options.slots) * options.portal_shares.size(), 0),
-      moment_counts_(options.slots, 0), shares_(options.slots, 0.0f), light_m2_(options.slots, 0),
+      shares_(options.slots, 0.0f), light_m2_(options.slots, 0),
       inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0) {
     light_.sums.assign(static_cast<size_t>(options.slots) * K, 0);
     light_.counts.assign(options.slots, 0);
+    light_.counted = light_.counts;
     if (options.continuation) {
         dir_.sums = light_.sums;
         dir_.counts = light_.counts;
+        dir_.counted = light_.counts;
         spot_.assign(ETK_PORTAL_CELLS, 0);
         spot_moments_.assign(static_cast<size_t>(options.slots) * options.spot_shares.size(), 0);
-        spot_counts_.assign(options.slots, 0);
         spot_shares_.assign(options.slots, 0.0f);
         cont_m2_.assign(options.slots, 0);
         last_ = guide_prior_cells(mass_, options.slots, true, box);
@@ -230,11 +231,10 @@ constexpr int kPrefetch = 8;
 
 } // namespace
 
-int VisibilityCache::add_region(RegionSums& to, int key, double v, std::vector<uint32_t>& counts) {
+int VisibilityCache::add_region(RegionSums& to, int key, double v) {
     const int s = key / K;
-    add_to(to.sums, static_cast<size_t>(key), fixed_point(v * inv_scale_));
+    add_to(to.sums, static_cast<size_t>(key), fixed_point(v));
     add_to(to.counts, static_cast<size_t>(s), 1u);
-    add_to(counts, static_cast<size_t>(s), 1u);
     return s;
 }
 
@@ -250,20 +250,20 @@ void VisibilityCache::add(const int* keys, const float* values, const int* exits
             __builtin_prefetch(&moments_[(k / K) * C], 1);
             __builtin_prefetch(&light_m2_[k / K], 1);
         }
-        const double v = record_value(values[i]);
+        const double v = record_value(values[i]) * inv_scale_; // relative to the map's power
         if (exits[i] >= 0 && exits[i] < ETK_PORTAL_CELLS)
-            cells.add(exits[i], fixed_point(v * inv_scale_));
+            cells.add(exits[i], fixed_point(v));
         const int key = keys[i];
         if (key < 0 || key >= opt_.slots * K)
             continue;
         ++records;
-        const int s = add_region(light_, key, v, moment_counts_);
+        const int s = add_region(light_, key, v);
         const double pv = parts[2 * i], pp = parts[2 * i + 1];
         if (!(v > 0.0) || !std::isfinite(pv) || !std::isfinite(pp))
             continue;
         // A diffuse vertex's light sample estimates (albedo / pi) v: its second moment, in the
         // unit light_sample_count shares with the continuation's (albedo^2 dropped).
-        const double e = v * inv_scale_ * (1.0 / M_PI);
+        const double e = v * (1.0 / M_PI);
         add_to(light_m2_, static_cast<size_t>(s), fixed_point(e * e));
         // v = g / p_rec (g = luminance(L) cos, unoccluded); the second moment of the light
         // sample with share b is E_rec[g^2 / (p_rec p_b)] = E_rec[v^2 p_rec / p_b]. shares_ only
@@ -273,7 +273,7 @@ void VisibilityCache::add(const int* keys, const float* values, const int* exits
         for (size_t j = 0; j < C; ++j) {
             const double b = opt_.portal_shares[j];
             const double pb = (1.0 - b) * pv + b * pp;
-            const double m = pb > 0.0 ? v * inv_scale_ * v * inv_scale_ * prec / pb : kMaxValue;
+            const double m = pb > 0.0 ? v * v * prec / pb : kMaxValue;
             add_to(moments_, s * C + j, fixed_point(m));
         }
     }
@@ -305,15 +305,15 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
         if (key < 0 || key >= opt_.slots * K)
             continue;
         ++records;
-        const double v = record_value(values[i]);
-        const int s = add_region(dir_, key, v, spot_counts_);
+        const double v = record_value(values[i]) * inv_scale_; // relative to the map's power
+        const int s = add_region(dir_, key, v);
         const float* r = rays + 8 * static_cast<size_t>(i);
         const etk::float3 o = etk::make_float3(r[0], r[1], r[2]);
         const etk::float3 d = etk::make_float3(r[4], r[5], r[6]);
         float t;
         const int exit = etk::etk_portal_exit(spot, o, d, &t);
         if (exit >= 0 && exit < ETK_PORTAL_CELLS)
-            cells.add(exit, fixed_point(v * inv_scale_));
+            cells.add(exit, fixed_point(v));
         // The densities the record was drawn with: the cell's guide, the spot table, the BSDF's.
         const float* dir = last_.data() + etk::etk_guide_dir_offset(opt_.slots, s);
         const float c = dir[ETK_GUIDE_DIR_SHARE];
@@ -327,14 +327,13 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
                      : 0.0;
         if (!(v > 0.0) || !(pb > 0.0) || !std::isfinite(prec * ps * pg))
             continue;
-        const double vs = v * inv_scale_;
         // The continuation's estimate at a diffuse vertex, f cos L / p = albedo p_bsdf v (p_bsdf =
         // cos / pi): its second moment in light_sample_count's unit.
-        add_to(cont_m2_, static_cast<size_t>(s), fixed_point(pb * vs * pb * vs));
+        add_to(cont_m2_, static_cast<size_t>(s), fixed_point(pb * v * pb * v));
         for (size_t j = 0; j < C; ++j) {
             const double pq = etk::etk_cguide_mix(c1, static_cast<float>(opt_.spot_shares[j]), pg,
                                                   ps, static_cast<float>(pb));
-            const double m = pq > 0.0 ? vs * vs * prec * pb * pb / pq : kMaxValue;
+            const double m = pq > 0.0 ? v * v * prec * pb * pb / pq : kMaxValue;
             add_to(spot_moments_, s * C + j, fixed_point(m));
         }
     }
@@ -362,14 +361,13 @@ size_t least_moment_share(const uint64_t* moments, size_t n, double cost) {
     return best;
 }
 
-void VisibilityCache::choose_shares(const double* candidates, size_t n, double cost,
-                                    int min_records, std::vector<uint64_t>& moments,
-                                    std::vector<uint32_t>& counts, std::vector<float>& shares) {
+void VisibilityCache::choose_shares(const double* candidates, size_t n, double cost, RegionSums& r,
+                                    std::vector<uint64_t>& moments, std::vector<float>& shares) {
     for (int s = 0; s < opt_.slots; ++s) {
-        if (counts[s] >= static_cast<uint32_t>(min_records))
+        if (r.counts[s] - r.counted[s] >= static_cast<uint32_t>(opt_.min_records))
             shares[s] =
                 static_cast<float>(candidates[least_moment_share(moments.data() + s * n, n, cost)]);
-        counts[s] = 0;
+        r.counted[s] = r.counts[s];
         std::fill(moments.begin() + s * n, moments.begin() + (s + 1) * n, 0);
     }
 }
@@ -377,8 +375,7 @@ void VisibilityCache::choose_shares(const double* candidates, size_t n, double c
 std::vector<float> VisibilityCache::tables() {
     std::lock_guard<std::mutex> lock(mutex_);
     const size_t C = opt_.portal_shares.size();
-    choose_shares(opt_.portal_shares.data(), C, 0.0, opt_.portal_records, moments_, moment_counts_,
-                  shares_);
+    choose_shares(opt_.portal_shares.data(), C, 0.0, light_, moments_, shares_);
     const bool continuation = !dir_.sums.empty();
     fewer_.clear();
     // Cells without records keep the prior tables (most cells of a scene).
@@ -406,7 +403,7 @@ std::vector<float> VisibilityCache::tables() {
             float* cell = out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
             write_cdf(prob, cell);
             const uint32_t nl = light_.counts[s], nc = continuation ? dir_.counts[s] : 0;
-            const auto min_records = static_cast<uint32_t>(opt_.portal_records);
+            const auto min_records = static_cast<uint32_t>(opt_.min_records);
             const float count =
                 nl >= min_records && nc >= min_records
                     ? static_cast<float>(light_sample_count(
@@ -427,8 +424,8 @@ std::vector<float> VisibilityCache::tables() {
     float* portal = out.data() + etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0);
     write_portal(box_, shares_, std::vector<double>(portal_.begin(), portal_.end()), portal);
     if (continuation) {
-        choose_shares(opt_.spot_shares.data(), opt_.spot_shares.size(), opt_.spot_cost,
-                      opt_.portal_records, spot_moments_, spot_counts_, spot_shares_);
+        choose_shares(opt_.spot_shares.data(), opt_.spot_shares.size(), opt_.spot_cost, dir_,
+                      spot_moments_, spot_shares_);
         write_portal(box_, spot_shares_, std::vector<double>(spot_.begin(), spot_.end()),
                      portal + etk::etk_portal_size(opt_.slots));
         last_ = out;

@@ -72,18 +72,20 @@ struct VisibilityOptions {
     // Samples 0 .. 63 record shadow rays and continuations (16: 1.78x -> 64: 2.17x MIS's
     // efficiency on the interiors; docs/results.md, issue 11).
     int learning_passes = 64;
-    double prior = 32.0;      // n0: records a cell needs before its own sums weigh half
+    double prior = 32.0; // n0: records a cell needs before its own sums weigh half
+    // Records a cell needs of a kind before it makes its own choices below (its portal share, its
+    // secondary-source share, its light-sample count); until then it keeps the default.
+    int min_records = 64;
     bool continuation = true; // guide diffuse vertices' continuations as well
     // The guided share of a well-learned cell's continuations (0.3 / 0.5 / 0.7 measured:
     // docs/results.md, issue 11).
     double continuation_share = 0.5;
     // Portals (kernels/portal_guide.h): each cell's share of light samples drawn from the learned
     // portal table is the one of these whose light sample has the least second moment on the
-    // cell's records since the last update (0 for cells with fewer than portal_records).
+    // cell's records since the last update (0 until it has min_records of them).
     std::array<double, 4> portal_shares{{0.0, 0.25, 0.5, 0.75}};
-    int portal_records = 64;
     // The secondary-source table's share of a cell's guided continuations: chosen among these
-    // as the portal share is (0 for cells with fewer than portal_records continuation records),
+    // as the portal share is (0 until the cell has min_records continuation records),
     // except that a share q > 0 must lower the second moment by spot_cost of it, the extra time
     // its density costs at every guided vertex of the cell (equal-spp relative variance, 320 x
     // 240, 128 spp: skylight_room 0.0346 -> 0.0218 / 0.0239 / 0.0322 with a cost of 0 / 0.15 /
@@ -94,7 +96,7 @@ struct VisibilityOptions {
     // Each cell's expected light samples n (kernels/visibility_guide.h, etk_guide_light_count):
     // the candidate of light_sample_count on the second moments of the cell's light samples and
     // continuations, a light sample costing light_cost of the rest of a vertex and its path (1
-    // for cells with fewer than portal_records records of either kind). Measured, 320 x 240, 128
+    // until the cell has min_records records of either kind). Measured, 320 x 240, 128
     // spp, two seeds, two alternations: relative variance x time, window_room / skylight_room,
     // 1 everywhere 0.53 / 0.71; cost 0.5: 0.45 / 0.66; 1: 0.50 / 0.66; 2: 0.50 / 0.65 (a light
     // sample is costly here: the guided sample, its densities, the shadow ray; 30% fewer shadow
@@ -157,9 +159,9 @@ class VisibilityCache {
     // Host memory of the sums, bytes.
     uint64_t bytes() const {
         return light_.bytes() + dir_.bytes() + portal_.size() * 8 + moments_.size() * 8 +
-               moment_counts_.size() * 4 + shares_.size() * 4 + spot_.size() * 8 +
-               spot_moments_.size() * 8 + spot_counts_.size() * 4 + spot_shares_.size() * 4 +
-               last_.size() * 4 + light_m2_.size() * 8 + cont_m2_.size() * 8;
+               shares_.size() * 4 + spot_.size() * 8 + spot_moments_.size() * 8 +
+               spot_shares_.size() * 4 + last_.size() * 4 + light_m2_.size() * 8 +
+               cont_m2_.size() * 8;
     }
     // The cells of the last tables() that take fewer than one light sample, per count.
     const std::map<float, uint64_t>& fewer_light_samples() const { return fewer_; }
@@ -171,30 +173,31 @@ class VisibilityCache {
   private:
     // One kind of records, summed per slot and region.
     struct RegionSums {
-        std::vector<uint64_t> sums;   // slots x K, fixed point
-        std::vector<uint32_t> counts; // records per slot
+        std::vector<uint64_t> sums;    // slots x K, fixed point
+        std::vector<uint32_t> counts;  // records per slot
+        std::vector<uint32_t> counted; // counts at the last update: the records since are the rest
         uint64_t records = 0;
-        uint64_t bytes() const { return sums.size() * sizeof(uint64_t) + counts.size() * 4; }
+        uint64_t bytes() const {
+            return sums.size() * sizeof(uint64_t) + (counts.size() + counted.size()) * 4;
+        }
     };
-    // Each slot with at least min_records records since the last update takes the candidate
-    // share of least_moment_share; the moments and counts start afresh.
-    void choose_shares(const double* candidates, size_t n, double cost, int min_records,
-                       std::vector<uint64_t>& moments, std::vector<uint32_t>& counts,
-                       std::vector<float>& shares);
-    // Adds one record of value v (>= 0) at key (slot x K + region) to `to` and counts it in
-    // `counts` (the slot's records since the last update); returns the slot.
-    int add_region(RegionSums& to, int key, double v, std::vector<uint32_t>& counts);
+    // Each slot with at least min_records records of `r` since the last update takes the
+    // candidate share of least_moment_share; the moments start afresh and the records are
+    // counted from here.
+    void choose_shares(const double* candidates, size_t n, double cost, RegionSums& r,
+                       std::vector<uint64_t>& moments, std::vector<float>& shares);
+    // Adds one record of value v (relative to the map's power, >= 0) at key (slot x K + region)
+    // to `to`; returns the slot.
+    static int add_region(RegionSums& to, int key, double v);
     VisibilityOptions opt_;
     std::vector<float> mass_; // M_R
     std::array<float, 6> box_;
     std::vector<uint64_t> portal_; // per portal cell, fixed point
-    // Per slot and candidate share, the light sample's second moment (fixed point), records.
+    // Per slot and candidate share, the light sample's second moment (fixed point).
     std::vector<uint64_t> moments_;
-    std::vector<uint32_t> moment_counts_;
     std::vector<float> shares_; // the portal shares of the last update, per slot
-    // The secondary-source table's sums and, per slot, moments, records and shares.
+    // The secondary-source table's sums and, per slot, moments and shares.
     std::vector<uint64_t> spot_, spot_moments_;
-    std::vector<uint32_t> spot_counts_;
     std::vector<float> spot_shares_;
     // Per slot, the second moments of one light sample's and one continuation's estimate (fixed
     // point, in the common unit of light_sample_count).
