@@ -2,7 +2,7 @@
 #include "prepare/env_compensation.h"
 
 #include "prepare/bvh_build.h"
-#include "render/visibility_cache.h"
+#include "prepare/visibility_tables.h"
 #include "util/error.h"
 
 #include <algorithm>

@@ -6,7 +6,7 @@
 #include "load/scene.h"
 #include "prepare/light_set.h"
 #include "prepare/sis.h"
-#include "render/visibility_cache.h"
+#include "prepare/visibility_tables.h"
 
 #include <vector>
 

@@ -18,145 +18,6 @@ constexpr double kMaxValue = 4096.0;
 
 } // namespace
 
-std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, int h) {
-    std::vector<float> out(static_cast<size_t>(etk::etk_guide_regions_size(h)), 0.0f);
-    const float* marginal = dist.data();
-    const float* ccdf = dist.data() + etk::etk_dist2d_conditional_cdf(w, h);
-    for (int r = 0; r < h; ++r)
-        for (int j = 0; j <= ETK_GUIDE_SUBBANDS; ++j)
-            out[etk::etk_guide_split_table(r, h) + j] =
-                ccdf[static_cast<size_t>(r) * (w + 1) + etk::etk_guide_sub_start(j, w)];
-    std::vector<double> mass(K, 0.0);
-    for (int Rc = 0; Rc < ETK_GUIDE_COLS; ++Rc) {
-        const int c0 = etk::etk_guide_col_start(Rc, w), c1 = etk::etk_guide_col_start(Rc + 1, w);
-        for (int Rr = 0; Rr < ETK_GUIDE_ROWS; ++Rr) {
-            const int r0 = etk::etk_guide_row_start(Rr, h),
-                      r1 = etk::etk_guide_row_start(Rr + 1, h);
-            // Row r's share of the region: p(v_r) / h x the row's conditional mass in [c0, c1).
-            std::vector<double> cum(r1 - r0 + 1, 0.0);
-            for (int r = r0; r < r1; ++r) {
-                const float* row = ccdf + static_cast<size_t>(r) * (w + 1);
-                const double m = std::max(0.0, double(row[c1]) - double(row[c0]));
-                cum[r - r0 + 1] = cum[r - r0] + double(marginal[r]) / h * m;
-            }
-            const double total = cum.back();
-            mass[Rr * ETK_GUIDE_COLS + Rc] = total;
-            float* t = out.data() + etk::etk_guide_row_table(Rr, Rc, h);
-            for (int i = 0; i <= r1 - r0; ++i)
-                t[i] = total > 0.0 ? static_cast<float>(cum[i] / total)
-                                   : static_cast<float>(double(i) / std::max(1, r1 - r0));
-            t[r1 - r0] = 1.0f;
-        }
-    }
-    double all = 0.0;
-    for (double m : mass)
-        all += m;
-    for (int R = 0; R < K; ++R)
-        out[R] = all > 0.0 ? static_cast<float>(mass[R] / all) : 0.0f;
-    return out;
-}
-
-double guide_map_power(const std::vector<float>& rgb, int w, int h) {
-    double sum = 0.0;
-    for (int y = 0; y < h; ++y) {
-        const double sin_theta = std::sin(M_PI * (y + 0.5) / h);
-        double row = 0.0;
-        for (int x = 0; x < w; ++x) {
-            const float* t = rgb.data() + 3 * (static_cast<size_t>(y) * w + x);
-            row += 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2];
-        }
-        sum += row * sin_theta;
-    }
-    return sum * (2.0 * M_PI / w) * (M_PI / h);
-}
-
-namespace {
-
-// A CDF over the regions from probabilities (summing to about 1): cdf[0] = 0, cdf[K] = 1.
-void write_cdf(const std::vector<double>& prob, float* cdf) {
-    double total = 0.0;
-    for (double x : prob)
-        total += x;
-    double run = 0.0;
-    cdf[0] = 0.0f;
-    for (int R = 0; R < K; ++R) {
-        run += prob[R];
-        cdf[R + 1] = total > 0.0 ? static_cast<float>(run / total) : float(R + 1) / K;
-    }
-    cdf[K] = 1.0f;
-}
-
-} // namespace
-
-size_t guide_cells_size(int slots, bool continuation) {
-    return static_cast<size_t>(slots) *
-               (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0)) +
-           static_cast<size_t>(etk::etk_portal_size(slots)) * (continuation ? 2 : 1);
-}
-
-std::array<float, 6> guide_portal_box(const float lo[3], const float hi[3]) {
-    float longest = 0.0f;
-    for (int k = 0; k < 3; ++k)
-        longest = std::max(longest, hi[k] - lo[k]);
-    // 1/1000 of the scene, and never less than float rounding at the corners' magnitude.
-    std::array<float, 6> box{};
-    for (int k = 0; k < 3; ++k) {
-        const float scale = std::max({std::fabs(lo[k]), std::fabs(hi[k]), longest, 1e-6f});
-        const float margin = std::max(1e-3f * longest, 1e-5f * scale);
-        box[k] = lo[k] - margin;
-        box[3 + k] = hi[k] + margin;
-    }
-    return box;
-}
-
-namespace {
-
-// The portal table: box, whether it is on, CDF over the cells from sums (uniform if all are
-// zero: then it is off), the slots' shares.
-void write_portal(const std::array<float, 6>& box, const std::vector<float>& shares,
-                  const std::vector<double>& sums, float* out) {
-    std::fill(out, out + ETK_PORTAL_SHARES, 0.0f);
-    std::copy(box.begin(), box.end(), out);
-    double total = 0.0;
-    for (double x : sums)
-        total += x;
-    out[ETK_PORTAL_ON] = total > 0.0 ? 1.0f : 0.0f;
-    std::copy(shares.begin(), shares.end(), out + ETK_PORTAL_SHARES);
-    float* cdf = out + ETK_PORTAL_CDF;
-    double run = 0.0;
-    for (int k = 0; k < ETK_PORTAL_CELLS; ++k) {
-        run += total > 0.0 ? sums[k] : 1.0;
-        cdf[k + 1] = static_cast<float>(run / (total > 0.0 ? total : double(ETK_PORTAL_CELLS)));
-    }
-    cdf[ETK_PORTAL_CELLS] = 1.0f;
-}
-
-} // namespace
-
-std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots,
-                                     bool continuation, const std::array<float, 6>& box) {
-    std::vector<double> prob(regions.begin(), regions.begin() + K);
-    std::vector<float> light(ETK_GUIDE_CELL_FLOATS), dir(ETK_GUIDE_DIR_FLOATS, 0.0f);
-    write_cdf(prob, light.data());
-    light[ETK_GUIDE_LIGHT_COUNT] = 1.0f;                // every vertex takes its light sample
-    write_cdf(std::vector<double>(K, 1.0), dir.data()); // uniform, share 0: not guided
-    std::vector<float> out(guide_cells_size(slots, continuation));
-    for (int s = 0; s < slots; ++s) {
-        std::copy(light.begin(), light.end(),
-                  out.begin() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS);
-        if (continuation)
-            std::copy(dir.begin(), dir.end(), out.begin() + etk::etk_guide_dir_offset(slots, s));
-    }
-    float* portal = out.data() + etk::etk_portal_offset(slots, continuation ? 1 : 0);
-    write_portal(box, std::vector<float>(slots, 0.0f), std::vector<double>(ETK_PORTAL_CELLS, 0.0),
-                 portal);
-    if (continuation) // the secondary-source table, off
-        write_portal(box, std::vector<float>(slots, 0.0f),
-                     std::vector<double>(ETK_PORTAL_CELLS, 0.0),
-                     portal + etk::etk_portal_size(slots));
-    return out;
-}
-
 VisibilityCache::VisibilityCache(const VisibilityOptions& options,
                                  const std::vector<float>& regions, double scale,
                                  const std::array<float, 6>& box)
@@ -401,7 +262,7 @@ std::vector<float> VisibilityCache::tables() {
             for (int R = 0; R < K; ++R)
                 prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];
             float* cell = out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
-            write_cdf(prob, cell);
+            write_guide_cdf(prob, cell);
             const uint32_t nl = light_.counts[s], nc = continuation ? dir_.counts[s] : 0;
             const auto min_records = static_cast<uint32_t>(opt_.min_records);
             const float count =
@@ -417,17 +278,17 @@ std::vector<float> VisibilityCache::tables() {
         if (continuation && dir_.counts[s] > 0) { // the continuation guide and its share
             float* dir = out.data() + etk::etk_guide_dir_offset(opt_.slots, s);
             const double own = learned(dir_, s, uniform);
-            write_cdf(prob, dir);
+            write_guide_cdf(prob, dir);
             dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
         }
     }
     float* portal = out.data() + etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0);
-    write_portal(box_, shares_, std::vector<double>(portal_.begin(), portal_.end()), portal);
+    write_portal_table(box_, shares_, std::vector<double>(portal_.begin(), portal_.end()), portal);
     if (continuation) {
         choose_shares(opt_.spot_shares.data(), opt_.spot_shares.size(), opt_.spot_cost, dir_,
                       spot_moments_, spot_shares_);
-        write_portal(box_, spot_shares_, std::vector<double>(spot_.begin(), spot_.end()),
-                     portal + etk::etk_portal_size(opt_.slots));
+        write_portal_table(box_, spot_shares_, std::vector<double>(spot_.begin(), spot_.end()),
+                           portal + etk::etk_portal_size(opt_.slots));
         last_ = out;
     }
     return out;

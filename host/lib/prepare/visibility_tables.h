@@ -1,0 +1,88 @@
+// The visibility strategy's tables as the device gets them before anything is learned
+// (kernels/visibility_guide.h, continuation_guide.h, portal_guide.h): the options that size and
+// tune them, the map's region tables, the cells' prior tables and the portal box. Preparation
+// builds them once per scene (prepare/device_scene.cpp); the learning between passes
+// (render/visibility_cache.h) rewrites the cells' tables with the same writers.
+#pragma once
+#include "kernels/portal_guide.h"
+#include "kernels/visibility_guide.h"
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+namespace et {
+
+struct VisibilityOptions {
+    int slots = 1 << 14; // hash-grid cells (a power of two)
+    int resolution = 8;  // cells along the scene's longest side (few records per cell
+                         // otherwise: measured in docs/results.md, issue 11)
+    float alpha = 0.25f; // the map's defensive share of every light sample
+    // Samples 0 .. 63 record shadow rays and continuations (16: 1.78x -> 64: 2.17x MIS's
+    // efficiency on the interiors; docs/results.md, issue 11).
+    int learning_passes = 64;
+    double prior = 32.0; // n0: records a cell needs before its own sums weigh half
+    // Records a cell needs of a kind before it makes its own choices below (its portal share, its
+    // secondary-source share, its light-sample count); until then it keeps the default.
+    int min_records = 64;
+    bool continuation = true; // guide diffuse vertices' continuations as well
+    // The guided share of a well-learned cell's continuations (0.3 / 0.5 / 0.7 measured:
+    // docs/results.md, issue 11).
+    double continuation_share = 0.5;
+    // Portals (kernels/portal_guide.h): each cell's share of light samples drawn from the learned
+    // portal table is the one of these whose light sample has the least second moment on the
+    // cell's records since the last update (0 until it has min_records of them).
+    std::array<double, 4> portal_shares{{0.0, 0.25, 0.5, 0.75}};
+    // The secondary-source table's share of a cell's guided continuations: chosen among these
+    // as the portal share is (0 until the cell has min_records continuation records),
+    // except that a share q > 0 must lower the second moment by spot_cost of it, the extra time
+    // its density costs at every guided vertex of the cell (equal-spp relative variance, 320 x
+    // 240, 128 spp: skylight_room 0.0346 -> 0.0218 / 0.0239 / 0.0322 with a cost of 0 / 0.15 /
+    // 0.3, window_room 0.0187 -> 0.0177 / 0.0185 / 0.0186, while a cost of 0 took ~15% more
+    // time per sample: docs/results.md, issue 11).
+    std::array<double, 4> spot_shares{{0.0, 0.25, 0.5, 0.75}};
+    double spot_cost = 0.15;
+    // Each cell's expected light samples n (kernels/visibility_guide.h, etk_guide_light_count):
+    // the candidate of light_sample_count on the second moments of the cell's light samples and
+    // continuations, a light sample costing light_cost of the rest of a vertex and its path (1
+    // until the cell has min_records records of either kind). Measured, 320 x 240, 128
+    // spp, two seeds, two alternations: relative variance x time, window_room / skylight_room,
+    // 1 everywhere 0.53 / 0.71; cost 0.5: 0.45 / 0.66; 1: 0.50 / 0.66; 2: 0.50 / 0.65 (a light
+    // sample is costly here: the guided sample, its densities, the shadow ray; 30% fewer shadow
+    // rays took 20-25% of the time off).
+    std::array<double, 4> light_counts{{1.0, 0.5, 0.25, 0.125}};
+    double light_cost = 0.5;
+};
+
+// The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).
+std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, int h);
+
+// The map's power (luminance over the sphere), the unit the learning's fixed point is relative to.
+double guide_map_power(const std::vector<float>& rgb, int w, int h);
+
+// Floats of the cells' tables (EtkScene.guide_cells): the light sample's, then the continuation
+// guide's if it is on (kernels/visibility_guide.h), the portal table, and with the continuation
+// guide the secondary-source table (kernels/continuation_guide.h).
+size_t guide_cells_size(int slots, bool continuation);
+
+// The portal table's box: the scene's bounds lo, hi enlarged so that every surface point lies
+// strictly inside (a ray from it has a positive distance to the face it leaves by).
+std::array<float, 6> guide_portal_box(const float lo[3], const float hi[3]);
+
+// Every cell's tables before anything is learned: the map's region masses (the map's own
+// distribution) and, with the continuation guide, uniform regions with a share of 0.
+// The portal table follows, over `box` (guide_portal_box), with a share of 0, and with the
+// continuation guide the secondary-source table, off.
+std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots,
+                                     bool continuation, const std::array<float, 6>& box);
+
+// A CDF over the ETK_GUIDE_REGIONS regions from probabilities (summing to about 1): cdf[0] = 0,
+// cdf[K] = 1 (uniform where they are all 0).
+void write_guide_cdf(const std::vector<double>& prob, float* cdf);
+
+// A portal-layout table (kernels/portal_guide.h): box, whether it is on, the CDF over the box's
+// cells from sums (uniform if all are zero: then it is off), the slots' shares.
+void write_portal_table(const std::array<float, 6>& box, const std::vector<float>& shares,
+                        const std::vector<double>& sums, float* out);
+
+} // namespace et
