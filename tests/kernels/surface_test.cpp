@@ -4,9 +4,11 @@
 // resting on a ground square under a map with a sun (contact shadows, where an offset too large
 // lets light leak under the sphere, and grazing ground, where one too small shadows the surface
 // by itself) is rendered at unit scale and then scaled by 1e-4 and 1e4 and moved 1000 scene
-// sizes away. Same seed, same samples: the images differ only by float rounding, so the bounds
-// are far below the estimator's noise. With the offset of before (2e-4 of the coordinates, and
-// of 1 below coordinates of 1) the 1e-4 scene rendered 4.4% brighter, the moved one 2.7%.
+// sizes away, and scaled by 1e10 (where a float cross product's squared length overflows: the
+// loaders' and preparation's face normals are computed in double, load/scene.h). Same seed, same
+// samples: the images differ only by float rounding, so the bounds are far below the estimator's
+// noise. With the offset of before (2e-4 of the coordinates, and of 1 below coordinates of 1) the
+// 1e-4 scene rendered 4.4% brighter, the moved one 2.7%.
 #include "render_util.h"
 
 #include <gtest/gtest.h>
@@ -78,6 +80,7 @@ TEST_P(SurfaceOffset, ImageIndependentOfUnitAndPlace) {
     for (const Case& c :
          {Case{"scaled by 1e-4", 1e-4f, glm::vec3(0.0f), 1e-3, 0.01},
           Case{"scaled by 1e4", 1e4f, glm::vec3(0.0f), 1e-3, 0.01},
+          Case{"scaled by 1e10", 1e10f, glm::vec3(0.0f), 1e-3, 0.01},
           Case{"moved 1000 sizes away", 1.0f, glm::vec3(3000.0f, 0.0f, -2000.0f), 5e-3, 0.1}}) {
         SCOPED_TRACE(c.name);
         const ett::RenderResult r =

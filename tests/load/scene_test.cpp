@@ -213,7 +213,7 @@ TEST(SceneBadInput, DegenerateAndNanTrianglesAreSkippedWithAWarning) {
                                  "f 1 1 3\n"  // repeated vertex
                                  "f 5 2 3\n"  // NaN
                                  "f 6 2 3\n"  // infinite
-                                 "f 7 8 9\n"  // finite coordinates, infinite area
+                                 "f 7 8 9\n"  // beyond kMaxSceneCoordinate
                                  "f 1 2 99\n" // index out of range
     );
     write_file(dir + "/s.json",
@@ -367,6 +367,11 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
         {"film", R"({"width": 31.7})", "film.width"},
         {"camera", R"({"eye": [0, "1", 4]})", "camera.eye[1]"},
         {"camera", R"({"fov": true})", "camera.fov"},
+        // Beyond what the kernels' float triangle test holds (kMaxSceneCoordinate).
+        {"camera", R"({"eye": [0, 0, 2e12], "target": [0, 0, 0]})", "camera.eye"},
+        {"shapes", R"([{"type": "quad", "center": [0, 0, 3e12]}])", "shapes[0].center"},
+        {"shapes", R"([{"type": "sphere", "center": [-5e12, 0, 0]}])", "shapes[0].center"},
+        {"shapes", R"([{"type": "quad", "size": 1e13}])", "shapes[0]: the quad is degenerate"},
         {"environment", R"({"map": "MAP", "rotation": "east"})", "environment.rotation"},
         {"environment", R"({"map": "MAP", "convention": "luxcore"})", "environment.convention"},
         {"environment", R"({"map": "MAP", "blur": 1e30})", "environment.blur"},

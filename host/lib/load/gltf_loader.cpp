@@ -510,7 +510,8 @@ void load_gltf(const std::string& path, const glm::mat4& transform, int override
         warn(path + ": " + std::to_string(skipped_nopos) + " primitives without POSITION skipped");
     if (dropped)
         warn(path + ": " + std::to_string(dropped) +
-             " degenerate or non-finite triangles skipped (of " + std::to_string(triangles) + ")");
+             " degenerate, non-finite or out-of-range triangles skipped (of " +
+             std::to_string(triangles) + ")");
 }
 
 } // namespace et

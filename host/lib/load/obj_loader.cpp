@@ -14,16 +14,26 @@
 
 namespace et {
 
+glm::vec3 unit_face_normal(const glm::vec3 p[3]) {
+    const glm::dvec3 c =
+        glm::cross(glm::dvec3(p[1]) - glm::dvec3(p[0]), glm::dvec3(p[2]) - glm::dvec3(p[0]));
+    const double len = glm::length(c);
+    if (!(len > 0.0) || !std::isfinite(len))
+        return glm::vec3(0.0f);
+    const glm::vec3 n(c / len);
+    return n;
+}
+
 bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material,
                   const glm::vec2 uv[3]) {
     for (int k = 0; k < 3; ++k)
-        if (!std::isfinite(p[k].x) || !std::isfinite(p[k].y) || !std::isfinite(p[k].z))
+        if (!(std::fabs(p[k].x) <= kMaxSceneCoordinate) ||
+            !(std::fabs(p[k].y) <= kMaxSceneCoordinate) ||
+            !(std::fabs(p[k].z) <= kMaxSceneCoordinate)) // NaN fails too
             return false;
-    glm::vec3 ng = glm::cross(p[1] - p[0], p[2] - p[0]);
-    float area2 = glm::length(ng);
-    if (!(area2 > 0.0f) || !std::isfinite(area2))
+    const glm::vec3 ng = unit_face_normal(p);
+    if (ng == glm::vec3(0.0f))
         return false;
-    ng /= area2;
     for (int k = 0; k < 3; ++k) {
         soup.positions.push_back(p[k]);
         glm::vec3 nk = n ? n[k] : ng;
@@ -173,9 +183,8 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
                 // A dielectric keeps its tint in albedo and its index in specular.x (bsdf.h):
                 // colour maps would overwrite them, so glass takes no textures.
                 if (mat.albedo_tex >= 0 || mat.specular_tex >= 0 || mat.roughness_tex >= 0)
-                    warn(path + ": material " + m.name +
-                         ": a refracting material (illum " + std::to_string(m.illum) +
-                         ") takes no texture maps; they are ignored");
+                    warn(path + ": material " + m.name + ": a refracting material (illum " +
+                         std::to_string(m.illum) + ") takes no texture maps; they are ignored");
                 mat.albedo_tex = mat.specular_tex = mat.roughness_tex = -1;
             }
             materials.push_back(mat);
@@ -246,7 +255,7 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
              " faces with invalid vertex indices skipped");
     if (dropped)
         warn(path + ": " + std::to_string(dropped) +
-             " degenerate, non-finite or non-triangle faces skipped");
+             " degenerate, non-finite, out-of-range or non-triangle faces skipped");
 }
 
 } // namespace et

@@ -385,7 +385,7 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
         fail("no face element (a point cloud has nothing to render)");
     if (dropped)
         warn(path + ": " + std::to_string(dropped) +
-             " degenerate, non-finite or non-polygon faces skipped (of " +
+             " degenerate, non-finite, out-of-range or non-polygon faces skipped (of " +
              std::to_string(faces_read) + ")");
 }
 

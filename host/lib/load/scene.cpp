@@ -196,6 +196,9 @@ Scene load_scene(const std::string& path) {
         for (const glm::vec3& v : {scene.camera.eye, scene.camera.target, scene.camera.up})
             if (glm::any(glm::greaterThan(glm::abs(v), glm::vec3(1e30f))))
                 rc.fail("eye, target and up must be within [-1e30, 1e30]");
+        if (glm::any(glm::greaterThan(glm::abs(scene.camera.eye), glm::vec3(kMaxSceneCoordinate))))
+            rc.at("eye").fail("components must be within [-1e12, 1e12] (float ray tests; scale "
+                              "the scene down)");
         glm::vec3 f = scene.camera.target - scene.camera.eye;
         if (!(glm::length(f) > 0.0f) ||
             !(glm::length(glm::cross(f, scene.camera.up)) > 1e-6f * glm::length(f)))
@@ -300,8 +303,9 @@ Scene load_scene(const std::string& path) {
                 rs.warn_unknown_keys(
                     s, {"type", "center", "radius", "material", "segments", "smooth"});
                 glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
-                if (glm::any(glm::greaterThan(glm::abs(c), glm::vec3(1e30f))))
-                    rs.at("center").fail("components must be within [-1e30, 1e30]");
+                if (glm::any(glm::greaterThan(glm::abs(c), glm::vec3(kMaxSceneCoordinate))))
+                    rs.at("center").fail("components must be within [-1e12, 1e12] (float ray "
+                                         "tests; scale the scene down)");
                 float radius = read_float(s, "radius", 1.0f, 1e-6f, 1e9f, rs);
                 int segments = read_int(s, "segments", 96, 4, 4096, rs);
                 const bool smooth = rs.boolean(s, "smooth", true);
@@ -325,8 +329,9 @@ Scene load_scene(const std::string& path) {
             } else if (type == "quad") {
                 rs.warn_unknown_keys(s, {"type", "center", "size", "material", "transform"});
                 glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
-                if (glm::any(glm::greaterThan(glm::abs(c), glm::vec3(1e30f))))
-                    rs.at("center").fail("components must be within [-1e30, 1e30]");
+                if (glm::any(glm::greaterThan(glm::abs(c), glm::vec3(kMaxSceneCoordinate))))
+                    rs.at("center").fail("components must be within [-1e12, 1e12] (float ray "
+                                         "tests; scale the scene down)");
                 float hx = 5.0f, hz = 5.0f; // "size": edge length or [x extent, z extent]
                 if (s.contains("size")) {
                     const json& z = s["size"];
@@ -352,7 +357,8 @@ Scene load_scene(const std::string& path) {
                 int qm = mat < 0 ? default_material() : mat;
                 if (!add_triangle(scene.triangles, a, nullptr, qm, ta) ||
                     !add_triangle(scene.triangles, b, nullptr, qm, tb))
-                    rs.fail("the quad is degenerate (or not finite after its transform)");
+                    rs.fail("the quad is degenerate, or not finite or beyond [-1e12, 1e12] after "
+                            "its transform");
             } else {
                 rs.at("type").fail("unknown shape type " + json_excerpt(s["type"]) +
                                    " (use mesh, sphere or quad)");

@@ -74,8 +74,21 @@ void load_gltf(const std::string& path, const glm::mat4& transform, int override
 void load_mesh(const std::string& path, const glm::mat4& transform, int override_material,
                std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures = nullptr);
 
-// Appends the triangle (a, b, c) unless it is degenerate or not finite; returns whether it did.
-// `uv`: its corners' texture coordinates, or nullptr for (0, 0).
+// The largest scene coordinate the kernels' float arithmetic holds: the triangle test multiplies
+// three lengths (edges and the distance to a corner), which overflows a float beyond ~2e12, and
+// a ray from farther away than this has hit points rounded to more than a metre at scenes in
+// metres. Triangles beyond it are dropped like degenerate ones; a camera or shape there is an
+// error.
+constexpr float kMaxSceneCoordinate = 1e12f;
+
+// The unit normal of triangle p (counter-clockwise front), computed in double: a float cross
+// product's squared length overflows for edges beyond ~4e9 and underflows below ~1e-19. Zero
+// when the triangle is degenerate or not finite.
+glm::vec3 unit_face_normal(const glm::vec3 p[3]);
+
+// Appends the triangle (a, b, c) unless it is degenerate, not finite or beyond
+// kMaxSceneCoordinate; returns whether it did. `uv`: its corners' texture coordinates, or nullptr
+// for (0, 0).
 bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material,
                   const glm::vec2 uv[3] = nullptr);
 

@@ -378,9 +378,7 @@ std::vector<etk::float4> face_normals(const TriangleSoup& soup, const std::vecto
         return std::vector<etk::float4>(1, etk::make_float4(0.0f, 0.0f, 0.0f, 0.0f));
     std::vector<etk::float4> out(order.size());
     for (size_t i = 0; i < order.size(); ++i) {
-        const Edges t = edges_of(soup, order[i]);
-        const etk::float3 n = etk::normalize(etk::cross(etk::make_float3(t.e1.x, t.e1.y, t.e1.z),
-                                                        etk::make_float3(t.e2.x, t.e2.y, t.e2.z)));
+        const glm::vec3 n = unit_face_normal(&soup.positions[3 * static_cast<size_t>(order[i])]);
         out[i] = etk::make_float4(n.x, n.y, n.z, 0.0f);
     }
     return out;
