@@ -66,8 +66,8 @@ typedef struct {
     uint seed;
     uint sample_index; // the pass: which sample of each pixel
     int first_pixel;   // pixel of slot 0 in this wave
-    float ray_epsilon; // offset of secondary ray origins, relative to the magnitudes of the hit
-                       // point and of the ray's origin (surface.h)
+    float ray_epsilon; // offset of secondary ray origins, relative to the hit triangle's largest
+                       // vertex coordinate (surface.h)
     int light_count;   // directional lights or SIS strata (EtkScene.lights)
     int strata_width, strata_height; // SIS: the texel grid of the strata
     int bsdf_sampling; // GGX lobes: 1 visible normals, 0 the distribution of normals (bsdf.h)

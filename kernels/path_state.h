@@ -11,6 +11,7 @@
     X(float4, nodes)        /* BVH: 4-wide nodes (bvh.h) */                                        \
     X(float4, packets)      /* BVH: the leaves' triangles, four per packet (bvh.h) */              \
     X(float4, face_normals) /* geometric normal per triangle */                                    \
+    X(int, packet_slot)     /* per triangle: its packet x 4 + lane (bvh.h), for its vertices */    \
     X(float4, normals)      /* three vertex normals per triangle */                                \
     X(int, tri_material)    /* material index per triangle */                                      \
     X(int, material_bin)    /* adaptive strategy: light-share bin per material */                  \

@@ -62,12 +62,32 @@ ETK_FN int etk_light_side_ok(EtkMaterial m, float wz, float dwg) {
     return etk_same_side(wz, dwg) && (wz > 0.0f || etk_bsdf_is_dielectric(m));
 }
 
-// The surface at the closest hit h of the ray (o, d). Surfaces are two-sided; the shading
+// The hit point from the triangle's vertices and the hit's barycentrics, read back from its
+// packet (bvh.h): on the triangle's plane up to a few ulps of the vertices' coordinates, where
+// o + d t is off it by ulps of the ray origin's and of t (a camera far away would then need
+// offsets the size of the scene). extent: the largest coordinate magnitude of each axis over
+// the three vertices.
+ETK_FN float3 etk_hit_point(EtkScene S, EtkHit h, float3* extent) {
+    int slot = S.packet_slot[h.prim], lane = slot & 3;
+    ETK_GLOBAL const float* pk =
+        (ETK_GLOBAL const float*)(S.packets + (slot >> 2) * ETK_BVH_PACKET);
+    float3 v0 = make_float3(pk[lane], pk[4 + lane], pk[8 + lane]);
+    float3 e1 = make_float3(pk[12 + lane], pk[16 + lane], pk[20 + lane]);
+    float3 e2 = make_float3(pk[24 + lane], pk[28 + lane], pk[32 + lane]);
+    float3 v1 = v0 + e1, v2 = v0 + e2;
+    *extent = make_float3(fmax(fmax(fabs(v0.x), fabs(v1.x)), fabs(v2.x)),
+                          fmax(fmax(fabs(v0.y), fabs(v1.y)), fabs(v2.y)),
+                          fmax(fmax(fabs(v0.z), fabs(v1.z)), fabs(v2.z)));
+    return v0 + e1 * h.b1 + e2 * h.b2;
+}
+
+// The surface at the closest hit h of a ray in direction d. Surfaces are two-sided; the shading
 // normal is flipped to the geometric normal's side.
-ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, EtkHit h) {
+ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 d, EtkHit h) {
     EtkSurface s;
     int prim = h.prim;
-    float3 pos = o + d * h.t;
+    float3 extent;
+    float3 pos = etk_hit_point(S, h, &extent);
     float3 ng = etk_xyz(S.face_normals[prim]);
     float b0 = 1.0f - h.b1 - h.b2;
     float3 ns = etk_xyz(S.normals[3 * prim]) * b0 + etk_xyz(S.normals[3 * prim + 1]) * h.b1 +
@@ -91,12 +111,12 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, Et
     // from the back, the ray is inside and sees 1 / ior.
     if (!front && etk_bsdf_is_dielectric(s.m))
         s.m.eta = 1.0f / s.m.eta;
-    // The offset follows the hit point's rounding error, which grows with the magnitudes of the
-    // point and of the ray's origin (o + d t, and t from the triangle test on o - v0): relative
-    // to both and with no absolute floor, so a scene renders alike at any unit and position
-    // (tests/kernels/surface_test.cpp). The tiny floor only keeps an exact-origin hit off zero.
-    float scale = fmax(fmax(fmax(fabs(pos.x), fabs(pos.y)), fmax(fabs(pos.z), fabs(o.x))),
-                       fmax(fmax(fabs(o.y), fabs(o.z)), 1.0e-30f));
+    // The offset follows the hit point's rounding error off the triangle's plane, a few ulps of
+    // its vertices' coordinates (etk_hit_point): relative to them, with no absolute floor and
+    // whatever the ray's origin, so a scene renders alike at any unit, position and camera
+    // distance (tests/kernels/surface_test.cpp). The tiny floor keeps a triangle at the origin
+    // off zero.
+    float scale = fmax(fmax(extent.x, extent.y), fmax(extent.z, 1.0e-30f));
     s.origin = pos + ng * (p.ray_epsilon * scale);
     s.origin_back = pos - ng * (p.ray_epsilon * scale);
     return s;

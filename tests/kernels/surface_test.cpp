@@ -9,6 +9,8 @@
 // samples: the images differ only by float rounding, so the bounds are far below the estimator's
 // noise. With the offset of before (2e-4 of the coordinates, and of 1 below coordinates of 1) the
 // 1e-4 scene rendered 4.4% brighter, the moved one 2.7%.
+#include "kernels/bvh.h"
+#include "kernels/surface.h"
 #include "render_util.h"
 
 #include <gtest/gtest.h>
@@ -92,5 +94,42 @@ TEST_P(SurfaceOffset, ImageIndependentOfUnitAndPlace) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, SurfaceOffset, ::testing::Values("cpu", "opencl"));
+
+// The hit point is rebuilt from the triangle's vertices (etk_hit_point), so the secondary ray's
+// origin lies off the triangle's plane by ray_epsilon x its vertices' magnitude, on the side the
+// ray came from, however far the ray started: rays from 10 to 1e6 units away at a triangle of
+// unit size. From o + d t the hit point is off the plane by ulps of the origin's distance (1e6:
+// ~0.06 units, against an offset of 7e-6), which no offset relative to the triangle covers.
+TEST(SurfaceOffset, OriginOffTheTriangleWhateverTheRayStart) {
+    et::Scene s = sphere_on_ground();
+    s.triangles = et::TriangleSoup{};
+    const glm::vec3 tri[3] = {{-0.3f, 0.2f, -0.4f}, {0.7f, 0.25f, -0.3f}, {0.1f, 0.3f, 0.6f}};
+    et::add_triangle(s.triangles, tri, nullptr, 0);
+    et::RenderSettings st = s.settings;
+    st.backend = et::Backend::cpu;
+    const et::DeviceScene ds = et::prepare_device_scene(s, st);
+    const glm::vec3 n = et::unit_face_normal(tri);
+    const glm::vec3 target(0.15f, 0.25f, 0.0f);          // inside the triangle
+    const float expected = ds.params.ray_epsilon * 0.7f; // the largest vertex coordinate
+    for (double dist : {10.0, 1e3, 1e5, 1e6}) {
+        for (const glm::vec3 from : {glm::vec3(0.3f, 1.0f, 0.2f), glm::vec3(-0.8f, -0.2f, 0.5f)}) {
+            SCOPED_TRACE("distance " + std::to_string(dist));
+            const glm::vec3 dir = glm::normalize(from);
+            const glm::vec3 o = target + float(dist) * dir;
+            const etk::float3 eo = etk::make_float3(o.x, o.y, o.z);
+            const etk::float3 ed = etk::make_float3(-dir.x, -dir.y, -dir.z);
+            etk::EtkHit h;
+            const etk::EtkScene S = ds.view();
+            ASSERT_TRUE(etk::etk_bvh_traverse(S.nodes, S.packets, eo, ed, 3e38f, 0, &h));
+            const etk::EtkSurface surf = etk::etk_surface_at(S, ds.params, ed, h);
+            // Signed distance of the origin from the plane, on the ray's side.
+            const glm::vec3 org(surf.origin.x, surf.origin.y, surf.origin.z);
+            const float side = glm::dot(dir, n) > 0.0f ? 1.0f : -1.0f;
+            const float off = side * glm::dot(org - tri[0], n);
+            EXPECT_GT(off, 0.5f * expected);
+            EXPECT_LT(off, 2.0f * expected);
+        }
+    }
+}
 
 } // namespace

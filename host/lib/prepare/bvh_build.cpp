@@ -417,4 +417,14 @@ std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bv
     return out;
 }
 
+std::vector<int> packet_slots(const Bvh& bvh) {
+    std::vector<int> slots(std::max<size_t>(bvh.order.size(), 1), 0);
+    int packet = 0; // the same walk as flatten_packets
+    for (const auto& [first, count] : bvh.leaves)
+        for (int b = 0; b < count; b += 4, ++packet)
+            for (int k = 0; k < 4 && b + k < count; ++k)
+                slots[static_cast<size_t>(first + b + k)] = 4 * packet + k;
+    return slots;
+}
+
 } // namespace et

@@ -12,13 +12,13 @@
 namespace et {
 namespace {
 
-// Secondary rays start this far off the surface, relative to the magnitude of the hit point's and
-// the ray origin's coordinates (kernels/surface.h): 1e-5 is ~170 float ulps. Measured on the
-// shipped scenes (bunny_grace, ogre, the default scene at depth 1; glass, cornell_box,
-// window_room at depth 5; same seeds): image means agree within 0.01% from 1e-5 down to 3e-7,
-// surfaces shadow themselves from 1e-7 (1-5% darker; window_room 25% brighter through its
-// walls). The earlier 2e-4 leaked light at contact (bunny_grace +0.08%) and, with its absolute
-// floor below coordinates of 1, made small scenes up to 10% too bright.
+// Secondary rays start this far off the surface, relative to the largest coordinate of the hit
+// triangle's vertices (kernels/surface.h): 1e-5 is ~170 float ulps. Measured on the shipped
+// scenes (bunny_grace, ogre, the default scene at depth 1; glass, cornell_box, window_room at
+// depth 5; same seeds): image means agree within 0.01% from 1e-5 down to 3e-7, surfaces shadow
+// themselves from 1e-7 (1-5% darker; window_room 25% brighter through its walls). The earlier
+// 2e-4 of the hit point's coordinates leaked light at contact (bunny_grace +0.08%) and, with its
+// absolute floor below coordinates of 1, made small scenes up to 10% too bright.
 constexpr float kRayEpsilon = 1e-5f;
 
 void set_camera(const Scene& scene, etk::EtkParams& p) {
@@ -88,6 +88,7 @@ void add_textures(const Scene& scene, DeviceScene& d) {
 void add_triangles(const Scene& scene, DeviceScene& d) {
     Bvh bvh = build_bvh(scene.triangles);
     d.packets = flatten_packets(scene.triangles, bvh);
+    d.packet_slot = packet_slots(bvh);
     d.face_normals = face_normals(scene.triangles, bvh.order);
     const size_t n = bvh.order.size();
     d.normals.resize(3 * n);
