@@ -1,6 +1,7 @@
 // Where secondary rays start (kernels/surface.h, etk_surface_at): off the surface by a distance
-// relative to the magnitude of the hit point and of the ray's origin, with no absolute floor, so
-// that a scene renders the same image at any unit and wherever it sits in space. A sphere
+// relative to the hit triangle's largest vertex coordinate, from a hit point rebuilt from the
+// vertices, with no absolute floor, so that a scene renders the same image at any unit, wherever
+// it sits in space and however far the camera is. A sphere
 // resting on a ground square under a map with a sun (contact shadows, where an offset too large
 // lets light leak under the sphere, and grazing ground, where one too small shadows the surface
 // by itself) is rendered at unit scale and then scaled by 1e-4 and 1e4 and moved 1000 scene

@@ -75,10 +75,9 @@ void load_mesh(const std::string& path, const glm::mat4& transform, int override
                std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures = nullptr);
 
 // The largest scene coordinate the kernels' float arithmetic holds: the triangle test multiplies
-// three lengths (edges and the distance to a corner), which overflows a float beyond ~2e12, and
-// a ray from farther away than this has hit points rounded to more than a metre at scenes in
-// metres. Triangles beyond it are dropped like degenerate ones; a camera or shape there is an
-// error.
+// three lengths (edges and the distance to a corner), which overflows a float beyond ~2e12 (and
+// floats there are 1.2e5 apart). Triangles beyond it are dropped like degenerate ones; a camera
+// or shape there is an error.
 constexpr float kMaxSceneCoordinate = 1e12f;
 
 // The unit normal of triangle p (counter-clockwise front), computed in double: a float cross
