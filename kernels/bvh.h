@@ -23,6 +23,11 @@
 #define ETK_BVH_STACK 96
 #define ETK_BVH_NODE 8    // float4 per node
 #define ETK_BVH_PACKET 10 // float4 per packet of four triangles
+// A packet's rows (float4 each, one lane per triangle): v0 x, y, z, then e1, e2, the index.
+#define ETK_PACKET_V0 0
+#define ETK_PACKET_E1 3
+#define ETK_PACKET_E2 6
+#define ETK_PACKET_PRIM 9
 
 ETK_BEGIN
 
@@ -70,6 +75,19 @@ ETK_FORCE_INLINE_FN int etk_triangle_lane(float det, float b1, float b2, float t
     return 1;
 }
 
+// Vertex v0 and edges e1, e2 of the triangle in `slot` (packet index x 4 + lane) of the packets.
+ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, float3* v0, float3* e1,
+                                float3* e2) {
+    int lane = slot & 3;
+    ETK_GLOBAL const float* pk = (ETK_GLOBAL const float*)(packets + (slot >> 2) * ETK_BVH_PACKET);
+    *v0 = make_float3(pk[4 * ETK_PACKET_V0 + lane], pk[4 * ETK_PACKET_V0 + 4 + lane],
+                      pk[4 * ETK_PACKET_V0 + 8 + lane]);
+    *e1 = make_float3(pk[4 * ETK_PACKET_E1 + lane], pk[4 * ETK_PACKET_E1 + 4 + lane],
+                      pk[4 * ETK_PACKET_E1 + 8 + lane]);
+    *e2 = make_float3(pk[4 * ETK_PACKET_E2 + lane], pk[4 * ETK_PACKET_E2 + 4 + lane],
+                      pk[4 * ETK_PACKET_E2 + 8 + lane]);
+}
+
 // Moller-Trumbore on the four triangles of a packet at once: each step one vector operation on
 // both back ends, every lane rounded as a test of its triangle alone would be. The lanes are
 // then taken in order, as one-by-one tests would take them. Returns 1 when any_hit and one was
@@ -83,13 +101,15 @@ ETK_FORCE_INLINE_FN int etk_packet_hit(ETK_GLOBAL const float4* pk, float3 org, 
     float4 dx = make_float4(dir.x, dir.x, dir.x, dir.x),
            dy = make_float4(dir.y, dir.y, dir.y, dir.y);
     float4 dz = make_float4(dir.z, dir.z, dir.z, dir.z);
-    float4 e1x = pk[3], e1y = pk[4], e1z = pk[5], e2x = pk[6], e2y = pk[7], e2z = pk[8];
+    float4 e1x = pk[ETK_PACKET_E1], e1y = pk[ETK_PACKET_E1 + 1], e1z = pk[ETK_PACKET_E1 + 2];
+    float4 e2x = pk[ETK_PACKET_E2], e2y = pk[ETK_PACKET_E2 + 1], e2z = pk[ETK_PACKET_E2 + 2];
     float4 px = dy * e2z - dz * e2y; // p = d x e2
     float4 py = dz * e2x - dx * e2z;
     float4 pz = dx * e2y - dy * e2x;
     float4 det = e1x * px + e1y * py + e1z * pz;
     float4 inv = make_float4(1.0f, 1.0f, 1.0f, 1.0f) / det;
-    float4 sx = ox - pk[0], sy = oy - pk[1], sz = oz - pk[2];
+    float4 sx = ox - pk[ETK_PACKET_V0], sy = oy - pk[ETK_PACKET_V0 + 1],
+           sz = oz - pk[ETK_PACKET_V0 + 2];
     float4 b1 = (sx * px + sy * py + sz * pz) * inv;
     float4 qx = sy * e1z - sz * e1y; // q = s x e1
     float4 qy = sz * e1x - sx * e1z;
@@ -102,7 +122,7 @@ ETK_FORCE_INLINE_FN int etk_packet_hit(ETK_GLOBAL const float4* pk, float3 org, 
     if (!etk_any_lane(ETK_TRIANGLE_HIT(etk_lanes_of(det), etk_lanes_of(b1), etk_lanes_of(b2),
                                        etk_lanes_of(t), etk_lanes_splat(hit->t), zero, one)))
         return 0;
-    float4 prim = pk[9];
+    float4 prim = pk[ETK_PACKET_PRIM];
     return (etk_triangle_lane(det.x, b1.x, b2.x, t.x, prim.x, hit) && any_hit) ||
            (etk_triangle_lane(det.y, b1.y, b2.y, t.y, prim.y, hit) && any_hit) ||
            (etk_triangle_lane(det.z, b1.z, b2.z, t.z, prim.z, hit) && any_hit) ||

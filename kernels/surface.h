@@ -68,12 +68,8 @@ ETK_FN int etk_light_side_ok(EtkMaterial m, float wz, float dwg) {
 // offsets the size of the scene). extent: the largest coordinate magnitude of each axis over
 // the three vertices.
 ETK_FN float3 etk_hit_point(EtkScene S, EtkHit h, float3* extent) {
-    int slot = S.packet_slot[h.prim], lane = slot & 3;
-    ETK_GLOBAL const float* pk =
-        (ETK_GLOBAL const float*)(S.packets + (slot >> 2) * ETK_BVH_PACKET);
-    float3 v0 = make_float3(pk[lane], pk[4 + lane], pk[8 + lane]);
-    float3 e1 = make_float3(pk[12 + lane], pk[16 + lane], pk[20 + lane]);
-    float3 e2 = make_float3(pk[24 + lane], pk[28 + lane], pk[32 + lane]);
+    float3 v0, e1, e2;
+    etk_packet_triangle(S.packets, S.packet_slot[h.prim], &v0, &e1, &e2);
     float3 v1 = v0 + e1, v2 = v0 + e2;
     *extent = make_float3(fmax(fmax(fabs(v0.x), fabs(v1.x)), fabs(v2.x)),
                           fmax(fmax(fabs(v0.y), fabs(v1.y)), fabs(v2.y)),

@@ -20,8 +20,7 @@ glm::vec3 unit_face_normal(const glm::vec3 p[3]) {
     const double len = glm::length(c);
     if (!(len > 0.0) || !std::isfinite(len))
         return glm::vec3(0.0f);
-    const glm::vec3 n(c / len);
-    return n;
+    return glm::vec3(c / len);
 }
 
 bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material,

@@ -121,6 +121,13 @@ void add_sphere(TriangleSoup& soup, glm::vec3 c, float radius, int segments, int
         }
 }
 
+// A point the kernels' float arithmetic holds (kMaxSceneCoordinate): a camera eye, a shape's
+// centre.
+void require_in_range(const glm::vec3& v, const JsonReader& r) {
+    if (glm::any(glm::greaterThan(glm::abs(v), glm::vec3(kMaxSceneCoordinate))))
+        r.fail("components must be within [-1e12, 1e12] (float ray tests; scale the scene down)");
+}
+
 Material read_material(const std::string& name, const json& j, const JsonReader& r,
                        const std::string& dir, TextureSet& textures) {
     Material m;
@@ -196,9 +203,7 @@ Scene load_scene(const std::string& path) {
         for (const glm::vec3& v : {scene.camera.eye, scene.camera.target, scene.camera.up})
             if (glm::any(glm::greaterThan(glm::abs(v), glm::vec3(1e30f))))
                 rc.fail("eye, target and up must be within [-1e30, 1e30]");
-        if (glm::any(glm::greaterThan(glm::abs(scene.camera.eye), glm::vec3(kMaxSceneCoordinate))))
-            rc.at("eye").fail("components must be within [-1e12, 1e12] (float ray tests; scale "
-                              "the scene down)");
+        require_in_range(scene.camera.eye, rc.at("eye"));
         glm::vec3 f = scene.camera.target - scene.camera.eye;
         if (!(glm::length(f) > 0.0f) ||
             !(glm::length(glm::cross(f, scene.camera.up)) > 1e-6f * glm::length(f)))
@@ -303,9 +308,7 @@ Scene load_scene(const std::string& path) {
                 rs.warn_unknown_keys(
                     s, {"type", "center", "radius", "material", "segments", "smooth"});
                 glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
-                if (glm::any(glm::greaterThan(glm::abs(c), glm::vec3(kMaxSceneCoordinate))))
-                    rs.at("center").fail("components must be within [-1e12, 1e12] (float ray "
-                                         "tests; scale the scene down)");
+                require_in_range(c, rs.at("center"));
                 float radius = read_float(s, "radius", 1.0f, 1e-6f, 1e9f, rs);
                 int segments = read_int(s, "segments", 96, 4, 4096, rs);
                 const bool smooth = rs.boolean(s, "smooth", true);
@@ -329,9 +332,7 @@ Scene load_scene(const std::string& path) {
             } else if (type == "quad") {
                 rs.warn_unknown_keys(s, {"type", "center", "size", "material", "transform"});
                 glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
-                if (glm::any(glm::greaterThan(glm::abs(c), glm::vec3(kMaxSceneCoordinate))))
-                    rs.at("center").fail("components must be within [-1e12, 1e12] (float ray "
-                                         "tests; scale the scene down)");
+                require_in_range(c, rs.at("center"));
                 float hx = 5.0f, hz = 5.0f; // "size": edge length or [x extent, z extent]
                 if (s.contains("size")) {
                     const json& z = s["size"];

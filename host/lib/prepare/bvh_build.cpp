@@ -401,13 +401,20 @@ void append_packet(const TriangleSoup& soup, const std::vector<int>& order, cons
         out.push_back(etk::make_float4(v[r][0], v[r][1], v[r][2], v[r][3]));
 }
 
-std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh) {
+std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh,
+                                         std::vector<int>* slots) {
     std::vector<etk::float4> out;
+    if (slots)
+        slots->assign(std::max<size_t>(bvh.order.size(), 1), 0);
     for (const auto& [first, count] : bvh.leaves)
         for (int b = 0; b < count; b += 4) {
+            const int packet = static_cast<int>(out.size() / ETK_BVH_PACKET);
             int lanes[4];
-            for (int k = 0; k < 4; ++k)
+            for (int k = 0; k < 4; ++k) {
                 lanes[k] = b + k < count ? first + b + k : -1;
+                if (slots && lanes[k] >= 0)
+                    (*slots)[static_cast<size_t>(lanes[k])] = 4 * packet + k;
+            }
             append_packet(soup, bvh.order, lanes, out);
         }
     if (out.empty()) { // device buffers cannot be empty: one packet of unused lanes
@@ -415,16 +422,6 @@ std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bv
         append_packet(soup, bvh.order, none, out);
     }
     return out;
-}
-
-std::vector<int> packet_slots(const Bvh& bvh) {
-    std::vector<int> slots(std::max<size_t>(bvh.order.size(), 1), 0);
-    int packet = 0; // the same walk as flatten_packets
-    for (const auto& [first, count] : bvh.leaves)
-        for (int b = 0; b < count; b += 4, ++packet)
-            for (int k = 0; k < 4 && b + k < count; ++k)
-                slots[static_cast<size_t>(first + b + k)] = 4 * packet + k;
-    return slots;
 }
 
 } // namespace et

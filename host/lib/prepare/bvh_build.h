@@ -46,13 +46,12 @@ std::vector<etk::float4> flatten_triangles(const TriangleSoup& soup, const std::
 std::vector<etk::float4> face_normals(const TriangleSoup& soup, const std::vector<int>& order);
 
 // The leaves' triangles as the traversal reads them: packets of four (kernels/bvh.h), each leaf's
-// from the index its node gives; one packet of unused lanes when there is no triangle.
-std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh);
-
-// Where each triangle (BVH order) sits in flatten_packets' output: packet index x 4 + lane, so
-// that a hit's vertices can be read back (kernels/surface.h, etk_hit_point). One entry when there
-// is no triangle.
-std::vector<int> packet_slots(const Bvh& bvh);
+// from the index its node gives; one packet of unused lanes when there is no triangle. `slots`,
+// if given, receives where each triangle (BVH order) sits: packet index x 4 + lane, so that a
+// hit's vertices can be read back (kernels/surface.h, etk_hit_point); one entry when there is no
+// triangle.
+std::vector<etk::float4> flatten_packets(const TriangleSoup& soup, const Bvh& bvh,
+                                         std::vector<int>* slots = nullptr);
 
 // Appends one packet (ETK_BVH_PACKET float4) holding flattened triangles lanes[0..3], where
 // flattened triangle i is soup triangle order[i]; -1 is an unused lane.

@@ -87,8 +87,7 @@ void add_textures(const Scene& scene, DeviceScene& d) {
 
 void add_triangles(const Scene& scene, DeviceScene& d) {
     Bvh bvh = build_bvh(scene.triangles);
-    d.packets = flatten_packets(scene.triangles, bvh);
-    d.packet_slot = packet_slots(bvh);
+    d.packets = flatten_packets(scene.triangles, bvh, &d.packet_slot);
     d.face_normals = face_normals(scene.triangles, bvh.order);
     const size_t n = bvh.order.size();
     d.normals.resize(3 * n);

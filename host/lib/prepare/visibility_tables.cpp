@@ -1,5 +1,7 @@
 #include "prepare/visibility_tables.h"
 
+#include "load/env_distribution.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -55,7 +57,7 @@ double guide_map_power(const std::vector<float>& rgb, int w, int h) {
         double row = 0.0;
         for (int x = 0; x < w; ++x) {
             const float* t = rgb.data() + 3 * (static_cast<size_t>(y) * w + x);
-            row += 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2];
+            row += luminance(t); // etk_luma, the luminance the records' values use
         }
         sum += row * sin_theta;
     }
