@@ -253,6 +253,44 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
     out->slot[ETK_Q_SHADE] = slot;
 }
 
+// Stage 2': the shade queue's light samples, drawn ahead of the shade stage ETK_LIGHT_BATCH at a
+// time (etk_env_sample_batch: the cache misses of a batch overlap, where one sample per shade
+// call leaves them in series) for the strategies whose light sample is one map sample
+// (etk_batches_light_samples). i: the batch; the queue's length is the shade counter intersect
+// left (the host launches this stage after it). A batch past the queue's end repeats its last
+// entry and stores nothing for the repeats. The same values as etk_env_sample in the shade stage
+// would draw: the same bits.
+ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
+    (void)out;
+    (void)F;
+    int n = (int)Q.counters[ETK_Q_SHADE], first = i * ETK_LIGHT_BATCH;
+    float2 xi[ETK_LIGHT_BATCH];
+    EtkEnvSample ls[ETK_LIGHT_BATCH];
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        int slot = Q.shade[min(first + k, n - 1)];
+        xi[k] = etk_dims(p, P.pixel[slot], 1u + 3u * (uint)P.ray_o[slot].w); // the shade's pair
+    }
+    etk_env_sample_batch(etk_light_dist(S, p), p.env, xi, ls);
+    for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) {
+        int slot = Q.shade[first + k];
+        P.light_dir[slot] = etk_f4(ls[k].dir, ls[k].pdf);
+        P.light_uv[slot] = ls[k].uv;
+    }
+}
+
+// The light sample sample_lights drew for the path in `slot` (direction, density, map
+// coordinates: all the shade stage reads of it).
+ETK_FN EtkEnvSample etk_drawn_light_sample(EtkPaths P, int slot) {
+    float4 d = P.light_dir[slot];
+    EtkEnvSample s;
+    s.dir = etk_xyz(d);
+    s.pdf = d.w;
+    s.uv = P.light_uv[slot];
+    s.row = 0;
+    s.col = 0;
+    return s;
+}
+
 // Stage 3: at a surface: one light sample (pushed as a shadow ray) and one BSDF sample (pushed as
 // the continuation ray); for the adaptive strategy, samples A and B chosen by the vertex's share.
 ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
@@ -295,7 +333,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
 
     // Light sample (sample A of the adaptive strategy).
     if (p.strategy != ETK_STRATEGY_BSDF && !delta && take_light) {
-        float2 u = etk_dims(p, pixel, pair);
+        // With the sample_lights stage the sample is drawn already, from this pair.
+        float2 u = p.light_batch ? make_float2(0.0f, 0.0f) : etk_dims(p, pixel, pair);
         float3 c = make_float3(0.0f, 0.0f, 0.0f);
         float3 wi_world;
         float learn_val = 0.0f;
@@ -349,8 +388,9 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                 light_uv = etk_env_uv(p.env, wi_world);
                 pdf_light = 0.25f * ETK_INV_PI;
             } else {
-                EtkEnvSample ls = guided ? etk_guide_light_sample(S, p, cell, s, u, &parts)
-                                         : etk_env_sample(dist, p.env, u);
+                EtkEnvSample ls = guided          ? etk_guide_light_sample(S, p, cell, s, u, &parts)
+                                  : p.light_batch ? etk_drawn_light_sample(P, slot)
+                                                  : etk_env_sample(dist, p.env, u);
                 wi_world = ls.dir;
                 light_uv = ls.uv;
                 pdf_light = ls.pdf;

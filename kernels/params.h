@@ -90,7 +90,17 @@ typedef struct {
     // Splitting (the mis strategy): light and BSDF samples per non-delta vertex, powers of two;
     // 1 and 1 are the paper's estimator (etk_split_samples in integrator.h).
     int light_samples, bsdf_samples;
+    // The sample_lights stage has drawn the shade queue's light samples
+    // (etk_batches_light_samples).
+    int light_batch;
 } EtkParams;
+
+// Strategies whose light sample is one etk_env_sample at every vertex: the sample_lights stage can
+// draw them ahead of the shade stage, in batches (integrator.h).
+ETK_FN int etk_batches_light_samples(int strategy) {
+    return strategy == ETK_STRATEGY_LIGHT || strategy == ETK_STRATEGY_MIS ||
+           strategy == ETK_STRATEGY_COMPENSATED;
+}
 
 // Whether a vertex at `depth` (surface interactions before it) is the path's last: its
 // continuation can only escape (integrator.h; the continuation guide's recorder, schedule.cpp).

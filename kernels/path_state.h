@@ -51,7 +51,10 @@
     X(int,                                                                                         \
       guide_exit) /* visibility learning: the portal cell it leaves the box by, -1: blocked */     \
     X(float2, guide_rec_parts) /* visibility learning: its p_vis and p_portal (portal_guide.h) */  \
-    X(float2, guide_parts)     /* the same per path slot, written by the shade stage */
+    X(float2, guide_parts)     /* the same per path slot, written by the shade stage */            \
+    X(float4, light_dir)       /* the light sample of the path's vertex, drawn by sample_lights:   \
+                                  direction; w: its density (integrator.h) */                      \
+    X(float2, light_uv)        /* its map coordinates */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces; the others keep one buffer each for the whole render (the back ends
@@ -81,6 +84,7 @@
 #define ETK_STAGES(X)                                                                              \
     X(generate, etk_generate, 0)                                                                   \
     X(intersect, etk_intersect, 1)                                                                 \
+    X(sample_lights, etk_sample_lights, 0)                                                         \
     X(shade_hits, etk_shade, 1)                                                                    \
     X(shade_lights, etk_shade_lights, 0)                                                           \
     X(trace_shadows, etk_shadow, 0)                                                                \

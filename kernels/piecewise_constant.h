@@ -94,11 +94,16 @@ ETK_FN int etk_find_interval_between(ETK_GLOBAL const float* cdf, int lo, int hi
 // monotone), and a binary search over that short range (about two intervals) finishes it. The
 // same index as the plain search, so the same sample (tests/kernels/cdf_guide_test.cpp); the
 // win is memory traffic: one guide line and one CDF line rather than log2(n) scattered reads.
-ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n,
-                                    ETK_GLOBAL const float* guide, float u) {
+// The two halves of etk_find_interval_guided: the range [*lo, *hi] the answer for u lies in,
+// from the guide (one load; etk_env_sample_batch issues a batch's before any CDF read)...
+ETK_FN void etk_guide_range(ETK_GLOBAL const float* guide, int n, float u, int* lo, int* hi) {
     int K = etk_guide_cells(n);
     int k = clamp((int)(u * (float)K), 0, K - 1);
-    int lo = (int)guide[k], hi = (int)guide[k + 1];
+    *lo = (int)guide[k];
+    *hi = (int)guide[k + 1];
+}
+// ...and the answer within it.
+ETK_FN int etk_find_interval_in(ETK_GLOBAL const float* cdf, int n, int lo, int hi, float u) {
     // Most cells hold at most two interval ends: the next three CDF entries are read at once (one
     // cache line, most often) and counted, and the binary search runs only when the answer lies
     // beyond them (at most ~5% of the samples on the shipped maps). A sample's cost is the latency
@@ -108,6 +113,18 @@ ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n,
     if ((lo + 3 <= hi) & (c3 <= u))
         return etk_find_interval_between(cdf, lo + 3, hi, u);
     return lo + (int)((lo + 1 <= hi) & (c1 <= u)) + (int)((lo + 2 <= hi) & (c2 <= u));
+}
+// etk_find_interval's result, from the CDF's guide table (guide[k] = etk_find_interval(cdf, n,
+// k/K) for k < K, guide[K] = n-1), for u in [0, 1]. K is a power of two, so the cell k =
+// floor(u K) is exact: k/K <= u < (k+1)/K, hence guide[k] <= answer <= guide[k+1] (the CDF is
+// monotone), and a search over that short range (about two intervals) finishes it. The
+// same index as the plain search, so the same sample (tests/kernels/cdf_guide_test.cpp); the
+// win is memory traffic: one guide line and one CDF line rather than log2(n) scattered reads.
+ETK_FN int etk_find_interval_guided(ETK_GLOBAL const float* cdf, int n,
+                                    ETK_GLOBAL const float* guide, float u) {
+    int lo, hi;
+    etk_guide_range(guide, n, u, &lo, &hi);
+    return etk_find_interval_in(cdf, n, lo, hi, u);
 }
 
 ETK_FN int etk_cell_of(float x, int n) {
@@ -182,17 +199,36 @@ ETK_FN ETK_GLOBAL const float* etk_dist2d_row_guide(ETK_GLOBAL const float* dist
     return dist + etk_dist2d_conditional_guide(w, h) + r * (etk_guide_cells(w) + 1);
 }
 
+// The two halves of etk_sample_2d (etk_env_sample_batch interleaves them over several samples).
+// The row for xi.y from the marginal: its index; *v the coordinate, *pv its density.
+ETK_FN int etk_sample_2d_row(ETK_GLOBAL const float* dist, int w, int h, float y, float* v,
+                             float* pv) {
+    ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
+    int r = etk_find_interval_guided(mcdf, h, dist + etk_dist2d_marginal_guide(w, h), y);
+    int row;
+    *v = etk_sample_1d_in(mcdf, h, r, y, pv, &row);
+    return r;
+}
+// The column for xi.x from row r's conditional, whose guide range etk_guide_range gave: its
+// index; *u the coordinate, *pu its density.
+ETK_FN int etk_sample_2d_col_in(ETK_GLOBAL const float* dist, int w, int h, int r, int lo, int hi,
+                                float x, float* u, float* pu) {
+    ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(dist, w, h, r);
+    int c = etk_find_interval_in(ccdf, w, lo, hi, x);
+    int col;
+    *u = etk_sample_1d_in(ccdf, w, c, x, pu, &col);
+    return c;
+}
+
 // Samples (u, v) on the unit square: row from the marginal, column from that row's conditional,
 // both by inversion of the CDF (the guide tables only find the interval faster).
 ETK_FN float2 etk_sample_2d(ETK_GLOBAL const float* dist, int w, int h, float2 xi, float* density,
                             int* row, int* col) {
-    float pv, pu;
-    ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
-    int r = etk_find_interval_guided(mcdf, h, dist + etk_dist2d_marginal_guide(w, h), xi.y);
-    float v = etk_sample_1d_in(mcdf, h, r, xi.y, &pv, row);
-    ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(dist, w, h, r);
-    int c = etk_find_interval_guided(ccdf, w, etk_dist2d_row_guide(dist, w, h, r), xi.x);
-    float u = etk_sample_1d_in(ccdf, w, c, xi.x, &pu, col);
+    float u, v, pu, pv;
+    int lo, hi;
+    *row = etk_sample_2d_row(dist, w, h, xi.y, &v, &pv);
+    etk_guide_range(etk_dist2d_row_guide(dist, w, h, *row), w, xi.x, &lo, &hi);
+    *col = etk_sample_2d_col_in(dist, w, h, *row, lo, hi, xi.x, &u, &pu);
     *density = pv * pu;
     return make_float2(u, v);
 }

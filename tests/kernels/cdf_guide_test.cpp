@@ -2,7 +2,9 @@
 // etk_find_interval_guided, host/lib/load/env_distribution.cpp build_cdf_guide): the guided
 // search must return exactly the interval of the plain binary search for every u in [0, 1], so
 // a sample's direction, density and cell do not change; the 2D tables built by the distribution
-// builder and by the MIS compensation carry guides that agree with their own CDFs.
+// builder and by the MIS compensation carry guides that agree with their own CDFs; and samples
+// drawn in batches (etk_env_sample_batch, the sample_lights stage) equal those drawn one by one.
+#include "kernels/envmap.h"
 #include "kernels/piecewise_constant.h"
 #include "load/env_distribution.h"
 #include "prepare/env_compensation.h"
@@ -164,6 +166,35 @@ void expect_same_as_plain(const et::EnvDistribution& d, uint32_t seed) {
             ASSERT_EQ(uv.y, y);
             ASSERT_EQ(density, pv * pu);
         }
+    // The sample_lights stage's batches (etk_env_sample_batch) give each sample's bits.
+    etk::EtkEnvMap env{};
+    env.tex_w = env.dist_w = w;
+    env.tex_h = env.dist_h = h;
+    env.scale = 1.0f;
+    env.rot_cos = std::cos(0.3f);
+    env.rot_sin = std::sin(0.3f);
+    env.has_light = 1;
+    std::vector<etk::float2> xi;
+    for (size_t i = 0; i < us.size(); ++i)
+        xi.push_back(etk::make_float2(us[(i * 7919) % us.size()], us[i]));
+    xi.resize((xi.size() + ETK_LIGHT_BATCH - 1) / ETK_LIGHT_BATCH * ETK_LIGHT_BATCH,
+              etk::make_float2(0.5f, 0.5f));
+    for (size_t b = 0; b < xi.size(); b += ETK_LIGHT_BATCH) {
+        etk::EtkEnvSample batch[ETK_LIGHT_BATCH];
+        etk::etk_env_sample_batch(t, env, &xi[b], batch);
+        for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+            const etk::EtkEnvSample one = etk::etk_env_sample(t, env, xi[b + k]);
+            SCOPED_TRACE("u " + std::to_string(xi[b + k].x) + " v " + std::to_string(xi[b + k].y));
+            ASSERT_EQ(batch[k].row, one.row);
+            ASSERT_EQ(batch[k].col, one.col);
+            ASSERT_EQ(batch[k].uv.x, one.uv.x);
+            ASSERT_EQ(batch[k].uv.y, one.uv.y);
+            ASSERT_EQ(batch[k].pdf, one.pdf);
+            ASSERT_EQ(batch[k].dir.x, one.dir.x);
+            ASSERT_EQ(batch[k].dir.y, one.dir.y);
+            ASSERT_EQ(batch[k].dir.z, one.dir.z);
+        }
+    }
 }
 
 et::RgbImage random_map(int w, int h, uint32_t seed) {

@@ -1,9 +1,11 @@
 // Probes of one scene's render beside `envtrace bench` (which keeps the OpenCL/native table):
 //  - environment sampling's share of a frame: the frame's light samples (one per shaded hit, as
-//    counted by the schedule) drawn on their own, natively (sample values; + etk_env_sample;
+//    counted by the schedule) drawn on their own, natively (sample values; + etk_env_sample, in
+//    the sample_lights stage's batches where the render draws them so;
 //    + the radiance lookup) and on the device (kernels/envmap_sample_bench.cl), each right
-//    after a render of the frame; and in situ: the shade stage of the same render with
-//    --strategy uniform (etk_sample_uniform_sphere instead of etk_env_sample);
+//    after a render of the frame; and in situ: the shade stage (with the sample_lights stage that
+//    draws its light samples ahead) of the same render against the shade stage with --strategy
+//    uniform (etk_sample_uniform_sphere instead of etk_env_sample);
 //  - cold and warm OpenCL program builds of kernels/wavefront.cl: `envtrace render --spp 2
 //    --stats` in a child process with empty (cold) then populated (warm) ENVTRACE_CACHE_DIR and
 //    POCL_CACHE_DIR.
@@ -65,17 +67,19 @@ Frame render(const et::DeviceScene& ds, int spp) {
     const et::RenderStats& s = r->stats();
     for (const auto& [name, sec] : s.stage_seconds) {
         f.stage_seconds += sec;
-        if (name == "shade_hits")
-            f.shade_seconds = sec;
+        if (name == "shade_hits" || name == "sample_lights") // the light samples, drawn ahead
+            f.shade_seconds += sec;
     }
     f.shade_share = f.stage_seconds > 0 ? f.shade_seconds / f.stage_seconds : 0.0;
     f.shaded = s.shaded_hits / spp;
     return f;
 }
 
-// n light samples drawn as the shade stage draws them (pixel stream k mod pixels, pair 1):
-// mode 0 the sample values only, 1 plus etk_env_sample, 2 plus the radiance lookup.
-double native_env_sampling(const et::DeviceScene& ds, long long n, int threads, int mode,
+// n light samples drawn as a frame draws them (pixel stream k mod pixels, pair 1): `batch` 1, one
+// etk_env_sample each, as the shade stage draws them; ETK_LIGHT_BATCH, by etk_env_sample_batch,
+// as the sample_lights stage does. Mode 0: the sample values only; 1: plus the samples; 2: plus
+// the radiance lookup.
+double native_env_sampling(const et::DeviceScene& ds, long long n, int threads, int mode, int batch,
                            double* sink) {
     const etk::EtkParams& p = ds.params;
     const long long pixels = static_cast<long long>(ds.width()) * ds.height();
@@ -83,21 +87,34 @@ double native_env_sampling(const et::DeviceScene& ds, long long n, int threads, 
     std::atomic<long long> next{0};
     auto work = [&](int t) {
         double acc = 0.0;
+        etk::float2 u[ETK_LIGHT_BATCH];
+        etk::EtkEnvSample s[ETK_LIGHT_BATCH];
         for (long long begin; (begin = next.fetch_add(4096)) < n;) {
-            for (long long k = begin; k < std::min(n, begin + 4096); ++k) {
-                const etk::float2 u =
-                    etk::etk_sample_pair(p.sampler, p.seed, static_cast<etk::uint>(k % pixels),
-                                         static_cast<etk::uint>(k / pixels), 1u);
+            const long long end = std::min(n, begin + 4096);
+            for (long long k0 = begin; k0 < end; k0 += batch) {
+                const int m = static_cast<int>(std::min<long long>(batch, end - k0));
+                for (int j = 0; j < batch; ++j) { // a partial batch repeats its last value
+                    const long long k = k0 + std::min(j, m - 1);
+                    u[j] =
+                        etk::etk_sample_pair(p.sampler, p.seed, static_cast<etk::uint>(k % pixels),
+                                             static_cast<etk::uint>(k / pixels), 1u);
+                }
                 if (mode == 0) {
-                    acc += u.x + u.y;
+                    for (int j = 0; j < m; ++j)
+                        acc += u[j].x + u[j].y;
                     continue;
                 }
-                const etk::EtkEnvSample s = etk::etk_env_sample(ds.env_dist.data(), p.env, u);
-                acc += s.pdf;
-                if (mode == 2) {
-                    const etk::float3 L =
-                        etk::etk_env_radiance_uv(ds.env_texels.data(), p.env, s.uv);
-                    acc += L.x + L.y + L.z;
+                if (batch > 1)
+                    etk::etk_env_sample_batch(ds.env_dist.data(), p.env, u, s);
+                else
+                    s[0] = etk::etk_env_sample(ds.env_dist.data(), p.env, u[0]);
+                for (int j = 0; j < m; ++j) {
+                    acc += s[j].pdf;
+                    if (mode == 2) {
+                        const etk::float3 L =
+                            etk::etk_env_radiance_uv(ds.env_texels.data(), p.env, s[j].uv);
+                        acc += L.x + L.y + L.z;
+                    }
                 }
             }
         }
@@ -219,26 +236,33 @@ int main(int argc, char** argv) try {
     const long long n = static_cast<long long>(first.shaded); // one light sample per shaded hit
     ClEnvSampling cl_env(ds, st.device, n);
     double sink = 0;
-    std::vector<double> share[4], insitu[2], shade[2];
+    std::vector<double> share[5], insitu[2], shade[2];
     for (int r = 0; r < runs; ++r) {
         for (et::Backend b : {et::Backend::cpu, et::Backend::opencl}) {
             const int k = b == et::Backend::cpu ? 0 : 1;
             ds.settings.backend = b;
             const Frame env = render(ds, spp);
             // The in-situ comparison: the same scene with uniform light directions.
-            const int strategy = ds.params.strategy;
+            const int strategy = ds.params.strategy, batch = ds.params.light_batch;
             ds.params.strategy = ETK_STRATEGY_UNIFORM;
+            ds.params.light_batch = 0; // the uniform direction is drawn in the shade stage
             const Frame uni = render(ds, spp);
             ds.params.strategy = strategy;
+            ds.params.light_batch = batch;
             shade[k].push_back(env.shade_share);
             insitu[k].push_back((env.shade_seconds - uni.shade_seconds) / env.stage_seconds);
             if (b == et::Backend::cpu) {
+                // As the frame draws them (batches where the strategy has the sample_lights
+                // stage), and one at a time beside it.
+                const int batch = ds.params.light_batch ? ETK_LIGHT_BATCH : 1;
                 double t[3];
                 for (int mode = 0; mode < 3; ++mode)
-                    t[mode] = native_env_sampling(ds, n, threads, mode, &sink);
+                    t[mode] = native_env_sampling(ds, n, threads, mode, batch, &sink);
                 share[0].push_back((t[1] - t[0]) / env.seconds_per_spp);
                 share[1].push_back(t[1] / env.seconds_per_spp);
                 share[2].push_back(t[2] / env.seconds_per_spp);
+                const double single = native_env_sampling(ds, n, threads, 1, 1, &sink);
+                share[4].push_back((single - t[0]) / env.seconds_per_spp);
             } else {
                 share[3].push_back(cl_env.time() / env.seconds_per_spp);
             }
@@ -246,9 +270,12 @@ int main(int argc, char** argv) try {
     }
     std::printf("%s, depth %d: %lld light samples per frame; medians of %d\n", scene_path.c_str(),
                 depth, n, runs);
-    std::printf("  isolated native (%d threads): etk_env_sample %.2f%% of the frame (%.2f%% with "
-                "the sample values, %.2f%% with the lookup); OpenCL %.2f%%\n",
-                threads, 100 * median(share[0]), 100 * median(share[1]), 100 * median(share[2]),
+    std::printf("  isolated native (%d threads): map samples %.2f%% of the frame (%s; %.2f%% with "
+                "the sample values, %.2f%% with the lookup; one etk_env_sample at a time "
+                "%.2f%%); OpenCL %.2f%%\n",
+                threads, 100 * median(share[0]),
+                ds.params.light_batch ? "in the sample_lights stage's batches" : "one at a time",
+                100 * median(share[1]), 100 * median(share[2]), 100 * median(share[4]),
                 100 * median(share[3]));
     std::printf("  in situ (shade stage shorter with uniform directions): native %.1f%%, OpenCL "
                 "%.1f%%; whole shade stage native %.1f%%, OpenCL %.1f%%\n",
@@ -276,6 +303,7 @@ int main(int argc, char** argv) try {
                              {"samples_exact", depth == 1},
                              {"native_threads", threads},
                              {"share_native_sample_only", stats_of(share[0])},
+                             {"share_native_one_at_a_time", stats_of(share[4])},
                              {"share_native_with_values", stats_of(share[1])},
                              {"share_native_with_lookup", stats_of(share[2])},
                              {"share_opencl", stats_of(share[3])},

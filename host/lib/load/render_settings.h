@@ -89,6 +89,9 @@ struct RenderSettings {
     int sis_samples = 64; // SIS strata (Strategy::sis)
     std::string lights;   // directional light set file (Strategy::lights)
     bool aovs = false;    // keep the first hits' AOVs (render/film_aovs.h), written to the EXR
+    // Draw the light samples of the strategies that allow it in the sample_lights stage, in
+    // batches (kernels/integrator.h); off, the shade stage draws each: the same image.
+    bool batch_light_samples = true;
 };
 
 } // namespace et
