@@ -61,6 +61,13 @@ ETK_FORCE_INLINE_FN float etk_bsdf_sample_weight(EtkParams p, float lc, float pb
 
 #define ETK_PAIR_SHARE 0x40000000u
 
+// The first sample pair of a vertex at `depth` (its light sample; + 1 its BSDF direction, + 2 the
+// lobe and Russian roulette: the layout above), for the shade stage and for sample_lights, which
+// draws that light sample ahead of it.
+ETK_FN uint etk_vertex_pair(int depth) {
+    return 1u + 3u * (uint)depth;
+}
+
 // The distribution light samples are drawn from, and weighted by in MIS. The compensated one
 // (Karlik et al. 2019) is used only where a BSDF sample can reach the same direction: the MIS
 // strategies at non-delta vertices (the adaptive strategy keeps a BSDF share, below). Delta
@@ -268,7 +275,7 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
     EtkEnvSample ls[ETK_LIGHT_BATCH];
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
         int slot = Q.shade[min(first + k, n - 1)];
-        xi[k] = etk_dims(p, P.pixel[slot], 1u + 3u * (uint)P.ray_o[slot].w); // the shade's pair
+        xi[k] = etk_dims(p, P.pixel[slot], etk_vertex_pair((int)P.ray_o[slot].w));
     }
     etk_env_sample_batch(etk_light_dist(S, p), p.env, xi, ls);
     for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) {
@@ -303,7 +310,7 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
     float3 t = s.t, b = s.b, ns = s.ns, ng = s.ng, wo = s.wo;
     EtkMaterial m = s.m;
     float3 beta = etk_xyz(P.beta[slot]);
-    uint pair = 1u + 3u * (uint)depth;
+    uint pair = etk_vertex_pair(depth);
     int last = etk_last_bounce(p, depth);
     int adaptive = p.strategy == ETK_STRATEGY_ADAPTIVE;
     int delta = etk_bsdf_is_delta(m);

@@ -88,14 +88,8 @@ ETK_FN int etk_find_interval_between(ETK_GLOBAL const float* cdf, int lo, int hi
     return lo;
 }
 
-// etk_find_interval's result, from the CDF's guide table (guide[k] = etk_find_interval(cdf, n,
-// k/K) for k < K, guide[K] = n-1), for u in [0, 1]. K is a power of two, so the cell k =
-// floor(u K) is exact: k/K <= u < (k+1)/K, hence guide[k] <= answer <= guide[k+1] (the CDF is
-// monotone), and a binary search over that short range (about two intervals) finishes it. The
-// same index as the plain search, so the same sample (tests/kernels/cdf_guide_test.cpp); the
-// win is memory traffic: one guide line and one CDF line rather than log2(n) scattered reads.
-// The two halves of etk_find_interval_guided: the range [*lo, *hi] the answer for u lies in,
-// from the guide (one load; etk_env_sample_batch issues a batch's before any CDF read)...
+// The two halves of etk_find_interval_guided (below): the range [*lo, *hi] the answer for u lies
+// in, from the guide (one load; etk_env_sample_batch issues a batch's before any CDF read)...
 ETK_FN void etk_guide_range(ETK_GLOBAL const float* guide, int n, float u, int* lo, int* hi) {
     int K = etk_guide_cells(n);
     int k = clamp((int)(u * (float)K), 0, K - 1);

@@ -90,14 +90,23 @@ void expect_equal_up_to_rounding(const Case& c, const et::Scene& s, const ett::R
     EXPECT_EQ(over, 0) << "values differing by 1e-4 relative or more";
 }
 
-class Backends : public ::testing::TestWithParam<Case> {};
+// Every test's scene: the case's map (and the bunny) in a scene file, loaded; the test is skipped
+// when the shared data lacks them.
+class Backends : public ::testing::TestWithParam<Case> {
+  protected:
+    void SetUp() override {
+        const Case c = GetParam();
+        ETT_DATA_FILE(map, std::string("envmaps/") + c.map);
+        if (c.bunny && ett::data_file("meshes/bunny_5k.obj").empty())
+            GTEST_SKIP() << "meshes/bunny_5k.obj not found";
+        scene_ = et::load_scene(write_scene(c.name, map, c.bunny));
+    }
+    et::Scene scene_;
+};
 
 TEST_P(Backends, DepthOneEqualUpToRounding) {
     const Case c = GetParam();
-    ETT_DATA_FILE(map, std::string("envmaps/") + c.map);
-    if (c.bunny && ett::data_file("meshes/bunny_5k.obj").empty())
-        GTEST_SKIP() << "meshes/bunny_5k.obj not found";
-    et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
+    et::Scene s = scene_;
     s.settings.max_depth = 1;
     s.settings.sampler = et::SamplerKind::sobol;
     s.settings.seed = 11;
@@ -126,10 +135,7 @@ TEST_P(Backends, DepthOneEqualUpToRounding) {
 
 TEST_P(Backends, DepthFiveAgreeStatistically) {
     const Case c = GetParam();
-    ETT_DATA_FILE(map, std::string("envmaps/") + c.map);
-    if (c.bunny && ett::data_file("meshes/bunny_5k.obj").empty())
-        GTEST_SKIP() << "meshes/bunny_5k.obj not found";
-    et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
+    et::Scene s = scene_;
     s.settings.max_depth = 5;
     s.settings.sampler = et::SamplerKind::random;
     // The paper's MIS, and the visibility strategy, whose diffuse vertices also guide their
@@ -156,11 +162,7 @@ TEST_P(Backends, DepthFiveAgreeStatistically) {
 // Directional light sets (the shade_lights stage) and SIS (one stratum per sample through the
 // shadow queue) are stages of the same schedule: both back ends give bit-identical films.
 TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
-    const Case c = GetParam();
-    ETT_DATA_FILE(map, std::string("envmaps/") + c.map);
-    if (c.bunny && ett::data_file("meshes/bunny_5k.obj").empty())
-        GTEST_SKIP() << "meshes/bunny_5k.obj not found";
-    const et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
+    const et::Scene& s = scene_;
     const et::LightSet set = et::make_lights_ours(s.env, 24, 1, false);
     et::SisOptions so;
     so.samples = 8;
@@ -201,11 +203,7 @@ TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
 // each itself. The same values: bit-identical films on each back end, at depth 3 (shade queues of
 // many lengths, their last batch partly past the queue's end, vertices of three depths).
 TEST_P(Backends, BatchedLightSamplesGiveTheSameBits) {
-    const Case c = GetParam();
-    ETT_DATA_FILE(map, std::string("envmaps/") + c.map);
-    if (c.bunny && ett::data_file("meshes/bunny_5k.obj").empty())
-        GTEST_SKIP() << "meshes/bunny_5k.obj not found";
-    const et::Scene s = et::load_scene(write_scene(c.name, map, c.bunny));
+    const et::Scene& s = scene_;
     for (et::Strategy strategy :
          {et::Strategy::mis, et::Strategy::compensated, et::Strategy::light})
         for (et::Backend b : {et::Backend::opencl, et::Backend::cpu}) {

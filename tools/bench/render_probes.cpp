@@ -245,7 +245,8 @@ int main(int argc, char** argv) try {
             // The in-situ comparison: the same scene with uniform light directions.
             const int strategy = ds.params.strategy, batch = ds.params.light_batch;
             ds.params.strategy = ETK_STRATEGY_UNIFORM;
-            ds.params.light_batch = 0; // the uniform direction is drawn in the shade stage
+            // (the device scene's rule for the stage: the uniform direction has none)
+            ds.params.light_batch = etk::etk_batches_light_samples(ds.params.strategy);
             const Frame uni = render(ds, spp);
             ds.params.strategy = strategy;
             ds.params.light_batch = batch;

@@ -10,6 +10,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -121,11 +122,20 @@ void add_sphere(TriangleSoup& soup, glm::vec3 c, float radius, int segments, int
         }
 }
 
+// The coordinate range the kernels' float arithmetic holds, for messages: "[-1e+12, 1e+12]".
+std::string scene_range_text() {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "[-%g, %g]", double(kMaxSceneCoordinate),
+                  double(kMaxSceneCoordinate));
+    return buf;
+}
+
 // A point the kernels' float arithmetic holds (kMaxSceneCoordinate): a camera eye, a shape's
 // centre.
 void require_in_range(const glm::vec3& v, const JsonReader& r) {
     if (glm::any(glm::greaterThan(glm::abs(v), glm::vec3(kMaxSceneCoordinate))))
-        r.fail("components must be within [-1e12, 1e12] (float ray tests; scale the scene down)");
+        r.fail("components must be within " + scene_range_text() +
+               " (float ray tests; scale the scene down)");
 }
 
 Material read_material(const std::string& name, const json& j, const JsonReader& r,
@@ -358,8 +368,8 @@ Scene load_scene(const std::string& path) {
                 int qm = mat < 0 ? default_material() : mat;
                 if (!add_triangle(scene.triangles, a, nullptr, qm, ta) ||
                     !add_triangle(scene.triangles, b, nullptr, qm, tb))
-                    rs.fail("the quad is degenerate, or not finite or beyond [-1e12, 1e12] after "
-                            "its transform");
+                    rs.fail("the quad is degenerate, or not finite or beyond " +
+                            scene_range_text() + " after its transform");
             } else {
                 rs.at("type").fail("unknown shape type " + json_excerpt(s["type"]) +
                                    " (use mesh, sphere or quad)");
