@@ -106,24 +106,30 @@ ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, 
 // sample is a chain of dependent loads -- the row's guide entry and CDF line, then the column's --
 // which miss the cache at random rows of a large map; a core overlaps the chains of independent
 // samples only as far as its reorder window reaches, about one sample of shade-stage code.
-// Interleaving the steps of B samples (all rows, then all columns, then the directions) puts B
-// chains in flight at once. The same functions in the same order per sample as etk_env_sample,
-// so the same bits. B = 32: window_room (mis, 320 x 240, native), the shade stage and this one
-// together 18% below the shade stage alone, against 10% / 16% / 18% / 16% for B = 8 / 16 / 32 /
-// 64 (tools/bench/README.md). One constant for the host (which launches one work-item per batch)
-// and the device.
+// Interleaving the steps of B samples (all rows, then all guide ranges, then the first CDF entries
+// of every range -- plain loads, no branch between them -- then all columns, then the directions)
+// puts B chains in flight at once: the column search's branch mispredicts now and then, and each
+// misprediction would otherwise restart the loads behind it. The same functions in the same order
+// per sample as etk_env_sample, so the same bits. B = 32: window_room (mis, 320 x 240, native), the
+// shade stage and this one together 18% below the shade stage alone, against 10% / 16% / 18% / 16%
+// for B = 8 / 16 / 32 / 64 (tools/bench/README.md). One constant for the host (which launches one
+// work-item per batch) and the device.
 #define ETK_LIGHT_BATCH 32
 ETK_FN void etk_env_sample_batch(ETK_GLOBAL const float* dist, EtkEnvMap env, const float2* xi,
                                  EtkEnvSample* out) {
     int w = env.dist_w, h = env.dist_h;
     int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH], lo[ETK_LIGHT_BATCH], hi[ETK_LIGHT_BATCH];
     float u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pu[ETK_LIGHT_BATCH], pv[ETK_LIGHT_BATCH];
+    float3 head[ETK_LIGHT_BATCH];
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         row[k] = etk_sample_2d_row(dist, w, h, xi[k].y, &v[k], &pv[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         etk_guide_range(etk_dist2d_row_guide(dist, w, h, row[k]), w, xi[k].x, &lo[k], &hi[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        col[k] = etk_sample_2d_col_in(dist, w, h, row[k], lo[k], hi[k], xi[k].x, &u[k], &pu[k]);
+        head[k] = etk_interval_head(etk_dist2d_row_cdf(dist, w, h, row[k]), w, lo[k]);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+        col[k] =
+            etk_sample_2d_col_in(dist, w, h, row[k], lo[k], hi[k], head[k], xi[k].x, &u[k], &pu[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         out[k] = etk_env_sample_at(env, make_float2(u[k], v[k]), pv[k] * pu[k], row[k], col[k]);
 }

@@ -96,17 +96,24 @@ ETK_FN void etk_guide_range(ETK_GLOBAL const float* guide, int n, float u, int* 
     *lo = (int)guide[k];
     *hi = (int)guide[k + 1];
 }
-// ...and the answer within it.
-ETK_FN int etk_find_interval_in(ETK_GLOBAL const float* cdf, int n, int lo, int hi, float u) {
-    // Most cells hold at most two interval ends: the next three CDF entries are read at once (one
-    // cache line, most often) and counted, and the binary search runs only when the answer lies
-    // beyond them (at most ~5% of the samples on the shipped maps). A sample's cost is the latency
-    // of its chain of dependent loads: a search whose trip count varies with the data mispredicts
-    // a branch on most samples, and a scan one entry at a time chains the loads.
-    float c1 = cdf[lo + 1], c2 = cdf[min(lo + 2, n)], c3 = cdf[min(lo + 3, n)];
-    if ((lo + 3 <= hi) & (c3 <= u))
+// ...and the answer within it: first the three CDF entries after lo (one cache line, most often;
+// etk_env_sample_batch reads a batch's before it searches any)...
+ETK_FN float3 etk_interval_head(ETK_GLOBAL const float* cdf, int n, int lo) {
+    return make_float3(cdf[lo + 1], cdf[min(lo + 2, n)], cdf[min(lo + 3, n)]);
+}
+// ...then the answer from them. Most cells hold at most two interval ends: the three entries are
+// counted, and the binary search runs only when the answer lies beyond them (at most ~5% of the
+// samples on the shipped maps). A sample's cost is the latency of its chain of dependent loads: a
+// search whose trip count varies with the data mispredicts a branch on most samples, and a scan
+// one entry at a time chains the loads.
+ETK_FN int etk_find_interval_after(ETK_GLOBAL const float* cdf, int lo, int hi, float3 head,
+                                   float u) {
+    if ((lo + 3 <= hi) & (head.z <= u))
         return etk_find_interval_between(cdf, lo + 3, hi, u);
-    return lo + (int)((lo + 1 <= hi) & (c1 <= u)) + (int)((lo + 2 <= hi) & (c2 <= u));
+    return lo + (int)((lo + 1 <= hi) & (head.x <= u)) + (int)((lo + 2 <= hi) & (head.y <= u));
+}
+ETK_FN int etk_find_interval_in(ETK_GLOBAL const float* cdf, int n, int lo, int hi, float u) {
+    return etk_find_interval_after(cdf, lo, hi, etk_interval_head(cdf, n, lo), u);
 }
 // etk_find_interval's result, from the CDF's guide table (guide[k] = etk_find_interval(cdf, n,
 // k/K) for k < K, guide[K] = n-1), for u in [0, 1]. K is a power of two, so the cell k =
@@ -203,12 +210,12 @@ ETK_FN int etk_sample_2d_row(ETK_GLOBAL const float* dist, int w, int h, float y
     *v = etk_sample_1d_in(mcdf, h, r, y, pv, &row);
     return r;
 }
-// The column for xi.x from row r's conditional, whose guide range etk_guide_range gave: its
-// index; *u the coordinate, *pu its density.
+// The column for xi.x from row r's conditional, whose guide range etk_guide_range gave and whose
+// first entries in it etk_interval_head read: its index; *u the coordinate, *pu its density.
 ETK_FN int etk_sample_2d_col_in(ETK_GLOBAL const float* dist, int w, int h, int r, int lo, int hi,
-                                float x, float* u, float* pu) {
+                                float3 head, float x, float* u, float* pu) {
     ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(dist, w, h, r);
-    int c = etk_find_interval_in(ccdf, w, lo, hi, x);
+    int c = etk_find_interval_after(ccdf, lo, hi, head, x);
     int col;
     *u = etk_sample_1d_in(ccdf, w, c, x, pu, &col);
     return c;
@@ -222,7 +229,8 @@ ETK_FN float2 etk_sample_2d(ETK_GLOBAL const float* dist, int w, int h, float2 x
     int lo, hi;
     *row = etk_sample_2d_row(dist, w, h, xi.y, &v, &pv);
     etk_guide_range(etk_dist2d_row_guide(dist, w, h, *row), w, xi.x, &lo, &hi);
-    *col = etk_sample_2d_col_in(dist, w, h, *row, lo, hi, xi.x, &u, &pu);
+    float3 head = etk_interval_head(etk_dist2d_row_cdf(dist, w, h, *row), w, lo);
+    *col = etk_sample_2d_col_in(dist, w, h, *row, lo, hi, head, xi.x, &u, &pu);
     *density = pv * pu;
     return make_float2(u, v);
 }

@@ -1,12 +1,13 @@
 // Cost of one environment-map sample, in pieces, on one core (issue 12): the two CDF searches
 // with the plain binary search (etk_find_interval) and with the guide tables
 // (etk_find_interval_guided), the whole 2D inversion both ways, and etk_env_sample (2D sample +
-// direction + solid-angle pdf). The sample values are those the shade stage draws for a 512x512
-// frame's first bounce (pixel streams in turn, sampler pair 1, scrambled Sobol'), computed once
-// beforehand so that only the sampling is timed. Plain and guided run in one process, on the
-// same values and the same table, interleaved with --benchmark_enable_random_interleaving.
-// Also: the distribution build (with its guides) and the guides' share of the table, per map size
-// (procedural sky from 256x128 to 16384x8192, and royal_esplanade_1k), for "How cost grows".
+// direction + solid-angle pdf), one at a time and in the sample_lights stage's batches. The sample
+// values are those the shade stage draws for a 512x512 frame's first bounce (pixel streams in turn,
+// sampler pair 1, scrambled Sobol'), computed once beforehand so that only the sampling is timed.
+// Plain and guided run in one process, on the same values and the same table, interleaved with
+// --benchmark_enable_random_interleaving. Also: the distribution build (with its guides) and the
+// guides' share of the table, per map size (procedural sky from 256x128 to 16384x8192, and
+// royal_esplanade_1k), for "How cost grows".
 #include "bench_maps.h"
 #include "load/env_distribution.h"
 #include "kernels/envmap.h"
@@ -126,6 +127,23 @@ void BM_EnvSample(benchmark::State& st, std::string map, bool guided) {
     st.SetItemsProcessed(st.iterations() * kSamples);
 }
 
+// etk_env_sample_batch, as the sample_lights stage draws the samples: ETK_LIGHT_BATCH at a time.
+void BM_EnvSampleBatch(benchmark::State& st, std::string map) {
+    const Fixture& f = fixture(map);
+    const float* t = f.dist.table.data();
+    etk::EtkEnvSample out[ETK_LIGHT_BATCH];
+    for (auto _ : st) {
+        float acc = 0;
+        for (size_t k = 0; k + ETK_LIGHT_BATCH <= f.u.size(); k += ETK_LIGHT_BATCH) {
+            etk::etk_env_sample_batch(t, f.env, &f.u[k], out);
+            for (const etk::EtkEnvSample& s : out)
+                acc += s.dir.x + s.pdf;
+        }
+        benchmark::DoNotOptimize(acc);
+    }
+    st.SetItemsProcessed(st.iterations() * kSamples);
+}
+
 // The distribution build (one thread) with its guides; counters: the table and the guides' bytes.
 void BM_Build(benchmark::State& st, std::string map) {
     const et::RgbImage& img =
@@ -160,6 +178,8 @@ int register_all() {
             benchmark::RegisterBenchmark(("env_sample/" + m + "/" + how).c_str(), BM_EnvSample, m,
                                          g);
         }
+        benchmark::RegisterBenchmark(("env_sample/" + m + "/batched").c_str(), BM_EnvSampleBatch,
+                                     m);
         benchmark::RegisterBenchmark(("build/" + m).c_str(), BM_Build, m)
             ->Unit(benchmark::kMillisecond);
     }
