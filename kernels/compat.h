@@ -43,6 +43,9 @@ typedef float4 etk_lanes;
 #define ETK_ATOMIC_INC(p) atomic_inc(p)
 #define ETK_ATOMIC_ADD(p, v) atomic_add((p), (v))
 #define ETK_ATOMIC_PTR volatile __global uint*
+// A hint to start loading the cache line at p (OpenCL 1.2's prefetch; an implementation may
+// ignore it): retires at once, where a load would hold its place until the line arrives.
+#define ETK_PREFETCH(p) prefetch((p), 1)
 // Vector geometry spelled out as the host spells it: the built-ins may sum in another order or
 // normalise through rsqrt, and the back ends are meant to round identically.
 static inline float etk_dot3(float3 a, float3 b) {
@@ -87,6 +90,7 @@ static inline float3 etk_normalize3(float3 a) {
 #define ETK_ATOMIC_INC(p) __atomic_fetch_add((p), 1u, __ATOMIC_RELAXED)
 #define ETK_ATOMIC_ADD(p, v) __atomic_fetch_add((p), (v), __ATOMIC_RELAXED)
 #define ETK_ATOMIC_PTR uint*
+#define ETK_PREFETCH(p) __builtin_prefetch(p)
 
 namespace etk {
 using std::acos;

@@ -107,7 +107,8 @@ ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, 
 // which miss the cache at random rows of a large map; a core overlaps the chains of independent
 // samples only as far as its reorder window reaches, about one sample of shade-stage code.
 // Interleaving the steps of B samples (all rows, then all guide ranges, then the first CDF entries
-// of every range -- plain loads, no branch between them -- then all columns, then the directions)
+// of every range -- prefetched, then plain loads, no branch between them -- then all columns, then
+// the directions)
 // puts B chains in flight at once: the column search's branch mispredicts now and then, and each
 // misprediction would otherwise restart the loads behind it. The same functions in the same order
 // per sample as etk_env_sample, so the same bits. B = 32: window_room (mis, 320 x 240, native), the
@@ -125,6 +126,8 @@ ETK_FN void etk_env_sample_batch(ETK_GLOBAL const float* dist, EtkEnvMap env, co
         row[k] = etk_sample_2d_row(dist, w, h, xi[k].y, &v[k], &pv[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         etk_guide_range(etk_dist2d_row_guide(dist, w, h, row[k]), w, xi[k].x, &lo[k], &hi[k]);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) // all of them requested before any is waited for
+        ETK_PREFETCH(etk_dist2d_row_cdf(dist, w, h, row[k]) + lo[k] + 1);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         head[k] = etk_interval_head(etk_dist2d_row_cdf(dist, w, h, row[k]), w, lo[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
