@@ -120,19 +120,47 @@ ETK_FN void etk_env_sample_batch(ETK_GLOBAL const float* dist, EtkEnvMap env, co
                                  EtkEnvSample* out) {
     int w = env.dist_w, h = env.dist_h;
     int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH], lo[ETK_LIGHT_BATCH], hi[ETK_LIGHT_BATCH];
+    int far[ETK_LIGHT_BATCH];
     float u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pu[ETK_LIGHT_BATCH], pv[ETK_LIGHT_BATCH];
     float3 head[ETK_LIGHT_BATCH];
+    ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
+    ETK_GLOBAL const float* mguide = dist + etk_dist2d_marginal_guide(w, h);
+    // Rows: the marginal's guide ranges, their first entries, the answers.
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        row[k] = etk_sample_2d_row(dist, w, h, xi[k].y, &v[k], &pv[k]);
+        etk_guide_range(mguide, h, xi[k].y, &lo[k], &hi[k]);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+        head[k] = etk_interval_head(mcdf, h, lo[k]);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        far[k] = etk_interval_beyond_head(lo[k], hi[k], head[k], xi[k].y);
+        row[k] = etk_interval_in_head(lo[k], hi[k], head[k], xi[k].y);
+    }
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+        if (far[k])
+            row[k] = etk_find_interval_between(mcdf, lo[k] + 3, hi[k], xi[k].y);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        int cell;
+        v[k] = etk_sample_1d_in(mcdf, h, row[k], xi[k].y, &pv[k], &cell);
+    }
+    // Columns: the same steps in each row's conditional.
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         etk_guide_range(etk_dist2d_row_guide(dist, w, h, row[k]), w, xi[k].x, &lo[k], &hi[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) // all of them requested before any is waited for
         ETK_PREFETCH(etk_dist2d_row_cdf(dist, w, h, row[k]) + lo[k] + 1);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         head[k] = etk_interval_head(etk_dist2d_row_cdf(dist, w, h, row[k]), w, lo[k]);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        far[k] = etk_interval_beyond_head(lo[k], hi[k], head[k], xi[k].x);
+        col[k] = etk_interval_in_head(lo[k], hi[k], head[k], xi[k].x);
+    }
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        col[k] =
-            etk_sample_2d_col_in(dist, w, h, row[k], lo[k], hi[k], head[k], xi[k].x, &u[k], &pu[k]);
+        if (far[k])
+            col[k] = etk_find_interval_between(etk_dist2d_row_cdf(dist, w, h, row[k]), lo[k] + 3,
+                                               hi[k], xi[k].x);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        int cell;
+        u[k] = etk_sample_1d_in(etk_dist2d_row_cdf(dist, w, h, row[k]), w, col[k], xi[k].x, &pu[k],
+                                &cell);
+    }
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         out[k] = etk_env_sample_at(env, make_float2(u[k], v[k]), pv[k] * pu[k], row[k], col[k]);
 }

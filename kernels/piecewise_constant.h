@@ -106,11 +106,18 @@ ETK_FN float3 etk_interval_head(ETK_GLOBAL const float* cdf, int n, int lo) {
 // samples on the shipped maps). A sample's cost is the latency of its chain of dependent loads: a
 // search whose trip count varies with the data mispredicts a branch on most samples, and a scan
 // one entry at a time chains the loads.
+// (Its two halves: whether the answer lies beyond the three entries, and the answer when not.)
+ETK_FN int etk_interval_beyond_head(int lo, int hi, float3 head, float u) {
+    return (lo + 3 <= hi) & (head.z <= u);
+}
+ETK_FN int etk_interval_in_head(int lo, int hi, float3 head, float u) {
+    return lo + (int)((lo + 1 <= hi) & (head.x <= u)) + (int)((lo + 2 <= hi) & (head.y <= u));
+}
 ETK_FN int etk_find_interval_after(ETK_GLOBAL const float* cdf, int lo, int hi, float3 head,
                                    float u) {
-    if ((lo + 3 <= hi) & (head.z <= u))
+    if (etk_interval_beyond_head(lo, hi, head, u))
         return etk_find_interval_between(cdf, lo + 3, hi, u);
-    return lo + (int)((lo + 1 <= hi) & (head.x <= u)) + (int)((lo + 2 <= hi) & (head.y <= u));
+    return etk_interval_in_head(lo, hi, head, u);
 }
 ETK_FN int etk_find_interval_in(ETK_GLOBAL const float* cdf, int n, int lo, int hi, float u) {
     return etk_find_interval_after(cdf, lo, hi, etk_interval_head(cdf, n, lo), u);
