@@ -34,20 +34,37 @@ ETK_FN float3 etk_texel(ETK_GLOBAL const float* texels, int w, int row, int col)
 }
 
 // Bilinear lookup at (u, v) with texel centres at half-integers: wraps in u, clamps at the poles.
-ETK_FN float3 etk_env_lookup_uv(ETK_GLOBAL const float* texels, int w, int h, float2 uv) {
+// The bilinear lookup's four texels: rows r0, r1 and columns c0, c1 (wrapping in longitude) of a
+// w x h map, weights tx, ty of the second ones.
+typedef struct {
+    int r0, r1, c0, c1;
+    float tx, ty;
+} EtkTexelQuad;
+ETK_FN EtkTexelQuad etk_env_quad(int w, int h, float2 uv) {
+    EtkTexelQuad q;
     float x = uv.x * (float)w - 0.5f;
     float y = uv.y * (float)h - 0.5f;
     float fx = floor(x), fy = floor(y);
-    float tx = x - fx, ty = y - fy;
+    q.tx = x - fx;
+    q.ty = y - fy;
     int c0 = (int)fx % w;
     if (c0 < 0)
         c0 += w;
-    int c1 = c0 + 1 == w ? 0 : c0 + 1;
-    int r0 = clamp((int)fy, 0, h - 1);
-    int r1 = clamp((int)fy + 1, 0, h - 1);
-    float3 top = etk_texel(texels, w, r0, c0) * (1.0f - tx) + etk_texel(texels, w, r0, c1) * tx;
-    float3 bot = etk_texel(texels, w, r1, c0) * (1.0f - tx) + etk_texel(texels, w, r1, c1) * tx;
-    return top * (1.0f - ty) + bot * ty;
+    q.c0 = c0;
+    q.c1 = c0 + 1 == w ? 0 : c0 + 1;
+    q.r0 = clamp((int)fy, 0, h - 1);
+    q.r1 = clamp((int)fy + 1, 0, h - 1);
+    return q;
+}
+ETK_FN float3 etk_env_blend(ETK_GLOBAL const float* texels, int w, EtkTexelQuad q) {
+    float3 top =
+        etk_texel(texels, w, q.r0, q.c0) * (1.0f - q.tx) + etk_texel(texels, w, q.r0, q.c1) * q.tx;
+    float3 bot =
+        etk_texel(texels, w, q.r1, q.c0) * (1.0f - q.tx) + etk_texel(texels, w, q.r1, q.c1) * q.tx;
+    return top * (1.0f - q.ty) + bot * q.ty;
+}
+ETK_FN float3 etk_env_lookup_uv(ETK_GLOBAL const float* texels, int w, int h, float2 uv) {
+    return etk_env_blend(texels, w, etk_env_quad(w, h, uv));
 }
 
 // Radiance arriving from world direction d.
@@ -163,6 +180,20 @@ ETK_FN void etk_env_sample_batch(ETK_GLOBAL const float* dist, EtkEnvMap env, co
     }
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         out[k] = etk_env_sample_at(env, make_float2(u[k], v[k]), pv[k] * pu[k], row[k], col[k]);
+}
+
+// The radiance of a batch's samples (etk_env_radiance_uv's bits), their texels' lines requested
+// for the whole batch before any is read: the shade stage would otherwise miss on each.
+ETK_FN void etk_env_radiance_batch(ETK_GLOBAL const float* texels, EtkEnvMap env,
+                                   const EtkEnvSample* s, float3* L) {
+    EtkTexelQuad q[ETK_LIGHT_BATCH];
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        q[k] = etk_env_quad(env.tex_w, env.tex_h, s[k].uv);
+        ETK_PREFETCH(texels + 3 * (q[k].r0 * env.tex_w + q[k].c0));
+        ETK_PREFETCH(texels + 3 * (q[k].r1 * env.tex_w + q[k].c0));
+    }
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+        L[k] = etk_env_blend(texels, env.tex_w, q[k]) * env.scale;
 }
 
 ETK_END

@@ -277,22 +277,25 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
         int slot = Q.shade[min(first + k, n - 1)];
         xi[k] = etk_dims(p, P.pixel[slot], etk_vertex_pair((int)P.ray_o[slot].w));
     }
+    float3 L[ETK_LIGHT_BATCH];
     etk_env_sample_batch(etk_light_dist(S, p), p.env, xi, ls);
+    etk_env_radiance_batch(S.env_texels, p.env, ls, L);
     for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) {
         int slot = Q.shade[first + k];
         P.light_dir[slot] = etk_f4(ls[k].dir, ls[k].pdf);
-        P.light_uv[slot] = ls[k].uv;
+        P.light_L[slot] = etk_f4(L[k], 0.0f);
     }
 }
 
-// The light sample sample_lights drew for the path in `slot` (direction, density, map
-// coordinates: all the shade stage reads of it).
+// The light sample sample_lights drew for the path in `slot`: direction and density (its radiance,
+// drawn too, is light_L; its map coordinates are not kept, nothing of these strategies reads them
+// in the shade stage).
 ETK_FN EtkEnvSample etk_drawn_light_sample(EtkPaths P, int slot) {
     float4 d = P.light_dir[slot];
     EtkEnvSample s;
     s.dir = etk_xyz(d);
     s.pdf = d.w;
-    s.uv = P.light_uv[slot];
+    s.uv = make_float2(0.0f, 0.0f); // not needed: its radiance is drawn too (light_L)
     s.row = 0;
     s.col = 0;
     return s;
@@ -412,7 +415,8 @@ ETK_FN void etk_shade(ETK_STAGE_PARAMS) {
                                     etk_cguide_mix_pdf(S, p, cell, cg, etk_bsdf_pdf(m, wo, wi),
                                                        etk_surface_origin(s, wi_world), wi_world))
                               : 1.0f; // sample 0 of the vertex's light samples
-                float3 L = etk_env_radiance_uv(S.env_texels, p.env, light_uv);
+                float3 L = p.light_batch ? etk_xyz(P.light_L[slot])
+                                         : etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
                 // Visibility learning: what this direction would bring, unweighted, and where.
                 learn_val = etk_luma(L) * fabs(wi.z) / pdf_light;

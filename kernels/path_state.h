@@ -54,7 +54,7 @@
     X(float2, guide_parts)     /* the same per path slot, written by the shade stage */            \
     X(float4, light_dir)       /* the light sample of the path's vertex, drawn by sample_lights:   \
                                   direction; w: its density (integrator.h) */                      \
-    X(float2, light_uv)        /* its map coordinates */
+    X(float4, light_L)         /* its radiance (rgb) */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces; the others keep one buffer each for the whole render (the back ends
