@@ -33,7 +33,6 @@ ETK_FN float3 etk_texel(ETK_GLOBAL const float* texels, int w, int row, int col)
     return make_float3(t[0], t[1], t[2]);
 }
 
-// Bilinear lookup at (u, v) with texel centres at half-integers: wraps in u, clamps at the poles.
 // The bilinear lookup's four texels: rows r0, r1 and columns c0, c1 (wrapping in longitude) of a
 // w x h map, weights tx, ty of the second ones.
 typedef struct {
@@ -63,6 +62,7 @@ ETK_FN float3 etk_env_blend(ETK_GLOBAL const float* texels, int w, EtkTexelQuad 
         etk_texel(texels, w, q.r1, q.c0) * (1.0f - q.tx) + etk_texel(texels, w, q.r1, q.c1) * q.tx;
     return top * (1.0f - q.ty) + bot * q.ty;
 }
+// Bilinear lookup at (u, v) with texel centres at half-integers: wraps in u, clamps at the poles.
 ETK_FN float3 etk_env_lookup_uv(ETK_GLOBAL const float* texels, int w, int h, float2 uv) {
     return etk_env_blend(texels, w, etk_env_quad(w, h, uv));
 }
@@ -123,15 +123,15 @@ ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, 
 // sample is a chain of dependent loads -- the row's guide entry and CDF line, then the column's --
 // which miss the cache at random rows of a large map; a core overlaps the chains of independent
 // samples only as far as its reorder window reaches, about one sample of shade-stage code.
-// Interleaving the steps of B samples (all rows, then all guide ranges, then the first CDF entries
-// of every range -- prefetched, then plain loads, no branch between them -- then all columns, then
-// the directions)
-// puts B chains in flight at once: the column search's branch mispredicts now and then, and each
-// misprediction would otherwise restart the loads behind it. The same functions in the same order
-// per sample as etk_env_sample, so the same bits. B = 32: window_room (mis, 320 x 240, native), the
-// shade stage and this one together 18% below the shade stage alone, against 10% / 16% / 18% / 16%
-// for B = 8 / 16 / 32 / 64 (tools/bench/README.md). One constant for the host (which launches one
-// work-item per batch) and the device.
+// Interleaving the steps of B samples (for the rows, then the columns: all guide ranges, then the
+// first CDF entries of every range -- the columns' prefetched, then plain loads, no branch between
+// them -- then all answers; then the directions) puts B chains in flight at once: the column
+// search's branch mispredicts now and then, and each misprediction would otherwise restart the
+// loads behind it. The same functions in the same order per sample as etk_env_sample, so the same
+// bits. B = 32: window_room (mis, 320 x 240, native), the shade stage and this one together 18%
+// below the shade stage alone, against 10% / 16% / 18% / 16% for B = 8 / 16 / 32 / 64
+// (tools/bench/README.md). One constant for the host (which launches one work-item per batch) and
+// the device.
 #define ETK_LIGHT_BATCH 32
 ETK_FN void etk_env_sample_batch(ETK_GLOBAL const float* dist, EtkEnvMap env, const float2* xi,
                                  EtkEnvSample* out) {

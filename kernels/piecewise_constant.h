@@ -207,37 +207,19 @@ ETK_FN ETK_GLOBAL const float* etk_dist2d_row_guide(ETK_GLOBAL const float* dist
     return dist + etk_dist2d_conditional_guide(w, h) + r * (etk_guide_cells(w) + 1);
 }
 
-// The two halves of etk_sample_2d (etk_env_sample_batch interleaves them over several samples).
-// The row for xi.y from the marginal: its index; *v the coordinate, *pv its density.
-ETK_FN int etk_sample_2d_row(ETK_GLOBAL const float* dist, int w, int h, float y, float* v,
-                             float* pv) {
-    ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
-    int r = etk_find_interval_guided(mcdf, h, dist + etk_dist2d_marginal_guide(w, h), y);
-    int row;
-    *v = etk_sample_1d_in(mcdf, h, r, y, pv, &row);
-    return r;
-}
-// The column for xi.x from row r's conditional, whose guide range etk_guide_range gave and whose
-// first entries in it etk_interval_head read: its index; *u the coordinate, *pu its density.
-ETK_FN int etk_sample_2d_col_in(ETK_GLOBAL const float* dist, int w, int h, int r, int lo, int hi,
-                                float3 head, float x, float* u, float* pu) {
-    ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(dist, w, h, r);
-    int c = etk_find_interval_after(ccdf, lo, hi, head, x);
-    int col;
-    *u = etk_sample_1d_in(ccdf, w, c, x, pu, &col);
-    return c;
-}
-
 // Samples (u, v) on the unit square: row from the marginal, column from that row's conditional,
 // both by inversion of the CDF (the guide tables only find the interval faster).
+// etk_env_sample_batch (envmap.h) runs the same steps across a batch of samples.
 ETK_FN float2 etk_sample_2d(ETK_GLOBAL const float* dist, int w, int h, float2 xi, float* density,
                             int* row, int* col) {
-    float u, v, pu, pv;
-    int lo, hi;
-    *row = etk_sample_2d_row(dist, w, h, xi.y, &v, &pv);
-    etk_guide_range(etk_dist2d_row_guide(dist, w, h, *row), w, xi.x, &lo, &hi);
-    float3 head = etk_interval_head(etk_dist2d_row_cdf(dist, w, h, *row), w, lo);
-    *col = etk_sample_2d_col_in(dist, w, h, *row, lo, hi, head, xi.x, &u, &pu);
+    ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
+    *row = etk_find_interval_guided(mcdf, h, dist + etk_dist2d_marginal_guide(w, h), xi.y);
+    ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(dist, w, h, *row);
+    *col = etk_find_interval_guided(ccdf, w, etk_dist2d_row_guide(dist, w, h, *row), xi.x);
+    float pu, pv;
+    int cell;
+    float v = etk_sample_1d_in(mcdf, h, *row, xi.y, &pv, &cell);
+    float u = etk_sample_1d_in(ccdf, w, *col, xi.x, &pu, &cell);
     *density = pv * pu;
     return make_float2(u, v);
 }
