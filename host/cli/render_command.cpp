@@ -50,6 +50,7 @@ namespace {
 struct RenderArgs {
     std::string scene, output, stats_file, strategy, heuristic, sampler, backend = "opencl";
     std::string bsdf_sampling;
+    std::string light_batch; // --light-batch: auto, on, off
     std::string light_share; // --light-share: "auto" or a number
     std::string lights;      // --lights: render with this directional light set
     int sis_samples = 64;
@@ -111,6 +112,8 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.sampler = parse_sampler(a.sampler, cli);
     if (!a.bsdf_sampling.empty())
         st.bsdf_sampling = parse_bsdf_sampling(a.bsdf_sampling, cli);
+    if (!a.light_batch.empty())
+        st.light_batch = parse_light_batch(a.light_batch, cli);
     if (!a.light_share.empty())
         st.light_share = parse_light_share(a.light_share, cli + ": --light-share");
     if (a.light_samples > 0)
@@ -178,6 +181,7 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                     {"level_samples", sis.level_samples}};
     j["sampler"] = name_of(st.sampler);
     j["bsdf_sampling"] = name_of(resolved_bsdf_sampling(st));
+    j["light_batch"] = renderer.batches_light_samples();
     j["light_samples"] = st.light_samples; // per vertex (mis splitting; 1: the paper's)
     j["bsdf_samples"] = st.bsdf_samples;
     if (st.strategy == Strategy::adaptive) {
@@ -652,6 +656,10 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "GGX lobes: vndf (visible normals) | ndf (the paper's) | auto (vndf for "
                     "compensated and adaptive, ndf otherwise)")
         ->check(CLI::IsMember(bsdf_sampling_names()));
+    cmd->add_option("--light-batch", a->light_batch,
+                    "Draw light samples 32 to a work-item in their own stage: auto (on natively "
+                    "and on OpenCL CPU devices, off on GPUs) | on | off; the same image")
+        ->check(CLI::IsMember(light_batch_names()));
     cmd->add_option("--light-share", a->light_share,
                     "Adaptive strategy: expected light samples of the two at a vertex, 0 .. "
                     "1.875, or auto (learned per material from the first passes)");

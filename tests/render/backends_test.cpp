@@ -204,38 +204,49 @@ TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
 // many lengths, their last batch partly past the queue's end, vertices of three depths).
 TEST_P(Backends, BatchedLightSamplesGiveTheSameBits) {
     const et::Scene& s = scene_;
+    const et::LightBatch modes[] = {et::LightBatch::off, et::LightBatch::on,
+                                    et::LightBatch::automatic};
     for (et::Strategy strategy :
          {et::Strategy::mis, et::Strategy::compensated, et::Strategy::light})
         for (et::Backend b : {et::Backend::opencl, et::Backend::cpu}) {
             SCOPED_TRACE(std::string(et::name_of(strategy)) +
                          (b == et::Backend::cpu ? ", native" : ", OpenCL"));
-            std::vector<float> films[2];
-            for (int batch = 0; batch < 2; ++batch) {
+            std::vector<float> films[3];
+            for (int m = 0; m < 3; ++m) {
+                SCOPED_TRACE(std::string("--light-batch ") + et::name_of(modes[m]));
                 et::RenderSettings st = s.settings;
                 st.strategy = strategy;
                 st.max_depth = 3;
                 st.seed = 5;
                 st.backend = b;
                 st.threads = 2;
-                st.batch_light_samples = batch == 1;
+                st.light_batch = modes[m];
                 const et::DeviceScene ds = et::prepare_device_scene(s, st);
                 auto r = et::make_renderer(ds);
                 for (uint32_t k = 0; k < 6; ++k)
                     r->render_sample(k);
-                films[batch] = r->sums().mean();
+                films[m] = r->sums().mean();
                 double stage = 0.0; // the stage ran only when asked to
                 for (const auto& [name, sec] : r->stats().stage_seconds)
                     stage += name == "sample_lights" ? sec : 0.0;
-                EXPECT_EQ(stage > 0.0, batch == 1) << "sample_lights time " << stage;
+                EXPECT_EQ(stage > 0.0, r->batches_light_samples())
+                    << "sample_lights time " << stage;
+                if (modes[m] != et::LightBatch::automatic) {
+                    EXPECT_EQ(r->batches_light_samples(), modes[m] == et::LightBatch::on);
+                } else if (b == et::Backend::cpu) { // auto batches on a CPU
+                    EXPECT_TRUE(r->batches_light_samples());
+                }
             }
             double sum = 0.0;
             for (float v : films[0])
                 sum += v;
             EXPECT_GT(sum, 0.0);
-            ASSERT_EQ(films[0].size(), films[1].size());
-            EXPECT_EQ(
-                0, std::memcmp(films[0].data(), films[1].data(), films[0].size() * sizeof(float)))
-                << "batched light samples changed the image";
+            for (int m = 1; m < 3; ++m) {
+                ASSERT_EQ(films[0].size(), films[m].size());
+                EXPECT_EQ(0, std::memcmp(films[0].data(), films[m].data(),
+                                         films[0].size() * sizeof(float)))
+                    << "--light-batch " << et::name_of(modes[m]) << " changed the image";
+            }
         }
 }
 

@@ -7,8 +7,9 @@
 #   tools/gpu/check_opencl_device.sh ENVTRACE TEST_BIN_DIR|- OUT_DIR [PLATFORM]
 #
 # PLATFORM (default NVIDIA) is matched against the OpenCL platform names (ENVTRACE_CL_PLATFORM).
-# Environment: SCENES, SPP (64), BENCH_SCENES (empty: none) choose the work; RENDERS=0 stops after
-# the tests; PYTHON names a python3 with numpy.
+# Environment: SCENES, SPP (64), BATCH_SCENES and BATCH_SPP (256: --light-batch on against off),
+# BENCH_SCENES choose the work (each set but empty: none); TEST_JOBS (6) test binaries run at
+# once, each for at most TEST_TIMEOUT seconds (600); PYTHON names a python3 with numpy.
 # ENVTRACE_DATA must name the data folder (maps and meshes). Writes OUT_DIR/summary.txt (and a
 # log per step); every image is compared in numpy by tools/gpu/compare_backends.py.
 set -u
@@ -48,7 +49,7 @@ if [ "$tests" != "-" ]; then
         n=$(basename "$t")
         (cd "$out/tests" && ENVTRACE_CL_PLATFORM=$platform timeout "${TEST_TIMEOUT:-600}" "$t" \
             >"$out/tests/$n.log" 2>&1; echo "$n exit $?" >"$out/tests/$n.rc") &
-        while [ "$(jobs -r | wc -l)" -ge 6 ]; do sleep 0.2; done
+        while [ "$(jobs -r | wc -l)" -ge "${TEST_JOBS:-6}" ]; do sleep 0.2; done
     done
     wait
     for t in "$out"/tests/*.rc; do
@@ -68,9 +69,8 @@ render() { # name scene depth backend platform seed
 stat() { # json key
     "$py" -c "import json,sys; print(round(json.load(open(sys.argv[1]))[sys.argv[2]], 4))" "$1" "$2" 2>/dev/null
 }
-[ "${RENDERS:-1}" = 0 ] && exit 0
 say "== renders: $platform / PoCL ($has_pocl) / native, ${SPP:-64} spp"
-for s in ${SCENES:-default cornell_box bunny_grace bunny_esplanade bunny_overpass ogre matpreview glass mesh_formats interiors/window_room interiors/skylight_room}; do
+for s in ${SCENES-default cornell_box bunny_grace bunny_esplanade bunny_overpass ogre matpreview glass mesh_formats interiors/window_room interiors/skylight_room}; do
     for d in 1 5; do
         n=$(echo "$s" | tr / _)_d$d
         render "$n.gpu" "$root/scenes/$s.json" $d opencl "$platform" 1
@@ -83,6 +83,31 @@ for s in ${SCENES:-default cornell_box bunny_grace bunny_esplanade bunny_overpas
         say "   gpu vs cpu:  $("$py" "$here/compare_backends.py" $d "$out/img/$n.cpu.pfm" "$out/img/$n.gpu.pfm" "$out/img/$n.cpu.pfm" "$out/img/$n.cpu2.pfm" 2>&1)"
         [ $has_pocl = 1 ] && say "   gpu vs pocl: $("$py" "$here/compare_backends.py" $d "$out/img/$n.pocl.pfm" "$out/img/$n.gpu.pfm" "$out/img/$n.cpu.pfm" "$out/img/$n.cpu2.pfm" 2>&1)"
         [ $has_pocl = 1 ] && say "   pocl vs cpu: $("$py" "$here/compare_backends.py" $d "$out/img/$n.cpu.pfm" "$out/img/$n.pocl.pfm" "$out/img/$n.cpu.pfm" "$out/img/$n.cpu2.pfm" 2>&1)"
+    done
+done
+
+# Light samples in batches (--light-batch on) against one at a time (off) on this device:
+# render seconds and the shade + sample_lights stages' device seconds, alternating; the films
+# must be equal bit for bit. auto picks off on a GPU (RenderSettings::light_batch).
+batch_stat() { # json: render seconds, stage seconds of shade_hits + sample_lights
+    "$py" -c "import json,sys; d=json.load(open(sys.argv[1])); s=d['stage_seconds']; print('%.3f/%.3f' % (d['render_seconds'], s.get('shade_hits',0)+s.get('sample_lights',0)))" "$1" 2>/dev/null
+}
+[ -n "${BATCH_SCENES-bunny_esplanade bunny_grace}" ] && say "== --light-batch on / off on $platform: render s / shade+sample_lights device s, ${BATCH_SPP:-256} spp"
+for s in ${BATCH_SCENES-bunny_esplanade bunny_grace}; do
+    for d in 1 5; do
+        line="$s depth $d:"
+        ENVTRACE_CL_PLATFORM=$platform "$exe" render "$root/scenes/$s.json" --spp 1 --max-depth $d \
+            --backend opencl -o "$out/batch_warm.pfm" >/dev/null 2>&1 # the program built and cached
+        for r in 1 2 3; do
+            for m in on off; do
+                ENVTRACE_CL_PLATFORM=$platform "$exe" render "$root/scenes/$s.json" --spp "${BATCH_SPP:-256}" \
+                    --max-depth $d --backend opencl --light-batch $m -o "$out/batch_$m.pfm" \
+                    --stats "$out/batch_$m.json" >/dev/null 2>&1 || line="$line FAILED($m)"
+                line="$line $m $(batch_stat "$out/batch_$m.json")"
+            done
+            cmp -s "$out/batch_on.pfm" "$out/batch_off.pfm" && line="$line (same bits);" || line="$line (FILMS DIFFER);"
+        done
+        say "$line"
     done
 done
 

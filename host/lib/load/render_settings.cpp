@@ -24,6 +24,8 @@ constexpr Named<SamplerKind> kSamplers[] = {{SamplerKind::sobol, "sobol"},
                                             {SamplerKind::random, "random"}};
 constexpr Named<BsdfSampling> kBsdfSamplings[] = {
     {BsdfSampling::automatic, "auto"}, {BsdfSampling::ndf, "ndf"}, {BsdfSampling::vndf, "vndf"}};
+constexpr Named<LightBatch> kLightBatches[] = {
+    {LightBatch::automatic, "auto"}, {LightBatch::on, "on"}, {LightBatch::off, "off"}};
 constexpr Named<Backend> kBackends[] = {{Backend::opencl, "opencl"}, {Backend::cpu, "cpu"}};
 
 template <typename E, size_t N> const char* name_in(const Named<E> (&table)[N], E v) {
@@ -79,6 +81,15 @@ BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what) 
 }
 std::vector<std::string> bsdf_sampling_names() {
     return names_in(kBsdfSamplings);
+}
+const char* name_of(LightBatch v) {
+    return name_in(kLightBatches, v);
+}
+LightBatch parse_light_batch(const std::string& s, const std::string& what) {
+    return parse_in(kLightBatches, s, what, "light batch setting");
+}
+std::vector<std::string> light_batch_names() {
+    return names_in(kLightBatches);
 }
 BsdfSampling resolved_bsdf_sampling(const RenderSettings& st) {
     if (st.bsdf_sampling != BsdfSampling::automatic)

@@ -29,12 +29,19 @@ enum class BsdfSampling : int { automatic = -1, ndf = 0, vndf = 1 };
 enum class MisHeuristic : int { balance = ETK_HEURISTIC_BALANCE, power = ETK_HEURISTIC_POWER };
 enum class SamplerKind : int { random = ETK_SAMPLER_RANDOM, sobol = ETK_SAMPLER_SOBOL };
 enum class Backend : int { opencl, cpu };
+// Whether the sample_lights stage draws the light samples in batches (kernels/integrator.h):
+// automatic batches on the native back end and on OpenCL CPU devices, where one work-item's
+// 32 samples keep misses in flight together, and not on GPUs, where other work-items hide the
+// latency and a work-item drawing 32 samples in series starves the device. The same image
+// either way.
+enum class LightBatch : int { automatic, on, off };
 
 const char* name_of(Strategy v);
 const char* name_of(MisHeuristic v);
 const char* name_of(SamplerKind v);
 const char* name_of(Backend v);
 const char* name_of(BsdfSampling v);
+const char* name_of(LightBatch v);
 
 // Throws et::Error "`what`: unknown strategy 'x' (use light, bsdf, ...)".
 Strategy parse_strategy(const std::string& s, const std::string& what);
@@ -42,6 +49,7 @@ MisHeuristic parse_heuristic(const std::string& s, const std::string& what);
 SamplerKind parse_sampler(const std::string& s, const std::string& what);
 Backend parse_backend(const std::string& s, const std::string& what);
 BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what);
+LightBatch parse_light_batch(const std::string& s, const std::string& what);
 // "auto" (-1: learned) or a number in [0, kMaxLightShare].
 float parse_light_share(const std::string& s, const std::string& what);
 
@@ -54,6 +62,7 @@ std::vector<std::string> heuristic_names();
 std::vector<std::string> sampler_names();
 std::vector<std::string> backend_names();
 std::vector<std::string> bsdf_sampling_names();
+std::vector<std::string> light_batch_names();
 
 constexpr float kMaxLightShare = 1.875f; // below 2: a BSDF share is always left
 
@@ -91,7 +100,7 @@ struct RenderSettings {
     bool aovs = false;    // keep the first hits' AOVs (render/film_aovs.h), written to the EXR
     // Draw the light samples of the strategies that allow it in the sample_lights stage, in
     // batches (kernels/integrator.h); off, the shade stage draws each: the same image.
-    bool batch_light_samples = true;
+    LightBatch light_batch = LightBatch::automatic;
 };
 
 } // namespace et

@@ -78,6 +78,7 @@ DeviceLimits query_device_limits(const cl::Device& device) {
     l.max_work_item_x = items.empty() ? l.max_work_group : items[0];
     l.little_endian = device.getInfo<CL_DEVICE_ENDIAN_LITTLE>() != CL_FALSE;
     l.host_unified = device.getInfo<CL_DEVICE_HOST_UNIFIED_MEMORY>() != CL_FALSE;
+    l.cpu = (device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
     l.correctly_rounded_div_sqrt =
         (device.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
     if (uint64_t v = env_bytes("ENVTRACE_CL_MAX_ALLOC"))

@@ -18,6 +18,7 @@ struct DeviceLimits {
     size_t max_work_item_x = 0; // CL_DEVICE_MAX_WORK_ITEM_SIZES[0]
     bool little_endian = true;  // CL_DEVICE_ENDIAN_LITTLE
     bool host_unified = false;  // CL_DEVICE_HOST_UNIFIED_MEMORY: reads host memory in place
+    bool cpu = false;           // CL_DEVICE_TYPE_CPU (LightBatch::automatic batches there)
     // CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT in CL_DEVICE_SINGLE_FP_CONFIG: programs are then built
     // with -cl-fp32-correctly-rounded-divide-sqrt, so that x / y and sqrt round as on the host
     // (OpenCL otherwise allows 2.5 and 3 ulp, and NVIDIA's driver uses that latitude).

@@ -235,7 +235,10 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     check_split(st);
     p.light_samples = st.light_samples;
     p.bsdf_samples = st.bsdf_samples;
-    p.light_batch = st.batch_light_samples && etk::etk_batches_light_samples(p.strategy) ? 1 : 0;
+    // Whether batches may be used; the renderer turns them off on devices that prefer single
+    // samples (LightBatch::automatic).
+    p.light_batch =
+        st.light_batch != LightBatch::off && etk::etk_batches_light_samples(p.strategy) ? 1 : 0;
     const float share = st.light_share >= 0.0f ? std::min(st.light_share, kMaxLightShare) : 1.0f;
     std::fill(p.light_share, p.light_share + ETK_SHARE_BINS, share);
     std::fill(p.bin_flags, p.bin_flags + ETK_SHARE_BINS, ETK_BIN_COMPENSATED | ETK_BIN_VNDF);

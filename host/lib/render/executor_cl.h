@@ -45,6 +45,7 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     void clear_film(bool aovs) override;
     void download_film(Film& film, bool aovs) override;
     std::vector<std::pair<std::string, double>> stage_seconds() override;
+    bool prefers_light_batches() const override { return rt_->limits().cpu; }
 
     void bind_queues(bool swapped) override;
     void reset_counters() override;

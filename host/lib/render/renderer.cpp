@@ -16,6 +16,8 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
     std::copy(scene.params.light_share, scene.params.light_share + ETK_SHARE_BINS, shares_.begin());
     std::copy(scene.params.bin_flags, scene.params.bin_flags + ETK_SHARE_BINS, flags_.begin());
     choices_.fill(-1);
+    light_batch_ = scene.params.light_batch != 0 && (scene.settings.light_batch == LightBatch::on ||
+                                                     device_->prefers_light_batches());
     learning_ = scene.settings.strategy == Strategy::adaptive && scene.settings.light_share < 0.0f;
     options_.last_bounce = scene.settings.max_depth <= 1;
     guide_ = scene.settings.strategy == Strategy::visibility;
@@ -56,6 +58,7 @@ void Renderer::render_sample(uint32_t sample_index) {
 void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     etk::EtkParams p = scene_.params;
     p.sample_index = sample_index;
+    p.light_batch = light_batch_ ? 1 : 0;
     std::copy(shares_.begin(), shares_.end(), p.light_share);
     std::copy(flags_.begin(), flags_.end(), p.bin_flags);
     // Samples 0 .. L-1 are learning samples whether or not they are learnt from: the image

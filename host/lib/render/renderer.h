@@ -61,6 +61,8 @@ class Renderer {
     const std::array<int, ETK_SHARE_BINS>& choices() const { return choices_; }
     // The sums of every sample rendered (and resumed from) so far.
     const FilmSums& sums() const { return sums_; }
+    // Whether the sample_lights stage draws the light samples (RenderSettings::light_batch).
+    bool batches_light_samples() const { return light_batch_; }
     // Continues from sums of the same size (an earlier, interrupted render, or another rank's).
     void resume(const FilmSums& sums);
     // Mean radiance per pixel (RGB, row-major, row 0 at the top).
@@ -79,6 +81,7 @@ class Renderer {
     RenderStats stats_;
     std::array<float, ETK_SHARE_BINS> shares_;
     std::array<int, ETK_SHARE_BINS> flags_, choices_;
+    bool light_batch_ = false;
     bool learning_ = false;      // adaptive strategy, configuration learned (not fixed)
     int next_learning_pass_ = 0; // the learning pass that comes next (L: learned)
     LightShareOptions options_;

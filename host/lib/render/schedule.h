@@ -69,6 +69,8 @@ class WavefrontDevice {
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
     // The visibility strategy's per-cell tables (EtkScene.guide_cells) for the passes to come.
     virtual void upload_guide(const std::vector<float>& cells);
+    // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
+    virtual bool prefers_light_batches() const { return true; }
 };
 
 // One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
