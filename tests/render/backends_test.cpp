@@ -12,8 +12,11 @@
 // royal_esplanade_1k and pedestrian_overpass_1k, written as scene files and loaded by
 // load_scene.
 #include "prepare/light_set.h"
+#include "render/executor_cpu.h"
+#include "render/renderer.h"
 #include "prepare/sis.h"
 #include "render_util.h"
+#include "test_data.h"
 
 #include <gtest/gtest.h>
 
@@ -248,6 +251,46 @@ TEST_P(Backends, BatchedLightSamplesGiveTheSameBits) {
                     << "--light-batch " << et::name_of(modes[m]) << " changed the image";
             }
         }
+}
+
+// --light-batch auto follows the device: a native device that, like a GPU, prefers one sample
+// per work-item renders without the stage under auto and with it under on; the same bits.
+class SingleSampleDevice : public et::CpuDevice {
+  public:
+    using et::CpuDevice::CpuDevice;
+    bool prefers_light_batches() const override { return false; }
+};
+
+TEST(LightBatch, AutoFollowsTheDevice) {
+    et::RgbImage sky = ett::constant_image(32, 16, 0.2f);
+    for (size_t i = 0; i < sky.rgb.size(); i += 7) // light of uneven strength: a real search
+        sky.rgb[i] = 5.0f;
+    et::Scene s = ett::base_scene(16, 12, et::make_envmap("sky", sky, {}));
+    s.camera.eye = {0, 1, 3};
+    s.materials.push_back(ett::diffuse(0.5f));
+    const glm::vec3 p[3] = {{-2, 0, -2}, {2, 0, -2}, {0, 0, 2}};
+    const glm::vec3 n[3] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+    et::add_triangle(s.triangles, p, n, 0);
+    std::vector<float> films[3];
+    const et::LightBatch modes[] = {et::LightBatch::automatic, et::LightBatch::on,
+                                    et::LightBatch::off};
+    for (int m = 0; m < 3; ++m) {
+        et::RenderSettings st = s.settings;
+        st.max_depth = 2;
+        st.light_batch = modes[m];
+        const et::DeviceScene ds = et::prepare_device_scene(s, st);
+        et::Renderer r(ds, [&](et::Film& film) -> std::unique_ptr<et::WavefrontDevice> {
+            return std::make_unique<SingleSampleDevice>(ds, film, 2);
+        });
+        for (uint32_t k = 0; k < 4; ++k)
+            r.render_sample(k);
+        EXPECT_EQ(r.batches_light_samples(), modes[m] == et::LightBatch::on)
+            << et::name_of(modes[m]);
+        films[m] = r.sums().mean();
+    }
+    for (int m = 1; m < 3; ++m)
+        EXPECT_EQ(0,
+                  std::memcmp(films[0].data(), films[m].data(), films[0].size() * sizeof(float)));
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Backends,
