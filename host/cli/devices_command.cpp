@@ -33,6 +33,9 @@ void add_devices_command(CLI::App& app, Globals&) {
                               ? "x / y and sqrt correctly rounded, as on the host (built so)"
                               : "x / y and sqrt within OpenCL's ulp bounds only: images agree "
                                 "with the native back end's statistically, not bit for bit")
+                      << "\n    light samples: "
+                      << (l.cpu ? "in batches of 32 (a CPU; --light-batch auto)"
+                                : "one per shade work-item (not a CPU; --light-batch auto)")
                       << "\n";
             std::cout << "    kernel          max group  preferred multiple  private bytes  "
                          "launched with\n";
