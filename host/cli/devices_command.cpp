@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <string>
 
 namespace et::cli {
 
@@ -34,8 +35,11 @@ void add_devices_command(CLI::App& app, Globals&) {
                               : "x / y and sqrt within OpenCL's ulp bounds only: images agree "
                                 "with the native back end's statistically, not bit for bit")
                       << "\n    light samples: "
-                      << (l.cpu ? "in batches of 32 (a CPU; --light-batch auto)"
-                                : "one per shade work-item (not a CPU; --light-batch auto)")
+                      << (prefers_light_batches_on(l)
+                              ? "in batches of " + std::to_string(ETK_LIGHT_BATCH) +
+                                    " per work-item (a CPU; --light-batch auto)"
+                              : std::string("one per shade work-item (not a CPU; --light-batch "
+                                            "auto)"))
                       << "\n";
             std::cout << "    kernel          max group  preferred multiple  private bytes  "
                          "launched with\n";

@@ -657,8 +657,9 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "compensated and adaptive, ndf otherwise)")
         ->check(CLI::IsMember(bsdf_sampling_names()));
     cmd->add_option("--light-batch", a->light_batch,
-                    "Draw light samples 32 to a work-item in their own stage: auto (on natively "
-                    "and on OpenCL CPU devices, off on GPUs) | on | off; the same image")
+                    "Draw light samples " + std::to_string(ETK_LIGHT_BATCH) +
+                        " to a work-item in their own stage: auto (on natively and on OpenCL CPU "
+                        "devices, off on GPUs) | on | off; the same image")
         ->check(CLI::IsMember(light_batch_names()));
     cmd->add_option("--light-share", a->light_share,
                     "Adaptive strategy: expected light samples of the two at a vertex, 0 .. "

@@ -30,9 +30,8 @@ enum class MisHeuristic : int { balance = ETK_HEURISTIC_BALANCE, power = ETK_HEU
 enum class SamplerKind : int { random = ETK_SAMPLER_RANDOM, sobol = ETK_SAMPLER_SOBOL };
 enum class Backend : int { opencl, cpu };
 // Whether the sample_lights stage draws the light samples in batches (kernels/integrator.h):
-// automatic batches on the native back end and on OpenCL CPU devices, where one work-item's
-// 32 samples keep misses in flight together, and not on GPUs, where other work-items hide the
-// latency and a work-item drawing 32 samples in series starves the device. The same image
+// automatic as the device prefers (WavefrontDevice::prefers_light_batches: natively yes, on
+// OpenCL prefers_light_batches_on, render/executor_cl.h: CPUs yes, GPUs no). The same image
 // either way.
 enum class LightBatch : int { automatic, on, off };
 

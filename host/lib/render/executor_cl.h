@@ -30,6 +30,13 @@ struct StageKernelInfo {
 };
 std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt);
 
+// Whether --light-batch auto batches the light samples on a device: on CPUs, where one
+// work-item's batch keeps its cache misses in flight together; not on GPUs, where other
+// work-items hide the latency (measured: tools/bench/README.md).
+inline bool prefers_light_batches_on(const DeviceLimits& limits) {
+    return limits.cpu;
+}
+
 class ClDevice : public WavefrontDevice, public StageExecutor {
   public:
     // paths: paths in flight (0: the film, capped by the device's memory).
@@ -45,7 +52,7 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     void clear_film(bool aovs) override;
     void download_film(Film& film, bool aovs) override;
     std::vector<std::pair<std::string, double>> stage_seconds() override;
-    bool prefers_light_batches() const override { return rt_->limits().cpu; }
+    bool prefers_light_batches() const override { return prefers_light_batches_on(rt_->limits()); }
 
     void bind_queues(bool swapped) override;
     void reset_counters() override;
