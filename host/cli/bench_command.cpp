@@ -299,7 +299,7 @@ void add_bench_command(CLI::App& app, Globals& g) {
         ->check(CLI::Range(0, 1024));
     cmd->add_option("--target-seconds", a->target_seconds,
                     "Seconds per run when choosing the default --spp (default 2)")
-        ->check(CLI::Range(0.01, 3600.0));
+        ->check(finite_range(0.01, 3600.0));
     cmd->add_option("--json", a->json_file, "Write everything as JSON");
     cmd->callback([a, &g] { run(*a, g); });
 }

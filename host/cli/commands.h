@@ -2,6 +2,8 @@
 #pragma once
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+
 #include <string>
 #include <utility>
 
@@ -14,6 +16,20 @@ struct Globals {
     Cluster* cluster = nullptr; // the MPI ranks of this run, or a cluster of one (cluster.h)
     int exit_code = 0; // main's status when a command ends without an error (e.g. 130: SIGINT)
 };
+
+// CLI::Range for a real number that also refuses NaN (CLI::Range's comparisons let it through).
+inline CLI::Validator finite_range(double lo, double hi) {
+    CLI::Validator range = CLI::Range(lo, hi);
+    return CLI::Validator(
+        [range](std::string& text) {
+            double v = 0;
+            if (CLI::detail::lexical_cast(text, v) && std::isnan(v))
+                return std::string("Value " + text + " is not a finite number");
+            std::string copy = text;
+            return range(copy);
+        },
+        range.get_description());
+}
 
 // The image and its twin of an output name: out.exr -> (out.exr, out.png); out.png -> (out.exr,
 // out.png); .hdr and .pfm like .exr. Throws et::Error for another extension.

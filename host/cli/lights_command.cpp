@@ -4,8 +4,11 @@
 #include "kernels/latlong.h"
 #include "prepare/light_set.h"
 #include "image/preview.h"
+#include "util/output_batch.h"
 
 #include <cstdio>
+#include <string>
+#include <vector>
 
 namespace et::cli {
 namespace {
@@ -18,6 +21,10 @@ struct LightsArgs {
 };
 
 void run(const LightsArgs& a) {
+    // The plot's name is checked before any work, and the outputs land together or not at all:
+    // a bad --plot leaves no light set behind.
+    if (!a.plot.empty())
+        check_writable_format(a.plot);
     DistributionOptions opt;
     opt.blur_sigma = a.blur;
     EnvMap env = load_envmap(a.map, opt);
@@ -29,7 +36,16 @@ void run(const LightsArgs& a) {
         o.levels = a.sis_levels;
         set = make_lights_sis(env, a.count, o);
     }
-    write_lights(a.output, set);
+    OutputBatch outputs(a.plot.empty() ? std::vector<std::string>{a.output}
+                                       : std::vector<std::string>{a.output, a.plot});
+    write_lights(outputs, a.output, set);
+    if (!a.plot.empty()) {
+        std::vector<std::array<float, 3>> dirs;
+        for (const auto& l : set.lights)
+            dirs.push_back({float(l.direction.x), float(l.direction.y), float(l.direction.z)});
+        write_direction_plot(outputs, a.plot, env, dirs);
+    }
+    outputs.commit();
     glm::dvec3 sum(0.0);
     for (const auto& l : set.lights)
         sum += l.power;
@@ -41,13 +57,8 @@ void run(const LightsArgs& a) {
     std::printf("precompute %.4f s + selection %.4f s = %.4f s\n", set.precompute_seconds,
                 set.selection_seconds, set.total_seconds());
     std::printf("wrote %s\n", a.output.c_str());
-    if (!a.plot.empty()) {
-        std::vector<std::array<float, 3>> dirs;
-        for (const auto& l : set.lights)
-            dirs.push_back({float(l.direction.x), float(l.direction.y), float(l.direction.z)});
-        write_direction_plot(a.plot, env, dirs);
+    if (!a.plot.empty())
         std::printf("wrote %s\n", a.plot.c_str());
-    }
 }
 
 } // namespace
@@ -68,7 +79,7 @@ void add_lights_command(CLI::App& app, Globals&) {
         ->check(CLI::IsMember({"share", "voronoi"}));
     cmd->add_option("--seed", a->seed, "Scrambling seed of the (0,2)-sequence (ours)");
     cmd->add_option("--blur", a->blur, "Gaussian blur sigma of the sampling luminance, texels")
-        ->check(CLI::Range(0.0f, 64.0f));
+        ->check(finite_range(0.0, 64.0));
     cmd->add_option("--sis-levels", a->sis_levels, "SIS brightness levels")
         ->check(CLI::Range(1, 64));
     cmd->add_option("--plot", a->plot, "Also draw the light directions on the map (.png)");

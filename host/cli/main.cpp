@@ -4,9 +4,13 @@
 #include "util/error.h"
 #include "opencl/opencl_runtime.h"
 
+#include <csignal>
 #include <iostream>
 
 int main(int argc, char** argv) {
+    // A reader that goes away (`envtrace render ... | head -1`) must not kill a render before
+    // its image is written: stdout's writes then fail quietly instead of raising SIGPIPE.
+    std::signal(SIGPIPE, SIG_IGN);
     // Under mpirun: MPI starts here and ends when main returns (the ranks of `render`).
     et::cli::Cluster cluster(&argc, &argv);
     CLI::App app{"envtrace " ENVTRACE_VERSION

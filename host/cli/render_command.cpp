@@ -54,7 +54,11 @@ struct RenderArgs {
     std::string light_share; // --light-share: "auto" or a number
     std::string lights;      // --lights: render with this directional light set
     int sis_samples = 64;
-    int light_samples = 0, bsdf_samples = 0; // --light-samples, --bsdf-samples (0: the scene's)
+    int light_samples = 0, bsdf_samples = 0; // --light-samples, --bsdf-samples
+    // Which options the command line gave (set by the callback from CLI11's counts): for
+    // options whose every value means something, and those that only apply to some renders.
+    bool light_samples_given = false, bsdf_samples_given = false, sis_samples_given = false;
+    bool output_given = false, stats_given = false, device_given = false, paths_given = false;
     int spp = 0, max_depth = 0, paths = -1, threads = 0;
     long long seed = -1;
     double time_limit = -1.0;
@@ -116,9 +120,9 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.light_batch = parse_light_batch(a.light_batch, cli);
     if (!a.light_share.empty())
         st.light_share = parse_light_share(a.light_share, cli + ": --light-share");
-    if (a.light_samples > 0)
+    if (a.light_samples_given)
         st.light_samples = check_split_count(a.light_samples, cli + ": --light-samples");
-    if (a.bsdf_samples > 0)
+    if (a.bsdf_samples_given)
         st.bsdf_samples = check_split_count(a.bsdf_samples, cli + ": --bsdf-samples");
     if (a.seed >= 0)
         st.seed = static_cast<uint32_t>(a.seed);
@@ -132,11 +136,27 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     st.sis_samples = a.sis_samples;
     st.lights = a.lights;
     st.aovs = a.aovs;
+    if (a.output_given && a.output.empty())
+        throw Error(cli + ": -o/--output is empty: name the image to write");
+    if (a.stats_given && a.stats_file.empty())
+        throw Error(cli + ": --stats is empty: name the JSON file to write");
     if (!st.lights.empty()) {
-        if (st.strategy == Strategy::sis)
-            throw Error("--lights and --strategy sis exclude each other");
+        // A light set is its own estimator: a strategy asked for as well would be dropped.
+        if (!a.strategy.empty())
+            throw Error(cli +
+                        ": --lights renders with the directional light set; it excludes "
+                        "--strategy " +
+                        a.strategy);
         st.strategy = Strategy::lights;
     }
+    // Options this render does not use: said, not silently dropped.
+    if (a.sis_samples_given && st.strategy != Strategy::sis)
+        warn("--sis-samples applies to --strategy sis only: ignored");
+    if (st.backend == Backend::cpu && a.device_given)
+        warn("--device picks an OpenCL device: ignored with --backend cpu");
+    if (st.backend == Backend::cpu && a.paths_given)
+        warn("--paths sets the OpenCL back end's paths in flight: ignored with --backend cpu "
+             "(each native thread keeps its own wave)");
     const bool direct_only = st.strategy == Strategy::sis || st.strategy == Strategy::lights;
     if (direct_only && st.max_depth != 1) {
         warn("--lights and --strategy sis render direct lighting only: using --max-depth 1");
@@ -381,7 +401,7 @@ void run(const RenderArgs& a, Globals& g) {
                             std::to_string(state.first) + ", this render starts at " +
                             std::to_string(range.first));
             const int asked = partial ? range.second - range.first : st.spp;
-            if (st.time_limit <= 0 && state.spp > asked)
+            if ((st.time_limit <= 0 || a.spp > 0) && state.spp > asked)
                 throw Error(state_path + ": the render state has " + std::to_string(state.spp) +
                             " spp, more than the " + std::to_string(asked) +
                             (partial ? " of --sample-range" : " of --spp") +
@@ -410,11 +430,11 @@ void run(const RenderArgs& a, Globals& g) {
     // indices, and a round ends with the film holding a prefix of the range, which an interrupted
     // or time-limited render writes and a resumed one continues, with any number of ranks.
     const int64_t first = range.first;
-    // --noise-target: --spp, when given on the command line, caps the render; else only the
-    // target (or --time-limit) ends it.
+    // --noise-target and --time-limit: --spp, when given on the command line, caps the render;
+    // else only the target or the time ends it.
     const bool noise = a.noise_target > 0;
     const int64_t end = partial                                      ? range.second
-                        : st.time_limit > 0 || (noise && a.spp <= 0) ? int64_t(1) << 24
+                        : (st.time_limit > 0 || noise) && a.spp <= 0 ? int64_t(1) << 24
                                                                      : st.spp;
     int64_t done = cl.broadcast(state.spp);
     if (a.resume && cl.root()) {
@@ -620,12 +640,13 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("-o,--output", a->output,
                     "Output image: .exr/.hdr/.pfm (linear) plus a .png preview beside it");
     cmd->add_option("--spp", a->spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
-    cmd->add_option("--time-limit", a->time_limit, "Render for this many seconds instead of --spp")
-        ->check(CLI::Range(0.0, 1e7));
+    cmd->add_option("--time-limit", a->time_limit,
+                    "Render for this many seconds (--spp, if given, caps the samples)")
+        ->check(finite_range(0.0, 1e7));
     cmd->add_option("--noise-target", a->noise_target,
                     "Stop once the image's estimated relative RMS error is at most this (e.g. "
                     "0.02); --spp, if given, caps the samples, --time-limit the time")
-        ->check(CLI::Range(1e-6, 10.0));
+        ->check(finite_range(1e-6, 10.0));
     cmd->add_flag("--aovs", a->aovs,
                   "Write albedo, normal (N), depth (Z) and variance layers into the EXR");
     cmd->add_option("--max-depth", a->max_depth,
@@ -671,7 +692,7 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--checkpoint", a->checkpoint,
                     "Save a resumable state every SECONDS of rendering (0: every pass), when "
                     "interrupted, and at the end")
-        ->check(CLI::Range(0.0, 1e7));
+        ->check(finite_range(0.0, 1e7));
     cmd->add_flag("--resume", a->resume,
                   "Continue from the saved state (same scene and settings; --spp is the total)");
     cmd->add_option("--state", a->state,
@@ -686,7 +707,16 @@ void add_render_command(CLI::App& app, Globals& g) {
         ->check(CLI::IsMember(backend_names()));
     cmd->add_option("--threads", a->threads, "Native back end threads (0: all cores)")
         ->check(CLI::Range(0, 1024));
-    cmd->callback([a, &g] { run(*a, g); });
+    cmd->callback([a, &g, cmd, &app] {
+        a->light_samples_given = cmd->count("--light-samples") > 0;
+        a->bsdf_samples_given = cmd->count("--bsdf-samples") > 0;
+        a->sis_samples_given = cmd->count("--sis-samples") > 0;
+        a->output_given = cmd->count("--output") > 0;
+        a->stats_given = cmd->count("--stats") > 0;
+        a->paths_given = cmd->count("--paths") > 0;
+        a->device_given = app.count("--device") > 0;
+        run(*a, g);
+    });
 }
 
 } // namespace et::cli

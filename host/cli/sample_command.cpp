@@ -2,7 +2,9 @@
 #include "render/env_sampling.h"
 #include "util/error.h"
 #include "kernels/sampler.h"
+#include "image/image_io.h"
 #include "image/preview.h"
+#include "util/output_batch.h"
 #include "prepare/device_scene.h"
 #include "util/timer.h"
 
@@ -20,6 +22,7 @@ struct SampleArgs {
 };
 
 void run(const SampleArgs& a, const Globals& g) {
+    check_writable_format(a.output); // before the map, the device and the samples
     DistributionOptions opt;
     opt.blur_sigma = a.blur;
     if (!a.dist_res.empty())
@@ -34,7 +37,8 @@ void run(const SampleArgs& a, const Globals& g) {
     ProgramBuildInfo build;
     EnvSamplerCL sampler(rt, env, &build);
     Timer t;
-    auto samples = sampler.sample_sequence(static_cast<int>(parse_sampler(a.sampler, "--sampler")), a.seed, 0, 0, a.count);
+    auto samples = sampler.sample_sequence(static_cast<int>(parse_sampler(a.sampler, "--sampler")),
+                                           a.seed, 0, 0, a.count);
     const double sample_s = t.seconds();
     std::printf("device %s: program build %.3f s (%s), %d samples in %.2f ms\n",
                 rt.device().device_name.c_str(), build.seconds,
@@ -46,7 +50,9 @@ void run(const SampleArgs& a, const Globals& g) {
     for (const auto& s : samples)
         if (s.pdf > 0.0f)
             dirs.push_back({s.dir[0], s.dir[1], s.dir[2]});
-    write_direction_plot(a.output, env, dirs);
+    OutputBatch outputs({a.output});
+    write_direction_plot(outputs, a.output, env, dirs);
+    outputs.commit();
     std::printf("wrote %s\n", a.output.c_str());
 }
 
@@ -66,7 +72,7 @@ void add_sample_command(CLI::App& app, Globals& g) {
     cmd->add_option("--seed", a->seed, "Scrambling / random seed");
     cmd->add_option("--dist-res", a->dist_res, "Distribution resolution WxH (default: the map's)");
     cmd->add_option("--blur", a->blur, "Gaussian blur sigma of the luminance, in texels (0: none)")
-        ->check(CLI::Range(0.0f, 64.0f));
+        ->check(finite_range(0.0, 64.0));
     cmd->callback([a, &g] { run(*a, g); });
 }
 

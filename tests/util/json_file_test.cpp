@@ -53,6 +53,18 @@ TEST(JsonFile, NumbersBeyondADoubleAreAnErrorWithPosition) {
     EXPECT_NO_THROW(et::read_json_file(write("str", "{\"a\": \"1e999 [[[[\"}")));
 }
 
+TEST(JsonFile, DuplicateKeysAreAnErrorWithBothPositions) {
+    const std::string path =
+        write("dup", "{\"render\": {\"spp\": 2,\n  \"spp\" : 3}, \"film\": {\"spp\": 1}}");
+    const std::string m = error_of_file(path);
+    EXPECT_EQ(m.rfind(path + ":2:3: duplicate key \"spp\"", 0), 0u) << m;
+    EXPECT_NE(m.find("first at " + path + ":1:13"), std::string::npos) << m;
+    // The same key in different objects, in arrays of objects, and as a string value: fine.
+    EXPECT_NO_THROW(et::read_json_file(
+        write("nodup",
+              "{\"a\": {\"a\": \"a\"}, \"l\": [{\"k\": 1}, {\"k\": 2}], \"b\": [\"b\", \"b\"]}")));
+}
+
 TEST(JsonFile, MalformedMessagesStayShort) {
     // An unterminated 10 MB string: the parser's message quotes the token it read.
     const std::string path = write("long", "{\"a\": \"" + std::string(10 << 20, 'x'));
@@ -112,6 +124,16 @@ TEST(JsonReader, TypesAndRangesWithKeyPaths) {
     EXPECT_NE(error([&] { r.object(j, "camera"); }).find("scene.json: camera: expected an object"),
               std::string::npos);
     EXPECT_NE(error([&] { rr.number(s, "n", 0, 0, 10); }).find("expected a number in [0, 10]"),
+              std::string::npos);
+    // Float limits: the value written in decimal (0.05, or 4 pi rounded in double) is inside
+    // when it equals the limit as a float, and comes back clamped; a value beyond shows digits
+    // that differ from the limit's.
+    const json f = json::parse(R"({"lo": 0.05, "hi": 12.566370614359966, "out": 0.0499999})");
+    EXPECT_EQ(r.number(f, "lo", 1, 0.05f, 1), 0.05f);
+    EXPECT_EQ(r.number(f, "hi", 0, 0, 4 * M_PI), 4 * M_PI);
+    EXPECT_NE(error([&] {
+                  r.number(f, "out", 1, 0.05f, 1);
+              }).find("expected a number in [0.05, 1], got 0.0499999"),
               std::string::npos);
     EXPECT_EQ(r.at("shapes").at(size_t(2)).at("transform").where(),
               "scene.json: shapes[2].transform");

@@ -331,6 +331,24 @@ void write_image_file(const std::string& path, const std::string& file, int widt
         data = &finite;
         warn(path + ": " + std::to_string(bad) + " non-finite values written as 0");
     }
+    // Radiance RGBE holds magnitudes below 2^128 (an 8-bit exponent): larger ones would wrap to
+    // 0 in the encoder. They are written as the largest it holds, loudly.
+    if (ext == ".hdr") {
+        const float top = 255.0f / 256.0f * 0x1p127f;
+        size_t over = 0;
+        for (float v : *data)
+            over += std::fabs(v) > top;
+        if (over) {
+            if (data != &finite) {
+                finite = pixels;
+                data = &finite;
+            }
+            for (float& v : finite)
+                v = std::clamp(v, -top, top);
+            warn(path + ": " + std::to_string(over) +
+                 " values beyond Radiance RGBE's range (about 1.7e38) written as its largest");
+        }
+    }
 
     if (ext == ".pfm") {
         const std::string err = write_pfm(file, width, height, channels, *data);

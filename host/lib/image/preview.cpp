@@ -47,7 +47,7 @@ void draw_dot(std::vector<float>& display, int width, int height, float u, float
         }
 }
 
-void write_direction_plot(const std::string& path, const EnvMap& env,
+void write_direction_plot(OutputBatch& batch, const std::string& path, const EnvMap& env,
                           const std::vector<std::array<float, 3>>& directions) {
     std::vector<float> display = tone_map(env.image);
     const int radius = std::max(1, env.image.width / 256);
@@ -58,7 +58,7 @@ void write_direction_plot(const std::string& path, const EnvMap& env,
             etk::etk_world_to_env(desc, etk::make_float3(d[0], d[1], d[2])));
         draw_dot(display, env.image.width, env.image.height, uv.x, uv.y, radius, colour);
     }
-    write_image(path, env.image.width, env.image.height, 3, display,
+    write_image(batch, path, env.image.width, env.image.height, 3, display,
                 {{"Software", "envtrace " ENVTRACE_VERSION}});
 }
 

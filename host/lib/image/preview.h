@@ -20,7 +20,8 @@ void draw_dot(std::vector<float>& display, int width, int height, float u, float
 // The map tone-mapped with a dot at each world-space direction (turned into map space by the
 // map's rotation), written to `path`: the paper's Figure 6 for samples, Figure 8 for lights.
 struct EnvMap;
-void write_direction_plot(const std::string& path, const EnvMap& env,
+class OutputBatch;
+void write_direction_plot(OutputBatch& batch, const std::string& path, const EnvMap& env,
                           const std::vector<std::array<float, 3>>& directions);
 
 } // namespace et

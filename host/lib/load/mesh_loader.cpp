@@ -1,6 +1,7 @@
 // The scene's "mesh" shape: one loader per file format, chosen by the file's extension
 // (scenes/README.md lists them).
 #include "load/scene.h"
+#include "util/error.h"
 
 #include <cctype>
 #include <filesystem>
@@ -12,12 +13,18 @@ void load_mesh(const std::string& path, const glm::mat4& transform, int override
     std::string ext = std::filesystem::path(path).extension().string();
     for (char& c : ext) // ASCII only: std::tolower of a negative char is undefined
         c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const size_t before = out.size();
     if (ext == ".ply")
         load_ply(path, transform, override_material, materials, out);
     else if (ext == ".gltf" || ext == ".glb")
         load_gltf(path, transform, override_material, materials, out);
     else // .obj, and any other name as before
         load_obj(path, transform, override_material, materials, out, textures);
+    // A mesh that adds nothing is a mistake (another file, a point cloud, every face broken),
+    // never a scene's intent: said, rather than rendering as if the mesh were there.
+    if (out.size() == before)
+        throw Error(path + ": no triangles to render (the file holds no faces, or every face "
+                           "was skipped)");
 }
 
 } // namespace et

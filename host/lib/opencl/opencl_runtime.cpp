@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -57,8 +58,11 @@ uint64_t env_bytes(const char* name) {
     if (!v || !*v)
         return 0;
     char* end = nullptr;
+    errno = 0;
+    // Digits only: strtoull would take "-5" as 2^64 - 5, and "1e9" stops at the e.
+    const bool digits = std::isdigit(static_cast<unsigned char>(v[0])) != 0;
     const unsigned long long x = std::strtoull(v, &end, 10);
-    if (*end != '\0' || x == 0)
+    if (!digits || *end != '\0' || x == 0 || errno == ERANGE)
         throw Error(std::string(name) + ": expected a positive number of bytes, got '" + v + "'");
     return x;
 }

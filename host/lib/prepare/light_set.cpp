@@ -2,12 +2,14 @@
 
 #include "util/error.h"
 #include "util/json_file.h"
+#include "util/output_batch.h"
 #include "kernels/envmap.h"
 #include "kernels/sampler.h"
 #include "util/timer.h"
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -59,7 +61,9 @@ LightSet make_lights_ours(const EnvMap& env, int n, uint32_t seed, bool voronoi_
         VoronoiStrata v = voronoi_strata(env, map_dirs);
         for (int k = 0; k < n; ++k) {
             set.lights[k].power = v.power[k];
-            set.lights[k].solid_angle = v.solid_angle[k];
+            // Texel solid angles summed in double can pass 4 pi by a rounding hair (one light
+            // whose cell is the whole sphere): the file says 4 pi, which its reader accepts.
+            set.lights[k].solid_angle = std::min(v.solid_angle[k], 4.0 * M_PI);
         }
     } else {
         for (int c = 0; c < 3; ++c) {
@@ -93,6 +97,12 @@ LightSet make_lights_sis(const EnvMap& env, int n, const SisOptions& options) {
 }
 
 void write_lights(const std::string& path, const LightSet& set) {
+    OutputBatch batch({path});
+    write_lights(batch, path, set);
+    batch.commit();
+}
+
+void write_lights(OutputBatch& batch, const std::string& path, const LightSet& set) {
     using nlohmann::json;
     json lights = json::array();
     for (const auto& l : set.lights) {
@@ -111,7 +121,7 @@ void write_lights(const std::string& path, const LightSet& set) {
            {"selection_seconds", set.selection_seconds},
            {"total_seconds", set.total_seconds()},
            {"lights", lights}};
-    write_json_file(path, j, 1);
+    write_json_file(batch, path, j, 1);
 }
 
 LightSet read_lights(const std::string& path) {

@@ -42,6 +42,9 @@ LightSet make_lights_ours(const EnvMap& env, int n, uint32_t seed, bool voronoi_
 LightSet make_lights_sis(const EnvMap& env, int n, const SisOptions& options);
 
 void write_lights(const std::string& path, const LightSet& set);
+// The same as one file of a batch (util/output_batch.h), in place at batch.commit().
+class OutputBatch;
+void write_lights(OutputBatch& batch, const std::string& path, const LightSet& set);
 // Throws et::Error naming the file on anything malformed.
 LightSet read_lights(const std::string& path);
 

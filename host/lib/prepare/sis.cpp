@@ -121,7 +121,10 @@ SisResult build_sis(const EnvMap& env, const SisOptions& o) {
     const int w = im.width, h = im.height;
     const size_t texels = static_cast<size_t>(w) * h;
     if (static_cast<size_t>(o.samples) > texels)
-        throw Error("SIS: more samples than texels");
+        throw Error((env.name.empty() ? std::string("the map") : env.name) + ": SIS asked for " +
+                    std::to_string(o.samples) + " strata, but the map has only " +
+                    std::to_string(texels) + (texels == 1 ? " texel (" : " texels (") +
+                    std::to_string(w) + "x" + std::to_string(h) + "), one stratum at least each");
     SisResult r;
 
     // Luminance and its solid-angle weighted mean and standard deviation.

@@ -6,12 +6,15 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <vector>
 #include <unistd.h>
 
 namespace et {
@@ -36,21 +39,43 @@ std::string position(const std::string& path, const std::string& text, size_t po
 // What nlohmann's parser does not bound: nesting depth (its error messages and other recursive
 // walks use the stack) and numbers that overflow a double (it throws out_of_range.406 with no
 // position). One pass over the text, skipping strings, finds both with their position.
+// Also refused: a key twice in one object, which nlohmann resolves silently (the last wins), so
+// that a scene's second "spp" would hide its first without a word.
 void prescan(const std::string& path, const std::string& text) {
     int depth = 0;
+    // Per open container: whether it is an object, and the keys seen in it (their text as
+    // written, with the position of the first).
+    std::vector<std::pair<bool, std::map<std::string, size_t>>> open;
     const size_t n = text.size();
     for (size_t i = 0; i < n; ++i) {
         const char c = text[i];
         if (c == '"') {
+            const size_t start = i;
             for (++i; i < n && text[i] != '"'; ++i)
                 if (text[i] == '\\')
                     ++i;
+            if (open.empty() || !open.back().first)
+                continue;
+            size_t next = i + 1;
+            while (next < n && std::isspace(static_cast<unsigned char>(text[next])))
+                ++next;
+            if (next >= n || text[next] != ':')
+                continue;
+            const std::string key = text.substr(start + 1, std::min(i, n) - start - 1);
+            auto [it, inserted] = open.back().second.emplace(key, start);
+            if (!inserted)
+                throw Error(position(path, text, start) + ": duplicate key \"" + excerpt(key, 40) +
+                            "\" in one object (first at " + position(path, text, it->second) +
+                            "): which one is meant?");
         } else if (c == '[' || c == '{') {
             if (++depth > kMaxJsonDepth)
                 throw Error(position(path, text, i) + ": malformed JSON: nested deeper than " +
                             std::to_string(kMaxJsonDepth) + " levels");
+            open.push_back({c == '{', {}});
         } else if (c == ']' || c == '}') {
             --depth;
+            if (!open.empty())
+                open.pop_back();
         } else if (c == '-' || (c >= '0' && c <= '9')) {
             size_t end = i;
             while (end < n &&
@@ -68,10 +93,14 @@ void prescan(const std::string& path, const std::string& text) {
     }
 }
 
+// The shortest text that reads back as v (as the float v is, if it is one: a float limit such as
+// 0.05f shows as 0.05): a limit and a value that differ show different digits.
 std::string number_text(double v) {
     char buf[32];
-    std::snprintf(buf, sizeof buf, "%.10g", v);
-    return buf;
+    const float f = static_cast<float>(v);
+    const auto r = static_cast<double>(f) == v ? std::to_chars(buf, buf + sizeof buf, f)
+                                               : std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
 }
 
 } // namespace
@@ -204,12 +233,16 @@ void JsonReader::expect_array(const json& v) const {
         fail("expected an array, got " + json_excerpt(v));
 }
 
+// Limits are often floats (0.05f, 1e12f, a float 4 pi) and values are written by programs that
+// round in double: a value that equals a limit once both are rounded to float is inside (it is a
+// float where it is used), and comes back clamped to the limits.
 double JsonReader::number(const json& v, double lo, double hi) const {
     const double x = v.is_number() ? v.get<double>() : NAN;
-    if (!v.is_number() || !std::isfinite(x) || x < lo || x > hi)
+    const auto below = [](double a, double b) { return a < b && float(a) < float(b); };
+    if (!v.is_number() || !std::isfinite(x) || below(x, lo) || below(hi, x))
         fail("expected a number in [" + number_text(lo) + ", " + number_text(hi) + "], got " +
              json_excerpt(v));
-    return x;
+    return std::clamp(x, lo, hi);
 }
 
 int64_t JsonReader::integer(const json& v, int64_t lo, int64_t hi) const {

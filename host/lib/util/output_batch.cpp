@@ -3,6 +3,7 @@
 #include "util/error.h"
 #include "util/input_files.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <filesystem>
@@ -49,22 +50,42 @@ class SignalHold {
 
 } // namespace
 
+namespace {
+
+// ".NAME.tmp" of a target: NAME is cut short (at a UTF-8 character's start) when the
+// temporary's file name, with up to 10 digits of a process id and the extension, would pass the
+// 255 bytes a file name can have: a target whose own name fits always gets a temporary.
+std::string temporary_prefix(const fs::path& p) {
+    std::string stem = p.stem().string();
+    const size_t room = 255 - std::min<size_t>(255, 1 + 4 + 10 + p.extension().string().size());
+    if (stem.size() > room) {
+        size_t cut = room;
+        while (cut > 0 && (static_cast<unsigned char>(stem[cut]) & 0xC0) == 0x80)
+            --cut;
+        stem.resize(cut);
+    }
+    return "." + stem + ".tmp";
+}
+
+} // namespace
+
 std::string temporary_path(const std::string& target, long pid) {
     const fs::path p(target);
     return (fs::path(folder_of(target)) /
-            ("." + p.stem().string() + ".tmp" + std::to_string(pid) + p.extension().string()))
+            (temporary_prefix(p) + std::to_string(pid) + p.extension().string()))
         .string();
 }
 
 int remove_stale_temporaries(const std::string& target) {
     const fs::path p(target);
-    const std::string prefix = "." + p.stem().string() + ".tmp", suffix = p.extension().string();
+    const std::string prefix = temporary_prefix(p), suffix = p.extension().string();
     std::error_code ec;
     fs::directory_iterator it(folder_of(target), ec), end;
     int removed = 0;
     for (; !ec && it != end; it.increment(ec)) {
         const std::string name = it->path().filename().string();
-        if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) ||
+        if (name.size() <= prefix.size() + suffix.size() ||
+            name.compare(0, prefix.size(), prefix) ||
             name.compare(name.size() - suffix.size(), suffix.size(), suffix))
             continue;
         const std::string digits =
