@@ -14,6 +14,7 @@
 #include "render/renderer.h"
 #include "load/scene.h"
 #include "prepare/device_scene.h"
+#include "prepare/sis.h"
 #include "util/timer.h"
 
 #include <nlohmann/json.hpp>
@@ -50,6 +51,12 @@ DeviceScene prepare(const BenchArgs& a, const Globals& g) {
         st.paths = a.paths;
     st.device = g.device;
     st.threads = a.threads;
+    if (st.strategy == Strategy::sis) { // a scene may ask for SIS: its strata, as render builds
+        SisOptions so;
+        so.samples = st.sis_samples;
+        const SisResult sis = build_sis(scene.env, so);
+        return prepare_device_scene(std::move(scene), st, nullptr, &sis.strata);
+    }
     return prepare_device_scene(std::move(scene), st);
 }
 

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -38,8 +39,13 @@ void run(const CompareArgs& args) {
                     " but " + args.b + " is " + std::to_string(b.width) + "x" +
                     std::to_string(b.height) + ": cannot compare images of different sizes");
     std::vector<unsigned char> mask;
-    if (!args.mask.empty())
+    if (!args.mask.empty()) {
         mask = read_mask(args.mask, a.width, a.height);
+        // A mask that selects nothing would report a perfect match ('l2 0') of no pixels.
+        if (std::find(mask.begin(), mask.end(), 1) == mask.end())
+            throw Error(args.mask + ": the mask selects no pixel (none has a first channel > "
+                                    "0.5): nothing to compare");
+    }
     const ImageErrors e = compare_images(a, b, mask);
     std::printf("pixels %zu\nrmse %.6g\nrel_mse %.6g\nl2 %.6g\nmean %.6g (reference %.6g)\n",
                 e.pixels, e.rmse, e.rel_mse, e.l2, e.mean_a, e.mean_b);

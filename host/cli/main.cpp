@@ -33,7 +33,12 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // --help and --version end here too, with status 0 and their text; a command line
+        // that cannot be parsed is an error like any other: one line, status 1.
+        if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success))
+            return app.exit(e);
+        std::cerr << "envtrace: error: " << e.what() << " (see envtrace --help)\n";
+        return 1;
     } catch (const et::cli::ClusterError& e) {
         // A failure of one or more ranks: rank 0 names them, the others stay silent.
         if (*e.what())

@@ -266,4 +266,76 @@ TEST(CliOptions, MemoryLimitsFromTheEnvironmentAreDigitsOnly) {
     }
 }
 
+TEST(CliOptions, CommandLinesThatDoNotParseAreOneErrorLineAndStatusOne) {
+    const std::string dir = ett::scratch_dir("cli-opt-parse");
+    const std::string scene = write_scene(dir), out = dir + "/o.exr";
+    for (const std::vector<std::string>& more : {std::vector<std::string>{"--spp", "0"},
+                                                 {"--bogus"},
+                                                 {"--spp", "2", "--spp", "3"},
+                                                 {"--strategy", "foo"}}) {
+        SCOPED_TRACE(more[0]);
+        const ett::CliRun r = ett::run_envtrace(render(scene, out, more), dir);
+        ASSERT_TRUE(r.exited());
+        EXPECT_EQ(r.code(), 1) << r.err;
+        EXPECT_EQ(r.err.rfind("envtrace: error: ", 0), 0u) << r.err;
+    }
+    const ett::CliRun help = ett::run_envtrace({"render", "--help"}, dir);
+    EXPECT_EQ(help.code(), 0) << help.err;
+}
+
+TEST(CliOptions, BenchBuildsTheStrataOfAnSisScene) {
+    const std::string dir = ett::scratch_dir("cli-opt-bench-sis");
+    write_scene(dir);
+    write_file(dir + "/sis.json", R"({"environment": {"map": ")" + dir + R"(/sky.pfm"},
+        "film": {"width": 8, "height": 6}, "camera": {"eye": [0, 0, 4], "target": [0, 0, 0]},
+        "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}],
+        "render": {"spp": 64, "max_depth": 1, "strategy": "sis"}})");
+    expect_ok(ett::run_envtrace(
+        {"bench", dir + "/sis.json", "--runs", "1", "--spp", "64", "--threads", "1"}, dir, 120));
+}
+
+TEST(CliOptions, CompareRefusesAMaskThatSelectsNothing) {
+    const std::string dir = ett::scratch_dir("cli-opt-mask");
+    et::write_image(dir + "/a.pfm", 2, 1, 3, {1, 1, 1, 2, 2, 2});
+    et::write_image(dir + "/b.pfm", 2, 1, 3, {1, 1, 1, 3, 3, 3});
+    et::write_image(dir + "/none.pfm", 2, 1, 3, {0.5f, 1, 1, -1, 0, 0});
+    et::write_image(dir + "/one.pfm", 2, 1, 3, {0, 0, 0, 1, 0, 0});
+    expect_error(ett::run_envtrace(
+                     {"compare", dir + "/a.pfm", dir + "/b.pfm", "--mask", dir + "/none.pfm"}, dir),
+                 "none.pfm: the mask selects no pixel");
+    expect_ok(ett::run_envtrace(
+        {"compare", dir + "/a.pfm", dir + "/b.pfm", "--mask", dir + "/one.pfm"}, dir));
+}
+
+// Where the map samples are drawn (--light-batch) changes no bit: a render resumes across it.
+TEST(CliOptions, ResumeAcrossALightBatchChange) {
+    const std::string dir = ett::scratch_dir("cli-opt-resume-batch");
+    const std::string scene = write_scene(dir), out = dir + "/o.exr";
+    expect_ok(ett::run_envtrace(
+        render(scene, out, {"--spp", "2", "--checkpoint", "0", "--light-batch", "on"}), dir));
+    expect_ok(ett::run_envtrace(
+        render(scene, out, {"--spp", "4", "--resume", "--checkpoint", "0", "--light-batch", "off"}),
+        dir));
+}
+
+TEST(CliOptions, PlyWarningsCountLikeWithLike) {
+    const std::string dir = ett::scratch_dir("cli-opt-ply");
+    write_scene(dir);
+    // A pentagon fanned into three triangles, one of them degenerate (corners 0, 2, 3 on a
+    // line), and a face of two corners.
+    write_file(dir + "/p.ply", "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
+                               "property float y\nproperty float z\nelement face 2\n"
+                               "property list uchar int vertex_indices\nend_header\n"
+                               "0 0 0\n1 0 0\n1 0 1\n2 0 2\n0 0 1\n5 0 1 2 3 4\n2 0 1\n");
+    write_file(dir + "/m.json", R"({"environment": {"map": ")" + dir +
+                                    R"(/sky.pfm"}, "film": {"width": 4, "height": 2},
+        "shapes": [{"type": "mesh", "file": ")" +
+                                    dir + R"(/p.ply"}], "render": {"spp": 1}})");
+    const ett::CliRun r = ett::run_envtrace(render(dir + "/m.json", dir + "/o.exr"), dir);
+    expect_ok(r);
+    EXPECT_NE(r.err.find("1 faces of fewer than three corners skipped"), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("1 of 3 triangles skipped"), std::string::npos) << r.err;
+}
+
 } // namespace

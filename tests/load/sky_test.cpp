@@ -153,6 +153,45 @@ TEST(Sky, SunSolidAngleMatchesItsRadius) {
     }
 }
 
+// The disc's power (radiance x solid angle) at any radius: a disc narrower than a texel, or
+// than a texel's sub-samples, is still there with its whole power; a disc below the horizon is
+// hidden by the ground, one on it keeps the half above.
+TEST(Sky, SunPowerHoldsAtAnyRadiusAndTheGroundHidesIt) {
+    struct Case {
+        int w, h;
+        float radius, elevation;
+        double above; // the share of the disc above the horizon
+    };
+    for (const Case& k : {Case{1024, 512, 0.001f, 30, 1}, Case{1024, 512, 0.01f, 30, 1},
+                          Case{1024, 512, 0.03f, 30, 1}, Case{1024, 512, 0.05f, 47, 1},
+                          Case{1024, 512, 0.1f, 30, 1}, Case{256, 128, 0.3f, 12, 1},
+                          Case{256, 128, 1.0f, 60, 1}, Case{64, 32, 0.02f, 89.99f, 1},
+                          Case{1024, 512, 0.05f, 0, 0.5}, Case{256, 128, 0.5f, 0, 0.5},
+                          Case{1024, 512, 0.05f, -1, 0}, Case{256, 128, 3.0f, -10, 0}}) {
+        SCOPED_TRACE("radius " + std::to_string(k.radius) + " elevation " +
+                     std::to_string(k.elevation) + " at " + std::to_string(k.w));
+        et::SkyParams p;
+        p.width = k.w;
+        p.height = k.h;
+        p.sun_angular_radius_deg = k.radius;
+        p.sun_elevation_deg = k.elevation;
+        p.sun_radiance = 1e6f;
+        p.sky_radiance = 0.0f; // the sun alone
+        p.ground_albedo = 0.0f;
+        const et::RgbImage img = make_sky(p);
+        double power = 0.0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x)
+                power += double(img.at(x, y)[0]) * texel_solid_angle(img, y);
+        const double want =
+            p.sun_radiance * 2.0 * M_PI * (1.0 - std::cos(double(k.radius) * kDeg)) * k.above;
+        if (k.above == 0.0)
+            EXPECT_EQ(power, 0.0);
+        else
+            EXPECT_NEAR(power / want, 1.0, k.above < 1.0 ? 0.02 : 1e-3);
+    }
+}
+
 TEST(Sky, FiniteAndNonNegative) {
     std::vector<et::SkyParams> cases(6);
     cases[1].sun_elevation_deg = 90.0f; // at the pole

@@ -116,13 +116,16 @@ TEST(RenderState, KeyFollowsWhatSamplesDependOn) {
         change(c, c.settings);
         return et::render_key(et::prepare_device_scene(c, c.settings));
     };
-    // Not: the target spp, the time limit, paths in flight, threads.
+    // Not: the target spp, the time limit, paths in flight, threads, where the map samples are
+    // drawn (--light-batch: the same bits, Backends.BatchedLightSamplesGiveTheSameBits).
     EXPECT_EQ(base, key_with([](et::Scene&, et::RenderSettings& st) {
                   st.spp = 999;
                   st.time_limit = 3;
                   st.paths = 17;
                   st.threads = 1;
               }));
+    for (et::LightBatch b : {et::LightBatch::off, et::LightBatch::on, et::LightBatch::automatic})
+        EXPECT_EQ(base, key_with([b](et::Scene&, et::RenderSettings& st) { st.light_batch = b; }));
     // But: the seed, the depth, the strategy, the sampler, the camera, a material, geometry, the
     // map's texels, the back end.
     EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) { st.seed += 1; }));

@@ -17,12 +17,13 @@ struct RgbImage {
 };
 
 // Any format OpenImageIO reads (EXR of every compression, HDR, PNG, JPEG, ...) and PFM (read
-// here; the only format of a build without OpenImageIO). Only regular files of at most kMaxImageBytes are opened, and the declared size is
-// checked against the memory budget and the file's size before any pixel is read. 8- and 16-bit
-// images are decoded from sRGB to linear. One channel is replicated to RGB; otherwise the R, G, B
-// channels are used (the first three when they are not named so), as stored: alpha is ignored,
-// colour is never multiplied or divided by it. Throws et::Error naming the file and the problem.
-// `colour` false reads data (a roughness texture): 8- and 16-bit values as stored, not decoded.
+// here; the only format of a build without OpenImageIO). Only regular files of at most
+// kMaxImageBytes are opened, and the declared size is checked against the memory budget and the
+// file's size before any pixel is read. 8- and 16-bit images are decoded from sRGB to linear. One
+// channel is replicated to RGB; otherwise the R, G, B channels are used (the first three when they
+// are not named so), as stored: alpha is ignored, colour is never multiplied or divided by it.
+// Throws et::Error naming the file and the problem. `colour` false reads data (a roughness
+// texture): 8- and 16-bit values as stored, not decoded.
 RgbImage read_rgb_image(const std::string& path, bool colour = true);
 
 // read_rgb_image a band of rows at a time, from the top, so that a caller can work on the first
@@ -56,8 +57,8 @@ void write_image(const std::string& path, int width, int height, int channels,
                  const std::vector<float>& pixels,
                  const std::vector<std::pair<std::string, std::string>>& attributes = {});
 // The same as one file of a batch: renamed into place with the others by batch.commit().
-void write_image(OutputBatch& batch, const std::string& path, int width, int height,
-                 int channels, const std::vector<float>& pixels,
+void write_image(OutputBatch& batch, const std::string& path, int width, int height, int channels,
+                 const std::vector<float>& pixels,
                  const std::vector<std::pair<std::string, std::string>>& attributes = {});
 
 // An OpenEXR image of named channels (a multi-layer file: "R", "albedo.R", "N.X", "Z", ...),

@@ -292,7 +292,9 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
     const glm::mat3 normal_m = glm::transpose(glm::inverse(glm::mat3(transform)));
 
     PlyBody body(path, data, pos, format);
-    size_t dropped = 0, faces_read = 0;
+    // Faces of fewer than three corners, and the triangles the other faces fan into: read and
+    // skipped (degenerate, non-finite, out of range).
+    size_t short_faces = 0, triangles_read = 0, dropped = 0;
     bool have_vertices = false;
     for (const auto& e : elements) {
         const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
@@ -335,11 +337,11 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
                                       " vertices)");
                         idx[k] = static_cast<uint32_t>(v);
                     }
-                    ++faces_read;
                     if (count < 3) {
-                        ++dropped;
+                        ++short_faces;
                         continue;
                     }
+                    triangles_read += count - 2;
                     for (size_t k = 1; k + 1 < count; ++k) { // a fan about corner 0
                         const uint32_t c[3] = {idx[0], idx[k], idx[k + 1]};
                         glm::vec3 pp[3], nn[3];
@@ -383,10 +385,12 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
         fail("no vertex element");
     if (face_list < 0)
         fail("no face element (a point cloud has nothing to render)");
+    if (short_faces)
+        warn(path + ": " + std::to_string(short_faces) +
+             " faces of fewer than three corners skipped");
     if (dropped)
-        warn(path + ": " + std::to_string(dropped) +
-             " degenerate, non-finite, out-of-range or non-polygon faces skipped (of " +
-             std::to_string(faces_read) + ")");
+        warn(path + ": " + std::to_string(dropped) + " of " + std::to_string(triangles_read) +
+             " triangles skipped (degenerate, non-finite or out of range)");
 }
 
 } // namespace et

@@ -14,7 +14,9 @@ struct SkyParams {
 };
 
 // Sky: a zenith-to-horizon gradient with a glow around the sun; ground: a uniform grey-brown lit
-// by sun and sky; sun: a disc. Each texel is the mean of 4x4 sub-samples so the disc is smooth.
+// by sun and sky; sun: a disc, hidden where it is below the horizon. Each texel is the mean of
+// 4x4 sub-samples so the disc is smooth; a disc under two texels across is put in by 4096 points
+// over its solid angle instead, so that its power is exact however small it is.
 RgbImage make_sky(const SkyParams& p);
 
 } // namespace et

@@ -78,6 +78,7 @@ uint64_t render_key(const DeviceScene& scene) {
     etk::EtkParams p = scene.params; // 4-byte members only (kernels/params.h)
     p.sample_index = 0;
     p.first_pixel = 0;
+    p.light_batch = 0; // where the map samples are drawn changes no bit of the film
     p.learn = 0;
     h.add_value(p);
     return h.digest();

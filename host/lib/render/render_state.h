@@ -18,7 +18,7 @@ class OutputBatch;
 // A hash (XXH3, 64 bits) of what the film's values depend on: every scene buffer, the per-pass
 // parameters (camera, film size, environment, depth, strategy, heuristic, sampler, seed), the
 // back end and device, and envtrace's version and kernel sources. Not the target spp, time
-// limit, paths in flight or threads, which do not change any sample.
+// limit, paths in flight, threads or light-sample batching, which do not change any sample.
 uint64_t render_key(const DeviceScene& scene);
 
 struct RenderState {
