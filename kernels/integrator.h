@@ -199,7 +199,8 @@ ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
     P.ray_o[i] = etk_f4(etk_p3(p.eye), 0.0f);
     P.ray_d[i] = etk_f4(d, -1.0f);
     P.beta[i] = make_float4(1.0f, 1.0f, 1.0f, 0.0f);
-    P.radiance[i] = make_float4(0.0f, 0.0f, 0.0f, 0.0f);
+    // w: the path's eta scale for Russian roulette (the continuation's, below), 1 to start.
+    P.radiance[i] = make_float4(0.0f, 0.0f, 0.0f, 1.0f);
     P.pixel[i] = pixel;
     if (p.learn) // no bin unless the camera ray hits a non-delta surface
         P.learn_bin[i] = -1;
@@ -238,7 +239,7 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
     if (w > 0.0f) {
         float3 L = etk_env_radiance_uv(S.env_texels, p.env, uv) * w;
         float4 r = P.radiance[slot];
-        P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.beta[slot]) * L, 0.0f);
+        P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.beta[slot]) * L, r.w);
     }
 }
 
@@ -446,7 +447,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
             ETK_ATOMIC_ADD(Q.counters + ETK_Q_LIGHT_RAYS, traced);
         if (etk_max3(e) > 0.0f) {
             float4 r = P.radiance[slot];
-            P.radiance[slot] = etk_f4(etk_xyz(r) + beta * e, 0.0f);
+            P.radiance[slot] = etk_f4(etk_xyz(r) + beta * e, r.w);
         }
     }
 
@@ -508,8 +509,14 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     if (!etk_same_side(wz, dot(wi_world, ng)))
         return; // across the geometric surface from its shading side: would leak light
     beta = beta * weight;
+    // A refraction scales radiance by 1 / eta^2 (dielectric.h), into glass and back out again:
+    // Russian roulette weighs the throughput without it (pbrt's etaScale), or paths inside glass
+    // of index 1.5 would survive 1 in 2.25 and come out as fireflies of 2.25x their worth.
+    float4 rad = P.radiance[slot];
+    if (etk_bsdf_is_dielectric(m) && wz < 0.0f)
+        rad.w *= m.eta * m.eta;
     if (depth + 1 >= p.rr_depth) {
-        float survive = fmin(0.95f, etk_max3(beta) * rr_scale);
+        float survive = fmin(0.95f, etk_max3(beta) * rr_scale * rad.w);
         if (!(rr.y < survive))
             return;
         beta = beta / survive;
@@ -519,6 +526,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     P.ray_o[slot] = etk_f4(etk_surface_origin(s, wi_world), (float)(depth + 1));
     P.ray_d[slot] = etk_f4(normalize(wi_world), delta_sample ? -1.0f : pdf);
     P.beta[slot] = etk_f4(beta, guided ? (float)cell : etk_share_code(share, b_from_light, flags));
+    P.radiance[slot] = rad;
     out->slot[ETK_Q_RAY_OUT] = slot;
 }
 
@@ -532,7 +540,7 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
     int visible = !etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), d.w, 1, &h);
     if (visible) {
         float4 r = P.radiance[slot];
-        P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.shadow_L[slot]), 0.0f);
+        P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.shadow_L[slot]), r.w);
     }
     if (p.guide_learn) { // the visibility strategy's records, in shadow-queue order (host reads)
         P.guide_key[i] = (int)as_uint(o.w);
@@ -565,7 +573,7 @@ ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
     if (traced > 0u)
         ETK_ATOMIC_ADD(Q.counters + ETK_Q_LIGHT_RAYS, traced);
     float4 r = P.radiance[slot];
-    P.radiance[slot] = etk_f4(etk_xyz(r) + beta * L, 0.0f);
+    P.radiance[slot] = etk_f4(etk_xyz(r) + beta * L, r.w);
 }
 
 // Stage 5: the pass's path radiance into the film. A non-finite sample counts as zero rather

@@ -38,7 +38,8 @@
                            if a delta sample or none */                                            \
     X(float4, beta)     /* throughput; w: adaptive: share of the vertex that made the ray, +4 if a \
                            light sample; visibility: the vertex's hash-grid cell */                \
-    X(float4, radiance) /* accumulated along the path */                                           \
+    X(float4, radiance) /* accumulated along the path; w: its refractions' eta^2, which Russian    \
+                           roulette takes out of the throughput it weighs (integrator.h) */        \
     X(float4, hit)      /* t, triangle (int bits), b1, b2 */                                       \
     X(float4, shadow_o) /* shadow ray origin */                                                    \
     X(float4, shadow_d) /* shadow ray direction; w: its length */                                  \

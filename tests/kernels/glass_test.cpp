@@ -72,6 +72,26 @@ TEST(GlassFurnace, SmoothSphereRendersTheMapValue) {
                 std::string(backend) + " smooth ior " + std::to_string(ior));
 }
 
+// In the furnace every path through a smooth glass sphere carries c to the camera; only Russian
+// roulette spreads the estimates. Weighing the throughput with the refractions' 1 / eta^2 taken
+// out (integrator.h), a path inside the glass survives each bounce with 0.95, as one outside
+// does; weighing it as it is, one inside glass of index 2.4 survived 1 in 5.8 and came out 5.8x
+// its worth. The relative variance of a sample, per pixel, averaged over the image (32 spp,
+// seed 17): 0.029 / 0.158 (ior 1.5 / 2.4) with the eta scale, 0.097 / 0.716 without it (what is
+// left: paths caught by total internal reflection for dozens of bounces, each survived at 0.95).
+// The time of this render rose 43%: the paths inside the glass are no longer cut short.
+TEST(GlassFurnace, RouletteWeighsRefractedPathsAtTheirWorth) {
+    for (float ior : {1.5f, 2.4f}) {
+        const auto r = ett::render(furnace_scene(dielectric(ior, 0.0f), 1000, "mis"), "cpu", 32);
+        double rel = 0.0;
+        for (size_t i = 0; i < r.var.size(); ++i)
+            rel += r.var[i] / (double(kC) * kC);
+        rel /= double(r.var.size());
+        std::printf("ior %.2f: relative variance of a sample %.5f\n", ior, rel);
+        EXPECT_LT(rel, ior < 2.0f ? 0.05 : 0.3) << "ior " << ior;
+    }
+}
+
 TEST(GlassFurnace, RoughSphereOfIndexOneIsInvisible) {
     for (const char* strategy : {"mis", "light", "compensated"}) {
         const auto r = ett::render(furnace_scene(dielectric(1.0f, 0.3f), 8, strategy), "cpu", 16);
