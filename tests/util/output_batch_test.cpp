@@ -9,10 +9,15 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sys/file.h>
 #include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -50,6 +55,32 @@ TEST(OutputBatch, NothingReachesATargetBeforeCommit) {
     EXPECT_EQ(get(dir + "/a.exr"), "new a");
     EXPECT_EQ(get(dir + "/b.png"), "new b");
     EXPECT_EQ(entries(dir), 2u) << "a temporary was left";
+}
+
+// Two processes committing outputs of the same names: each batch renames its files with the
+// folders locked (flock), so one set lands whole after the other, never a mix. A lock held here
+// on the folder stands for the other process: the commit waits until it is released.
+TEST(OutputBatch, CommitWaitsForAnotherCommitToTheSameFolder) {
+    const std::string dir = ett::scratch_dir("batch_lock");
+    et::OutputBatch b({dir + "/a.exr", dir + "/a.png"});
+    b.write(dir + "/a.exr", writes("new a"));
+    b.write(dir + "/a.png", writes("new png"));
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+    std::atomic<bool> done{false};
+    std::thread commit([&] {
+        b.commit();
+        done = true;
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    EXPECT_FALSE(done.load()) << "committed while the folder was locked";
+    EXPECT_FALSE(fs::exists(dir + "/a.exr"));
+    ::close(fd); // the other commit ends
+    commit.join();
+    EXPECT_TRUE(done.load());
+    EXPECT_EQ(get(dir + "/a.exr"), "new a");
+    EXPECT_EQ(get(dir + "/a.png"), "new png");
 }
 
 TEST(OutputBatch, AFailingWriterLeavesEveryOldOutput) {

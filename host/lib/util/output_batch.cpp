@@ -6,10 +6,13 @@
 #include <algorithm>
 #include <cerrno>
 #include <csignal>
+#include <fcntl.h>
 #include <filesystem>
 #include <pthread.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -66,6 +69,51 @@ std::string temporary_prefix(const fs::path& p) {
     }
     return "." + stem + ".tmp";
 }
+
+// Exclusive flock()s on the folders of a batch's targets, taken in one order (device, inode) and
+// held while the batch renames its files into place: another envtrace committing outputs of the
+// same names waits, so that each set lands whole -- two renders to one name leave one render's
+// image, preview, stats and state, never a mix. Best effort: a folder that cannot be opened or
+// locked (a file system without flock) is renamed into without.
+class FolderLocks {
+  public:
+    template <class Entries> explicit FolderLocks(const Entries& entries) {
+        std::vector<std::pair<std::pair<dev_t, ino_t>, std::string>> folders;
+        for (const auto& e : entries) {
+            const std::string dir = folder_of(e.target);
+            struct stat st {};
+            if (::stat(dir.c_str(), &st) == 0)
+                folders.push_back({{st.st_dev, st.st_ino}, dir});
+        }
+        std::sort(folders.begin(), folders.end());
+        folders.erase(std::unique(folders.begin(), folders.end(),
+                                  [](const auto& a, const auto& b) { return a.first == b.first; }),
+                      folders.end());
+        for (const auto& f : folders) {
+            const int fd = ::open(f.second.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+            if (fd < 0)
+                continue;
+            int r;
+            do
+                r = ::flock(fd, LOCK_EX);
+            while (r != 0 && errno == EINTR);
+            if (r != 0) {
+                ::close(fd);
+                continue;
+            }
+            fds_.push_back(fd);
+        }
+    }
+    ~FolderLocks() {
+        for (int fd : fds_)
+            ::close(fd); // releases the lock
+    }
+    FolderLocks(const FolderLocks&) = delete;
+    FolderLocks& operator=(const FolderLocks&) = delete;
+
+  private:
+    std::vector<int> fds_;
+};
 
 } // namespace
 
@@ -162,6 +210,7 @@ void OutputBatch::commit() {
         if (!e.written)
             throw Error(e.target + ": was not written (a bug)");
     SignalHold hold;
+    FolderLocks locks(entries_);
     for (const auto& e : entries_) {
         std::error_code ec;
         fs::rename(e.temporary, e.target, ec);

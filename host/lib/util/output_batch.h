@@ -1,9 +1,10 @@
 // Outputs written all-or-nothing. Each file is first written to a hidden temporary beside its
 // target, ".NAME.tmpPID.EXT" (the same folder, so the rename is atomic; the same extension, so
 // writers pick the format from it). Only when every file of the batch has been written are they
-// renamed into place, with SIGINT, SIGTERM and SIGHUP held back; a batch that is abandoned (an
-// error, an exception) removes its temporaries, and a run killed outright leaves temporaries
-// that the next batch naming the same targets removes.
+// renamed into place, with SIGINT, SIGTERM and SIGHUP held back and the targets' folders locked
+// (flock: another process's batch of the same names lands whole before or after, never mixed
+// with this one); a batch that is abandoned (an error, an exception) removes its temporaries, and
+// a run killed outright leaves temporaries that the next batch naming the same targets removes.
 #pragma once
 #include <functional>
 #include <string>
