@@ -35,6 +35,11 @@ namespace et::cli {
 // writes no preview: out.pfm -> (out.pfm, "").
 std::pair<std::string, std::string> output_names(const std::string& out) {
     fs::path p(out);
+    std::error_code ec;
+    if (!out.empty() && (out.back() == '/' || p.filename() == "." || p.filename() == ".." ||
+                         fs::is_directory(p, ec)))
+        throw Error(out + ": is a folder: name the image to write in it (e.g. " +
+                    (fs::path(out) / "render.exr").lexically_normal().string() + ")");
     std::string ext = p.extension().string();
     for (auto& c : ext)
         c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));

@@ -100,6 +100,8 @@ TEST(CliOptions, OptionsThatWouldBeDroppedAreRefusedOrWarned) {
     const std::string dir = ett::scratch_dir("cli-opt-dropped");
     const std::string scene = write_scene(dir), out = dir + "/o.exr";
     expect_error(ett::run_envtrace(render(scene, "", {}), dir), "--output is empty");
+    for (const std::string& folder : {dir + "/", dir + "/.", dir})
+        expect_error(ett::run_envtrace(render(scene, folder, {}), dir), "is a folder");
     expect_error(ett::run_envtrace(render(scene, out, {"--stats", ""}), dir), "--stats is empty");
     const std::string lights = dir + "/l.json";
     expect_ok(ett::run_envtrace({"lights", dir + "/sky.pfm", "-n", "4", "-o", lights}, dir));

@@ -298,11 +298,11 @@ TEST(SceneBadInput, BadOutputPathsLeaveNothing) {
                        "no/such/dir", dir);
     expect_clean_error(run_cli(render_args(dir + "/s.json", dir + "/out.txt"), dir), "out.txt",
                        dir);
-    // The destination is a folder: the render runs, the final rename fails; the temporary file
-    // must be gone and the folder untouched.
+    // The destination is a folder: refused before the render, no temporary, the folder
+    // untouched.
     fs::create_directories(dir + "/taken.exr");
     const CliRun r = run_cli(render_args(dir + "/s.json", dir + "/taken.exr"), dir);
-    expect_clean_error(r, "taken.exr: cannot write: it is a folder", dir);
+    expect_clean_error(r, "taken.exr: is a folder", dir);
     EXPECT_TRUE(fs::is_directory(dir + "/taken.exr"));
     // A read-only folder (not for root).
     fs::create_directories(dir + "/ro");
