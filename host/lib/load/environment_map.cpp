@@ -18,6 +18,11 @@
 
 namespace et {
 
+double texel_solid_angle(int row, int w, int h) {
+    const double t0 = M_PI * row / h, t1 = M_PI * (row + 1) / h;
+    return 2.0 * M_PI / w * (std::cos(t0) - std::cos(t1));
+}
+
 double convention_rotation_degrees(LatLongConvention c) {
     switch (c) {
     case LatLongConvention::mitsuba:

@@ -64,6 +64,9 @@ SanitizeReport sanitize_texels(RgbImage& image);
 // the map's later rows are still decoding. The result does not depend on the thread count.
 EnvMap load_envmap(const std::string& path, const DistributionOptions& options);
 
+// Exact solid angle of texel row `row` of an h-row lat-long grid, per texel of a w-wide row.
+double texel_solid_angle(int row, int w, int h);
+
 // Wraps an in-memory image (e.g. the procedural sky) the same way.
 EnvMap make_envmap(std::string name, RgbImage image, const DistributionOptions& options);
 

@@ -1,6 +1,8 @@
 #include "load/sky.h"
 
+#include "kernels/bsdf.h"
 #include "kernels/latlong.h"
+#include "load/environment_map.h"
 
 #include <algorithm>
 #include <cmath>
@@ -30,7 +32,7 @@ RgbImage make_sky(const SkyParams& p) {
     img.width = p.width;
     img.height = p.height;
     img.rgb.assign(static_cast<size_t>(p.width) * p.height * 3, 0.0f);
-    const double dv = M_PI / p.height, du = 2.0 * M_PI / p.width;
+    const double dv = M_PI / p.height; // a texel row's angle
     // A disc of at least two texels is drawn by the texels' 4 x 4 sub-samples; a smaller one by
     // its own points below: a disc narrower than the sub-samples would fall between them and be
     // lost, and one of a few texels would get the wrong power.
@@ -70,9 +72,8 @@ RgbImage make_sky(const SkyParams& p) {
     // texel it falls in, unless below the horizon. Its power is exact at any radius and
     // resolution, whatever the grid makes of its shape.
     if (small_disc && sun_omega > 0.0 && p.sun_radiance > 0.0f) {
-        const etk::float3 up =
-            std::fabs(sun.y) < 0.9f ? etk::make_float3(0, 1, 0) : etk::make_float3(1, 0, 0);
-        const etk::float3 t = etk::normalize(etk::cross(up, sun)), b = etk::cross(sun, t);
+        etk::float3 t, b;
+        etk::etk_make_frame(sun, &t, &b);
         constexpr int n = 64;
         const double share = sun_omega / (n * n);
         for (int i = 0; i < n; ++i) {
@@ -89,7 +90,7 @@ RgbImage make_sky(const SkyParams& p) {
                 const etk::float2 uv = etk::etk_dir_to_latlong(etk::normalize(d));
                 const int x = std::clamp(static_cast<int>(uv.x * p.width), 0, p.width - 1);
                 const int y = std::clamp(static_cast<int>(uv.y * p.height), 0, p.height - 1);
-                const double texel = du * (std::cos(dv * y) - std::cos(dv * (y + 1)));
+                const double texel = texel_solid_angle(y, p.width, p.height);
                 for (int k = 0; k < 3; ++k)
                     img.at(x, y)[k] +=
                         static_cast<float>(share / texel) * p.sun_radiance * sun_col[k];

@@ -13,11 +13,6 @@
 
 namespace et {
 
-double texel_solid_angle(int row, int w, int h) {
-    const double t0 = M_PI * row / h, t1 = M_PI * (row + 1) / h;
-    return 2.0 * M_PI / w * (std::cos(t0) - std::cos(t1));
-}
-
 glm::dvec3 texel_direction(int row, int col, int w, int h) {
     const etk::float3 d = etk::etk_latlong_to_dir(
         etk::make_float2((static_cast<float>(col) + 0.5f) / static_cast<float>(w),

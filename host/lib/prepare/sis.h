@@ -28,9 +28,6 @@
 
 namespace et {
 
-// Exact solid angle of texel row `row` of an h-row lat-long grid, per texel of a w-wide row.
-double texel_solid_angle(int row, int w, int h);
-
 // Map-space direction of the centre of texel (row, col).
 glm::dvec3 texel_direction(int row, int col, int w, int h);
 
