@@ -53,6 +53,7 @@ CASES = {
     "glass_smooth": ("smooth.pfm", {"type": "dielectric", "ior": 1.5}, 16),
     "rough_glass_a0.3_sun": ("sun.pfm", {"type": "dielectric", "ior": 1.5, "roughness": 0.3}, 16),
     "rough_glass_a0.1_smooth": ("smooth.pfm", {"type": "dielectric", "ior": 1.33, "roughness": 0.1}, 16),
+    "textured_ground_sun": ("sun.pfm", DIFFUSE, 3),
     "diffuse_grace": ("grace.hdr", DIFFUSE, 3),
     # Mitsuba's own material-preview scene from its XML (data/reference/matpreview), against
     # scenes/matpreview.json, envtrace's conversion of it (z-up to y-up, the map's to_world as
@@ -61,10 +62,14 @@ CASES = {
     "metal_a0.2_esplanade": ("royal_esplanade_1k.hdr", {"type": "microfacet", "specular": [1, 1, 1], "roughness": 0.2}, 3),
 }
 GROUND = {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}
+# Cases whose ground is not GROUND: an 8-bit sRGB PNG albedo (write_texture), red growing with u
+# and green with v, so that a flipped or transposed lookup or a missing sRGB decode shows.
+TEXTURED = {"type": "diffuse", "albedo": {"texture": "ground.png", "uv_scale": 2}}
+GROUND_OF = {"textured_ground_sun": TEXTURED}
 # --tiny (the ctest run): the analytic maps without the sun's caustics, whose few-sample estimates
 # are too heavy-tailed for four seeds to measure their noise.
 TINY = ["diffuse_sun", "metal_a0.2_sun", "metal_a0.05_smooth", "mirror_smooth", "glass_smooth",
-        "rough_glass_a0.1_smooth", "diffuse_grace", "matpreview_diffuse"]
+        "rough_glass_a0.1_smooth", "textured_ground_sun", "diffuse_grace", "matpreview_diffuse"]
 # --check: a case agrees when its blocks' z-scores have an rms of at most Z_RMS (about 1 when the
 # two renderers agree, more with few seeds, whose spread estimates are t-distributed) and its image
 # mean is within MEAN_TOL plus four standard errors of Mitsuba's.
@@ -154,8 +159,30 @@ def write_pfm(path, img):
 
 
 def ground_obj(path, s=4.0):
+    """The ground quad, texture coordinates (0, 0) .. (1, 1) from its -x +z corner (OBJ's v up)."""
     with open(path, "w") as o:
-        o.write(f"v {-s} 0 {s}\nv {s} 0 {s}\nv {s} 0 {-s}\nv {-s} 0 {-s}\nf 1 2 3\nf 1 3 4\n")
+        o.write(f"v {-s} 0 {s}\nv {s} 0 {s}\nv {s} 0 {-s}\nv {-s} 0 {-s}\n")
+        o.write("vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+
+
+def write_texture(path, n=32):
+    """A smooth 8-bit sRGB texture as PNG: red grows with u (to the right), green with v (up: the
+    top row is v = 1), blue constant."""
+    import struct
+    import zlib
+    u = (np.arange(n) + 0.5) / n
+    img = np.zeros((n, n, 3), np.uint8)
+    img[..., 0] = np.round(40 + 200 * u)[None, :]
+    img[..., 1] = np.round(40 + 200 * u[::-1])[:, None]
+    img[..., 2] = 120
+    raw = b"".join(b"\x00" + row.tobytes() for row in img)
+
+    def chunk(t, d):
+        return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xFFFFFFFF)
+
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", n, n, 8, 2, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
 CAMERA = {"eye": [0.0, 1.6, 4.2], "target": [0.0, 0.8, 0.0], "up": [0, 1, 0], "fov": 32}
@@ -167,7 +194,7 @@ def envtrace_scene(tmp, case, size):
         return envtrace_matpreview(tmp, case, size)
     s = {"camera": CAMERA, "film": {"width": size, "height": size},
          "environment": {"map": map_path(tmp, envmap), "convention": "mitsuba"},
-         "materials": {"ground": GROUND, "object": mat},
+         "materials": {"ground": GROUND_OF.get(case, GROUND), "object": mat},
          "shapes": [{"type": "mesh", "file": "ground.obj", "material": "ground"},
                     {"type": "mesh", "file": "sphere.obj", "material": "object",
                      "transform": {"translate": [0, 0.8, 0], "scale": 0.8}}],
@@ -226,8 +253,13 @@ def mitsuba_matpreview(mi, tmp, case, size, spp, seed):
     return np.array(mi.render(scene, seed=seed), dtype=np.float64)[:, :, :3]
 
 
-def mitsuba_bsdf(mi, mat):
+def mitsuba_bsdf(mi, mat, tmp=None):
     t = mat["type"]
+    if t == "diffuse" and isinstance(mat["albedo"], dict):  # Mitsuba decodes an 8-bit PNG from sRGB
+        s = mat["albedo"]["uv_scale"]
+        return {"type": "diffuse", "reflectance": {
+            "type": "bitmap", "filename": os.path.join(tmp, mat["albedo"]["texture"]),
+            "to_uv": mi.ScalarTransform4f().scale([s, s, 1])}}
     if t == "diffuse":
         return {"type": "diffuse", "reflectance": {"type": "rgb", "value": mat["albedo"]}}
     if t == "mirror":
@@ -259,7 +291,7 @@ def mitsuba_render(mi, tmp, case, size, spp, seed):
                             "pixel_format": "rgb"}},
         "env": {"type": "envmap", "filename": map_path(tmp, envmap, "mitsuba")},
         "ground": {"type": "obj", "filename": os.path.join(tmp, "ground.obj"), "face_normals": True,
-                   "bsdf": mitsuba_bsdf(mi, GROUND)},
+                   "bsdf": mitsuba_bsdf(mi, GROUND_OF.get(case, GROUND), tmp)},
         "object": {"type": "obj", "filename": os.path.join(tmp, "sphere.obj"), "face_normals": True,
                    "to_world": T().translate([0, 0.8, 0]) @ T().scale(0.8), "bsdf": mitsuba_bsdf(mi, mat)},
     })
@@ -288,7 +320,7 @@ def compare_case(mi, tmp, case, args):
         img = os.path.join(tmp, f"{case}_{seed}.pfm")
         t0 = time.time()
         common.run([common.envtrace(), "render", scene, "--spp", str(args.spp), "--seed", str(seed),
-                    "--backend", "cpu", "-o", img])
+                    "--backend", args.backend, "--strategy", args.strategy, "-o", img])
         et_t += time.time() - t0
         et.append(read_pfm(img))
         t0 = time.time()
@@ -325,6 +357,8 @@ def main():
     p.add_argument("--spp", type=int, default=256, help="samples per pixel of each seed, both renderers")
     p.add_argument("--seeds", type=int, default=4)
     p.add_argument("--check", action="store_true", help="exit 1 when a case disagrees")
+    p.add_argument("--strategy", default="mis", help="envtrace's estimator (envtrace render --strategy)")
+    p.add_argument("--backend", default="cpu", choices=["cpu", "opencl"], help="envtrace's back end")
     args = p.parse_args()
     unknown = [c for c in args.cases if c not in CASES]
     if unknown:
@@ -344,11 +378,13 @@ def main():
     sphere_obj(os.path.join(tmp, "sphere.obj"))
     ground_obj(os.path.join(tmp, "ground.obj"))
     write_maps(tmp)
+    write_texture(os.path.join(tmp, "ground.png"))
     rows = [compare_case(mi, tmp, case, args) for case in args.cases]
     with open(os.path.join(out, "peer_mitsuba.md"), "w") as f:
-        f.write(f"Mitsuba {mi.__version__} (scalar_rgb, path) against envtrace (native, mis, sobol); "
-                f"{args.size}x{args.size}, {args.spp} spp x {args.seeds} seeds each "
-                f"(`tools/experiments/peer_mitsuba.py --spp {args.spp} --seeds {args.seeds}`)\n\n")
+        f.write(f"Mitsuba {mi.__version__} (scalar_rgb, path) against envtrace ({args.backend}, {args.strategy}, "
+                f"sobol); {args.size}x{args.size}, {args.spp} spp x {args.seeds} seeds each "
+                f"(`tools/experiments/peer_mitsuba.py --spp {args.spp} --seeds {args.seeds} --strategy "
+                f"{args.strategy} --backend {args.backend}`)\n\n")
         f.write("| case | mean ratio R / G / B | block z rms | block z max | verdict | envtrace s | mitsuba s |\n")
         f.write("|---|---|---|---|---|---|---|\n")
         for r in rows:
