@@ -16,10 +16,12 @@ ETK_BEGIN
 
 // The material's albedo as denoisers take it (Intel OIDN: the directional albedo, approximated):
 // the diffuse reflectance, plus the specular reflectance at normal incidence for glossy
-// lobes, each channel clamped to [0, 1]; a mirror's is its specular colour.
+// lobes (a conductor's: its Fresnel reflectance there), each channel clamped to [0, 1]; a mirror's
+// is its specular colour.
 ETK_FN float3 etk_aov_albedo(EtkMaterial m) {
     float3 a = m.type == ETK_MAT_MIRROR       ? m.specular
                : m.type == ETK_MAT_MICROFACET ? m.albedo + m.specular
+               : m.type == ETK_MAT_CONDUCTOR  ? etk_fresnel_conductor(m.albedo, m.specular, 1.0f)
                                               : m.albedo;
     return make_float3(fmin(fmax(a.x, 0.0f), 1.0f), fmin(fmax(a.y, 0.0f), 1.0f),
                        fmin(fmax(a.z, 0.0f), 1.0f));

@@ -1,5 +1,6 @@
 // Materials: Lambertian, Cook-Torrance microfacet (GGX distribution, separable Smith shadowing,
-// Schlick Fresnel) with an optional Lambertian base ("plastic"), and a perfect mirror.
+// Schlick Fresnel) with an optional Lambertian base ("plastic"), a conductor (the same GGX lobe
+// with a metal's exact Fresnel reflectance), and a perfect mirror.
 // Everything is in the local shading frame: normal = +z. Evaluations exclude the cosine term.
 //
 // A material is two float4: (albedo rgb, type as int bits), (specular F0 rgb, GGX alpha).
@@ -11,6 +12,11 @@
 // draws a normal that faces away from wo, so fewer samples go below the horizon and the weights
 // f cos / pdf vary only through G1(wi) and the Fresnel term. EtkMaterial.vndf picks which; the
 // pdf follows it.
+//
+// A conductor (ETK_MAT_CONDUCTOR) is the same GGX lobe with the exact Fresnel reflectance of a
+// metal of complex index eta + i k per channel in place of Schlick's, and no diffuse base: it
+// stores (eta rgb, type), (k rgb, GGX alpha), eta where the others keep the albedo, k where they
+// keep F0.
 //
 // Dielectrics (glass; dielectric.h): ETK_MAT_DIELECTRIC (rough, GGX) and
 // ETK_MAT_SMOOTH_DIELECTRIC (delta) store (tint rgb, type), (ior, -, -, GGX alpha); they transmit
@@ -28,6 +34,7 @@
 #define ETK_MAT_MIRROR 2
 #define ETK_MAT_DIELECTRIC 3        // rough glass (dielectric.h)
 #define ETK_MAT_SMOOTH_DIELECTRIC 4 // smooth glass: delta reflection and refraction
+#define ETK_MAT_CONDUCTOR 5         // metal: the GGX lobe with a conductor's Fresnel reflectance
 
 ETK_BEGIN
 
@@ -102,8 +109,41 @@ ETK_FN float3 etk_schlick(float3 f0, float cos_d) {
     return f0 + (make_float3(1.0f, 1.0f, 1.0f) - f0) * m5;
 }
 
+// The unpolarised Fresnel reflectance of a conductor of complex index eta + i k (relative to the
+// outside) at incidence cos_i, one channel (the exact form, as pbrt-v3's FrConductor and Mitsuba's
+// fresnel_conductor write it; k = 0 gives a dielectric's reflectance from the outside).
+ETK_FN float etk_fresnel_conductor1(float eta, float k, float cos_i) {
+    float c2 = clamp(cos_i * cos_i, 0.0f, 1.0f), s2 = 1.0f - c2;
+    float t0 = eta * eta - k * k - s2;
+    float ab2 = sqrt(fmax(t0 * t0 + 4.0f * eta * eta * k * k, 0.0f)); // a^2 + b^2
+    float a = sqrt(fmax(0.5f * (ab2 + t0), 0.0f));
+    float t1 = ab2 + c2, t2 = 2.0f * a * sqrt(c2);
+    float rs = (t1 - t2) / fmax(t1 + t2, 1e-30f);
+    float t3 = c2 * ab2 + s2 * s2, t4 = t2 * s2;
+    float rp = rs * (t3 - t4) / fmax(t3 + t4, 1e-30f);
+    return 0.5f * (rs + rp);
+}
+ETK_FN float3 etk_fresnel_conductor(float3 eta, float3 k, float cos_i) {
+    return make_float3(etk_fresnel_conductor1(eta.x, k.x, cos_i),
+                       etk_fresnel_conductor1(eta.y, k.y, cos_i),
+                       etk_fresnel_conductor1(eta.z, k.z, cos_i));
+}
+
+// Whether the material's lobe is the GGX reflection (Cook-Torrance or conductor).
+ETK_FN int etk_bsdf_is_glossy(EtkMaterial m) {
+    return m.type == ETK_MAT_MICROFACET || m.type == ETK_MAT_CONDUCTOR;
+}
+
+// The GGX lobe's Fresnel factor at cos_d = wi . h.
+ETK_FN float3 etk_microfacet_fresnel(EtkMaterial m, float cos_d) {
+    return m.type == ETK_MAT_CONDUCTOR ? etk_fresnel_conductor(m.albedo, m.specular, cos_d)
+                                       : etk_schlick(m.specular, cos_d);
+}
+
 // Probability of choosing the specular lobe of a microfacet material with a diffuse base.
 ETK_FN float etk_specular_weight(EtkMaterial m) {
+    if (m.type == ETK_MAT_CONDUCTOR)
+        return 1.0f;
     float ws = etk_luma(m.specular);
     float wd = etk_luma(m.albedo) * (1.0f - etk_max3(m.specular));
     return ws + wd > 0.0f ? ws / (ws + wd) : 1.0f;
@@ -130,8 +170,10 @@ ETK_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
     float3 h = normalize(wo + wi);
     float d = etk_ggx_d(h.z, m.alpha);
     float g = etk_smith_g1(wo.z, m.alpha) * etk_smith_g1(wi.z, m.alpha);
-    float3 f = etk_schlick(m.specular, dot(wi, h));
+    float3 f = etk_microfacet_fresnel(m, dot(wi, h));
     float3 spec = f * (d * g / (4.0f * wo.z * wi.z));
+    if (m.type == ETK_MAT_CONDUCTOR)
+        return spec;
     return spec + m.albedo * (ETK_INV_PI * (1.0f - etk_max3(m.specular)));
 }
 
@@ -179,10 +221,10 @@ ETK_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 u, float l
         s.delta = 1;
         return s;
     }
-    if (m.type == ETK_MAT_MICROFACET && lobe < etk_specular_weight(m) && m.vndf) {
+    if (etk_bsdf_is_glossy(m) && lobe < etk_specular_weight(m) && m.vndf) {
         float3 h = etk_sample_ggx_vndf(wo, m.alpha, u);
         s.wi = h * (2.0f * dot(wo, h)) - wo;
-    } else if (m.type == ETK_MAT_MICROFACET && lobe < etk_specular_weight(m)) {
+    } else if (etk_bsdf_is_glossy(m) && lobe < etk_specular_weight(m)) {
         // GGX normal distribution sampling: pdf(h) = D(h) cos(theta_h).
         float a2 = m.alpha * m.alpha;
         float cos2 = (1.0f - u.x) / (1.0f + (a2 - 1.0f) * u.x);

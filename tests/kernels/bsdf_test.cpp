@@ -38,6 +38,14 @@ etk::EtkMaterial material(int type, float albedo, float f0, float alpha, int vnd
     return m;
 }
 
+// Gold (eta and k in albedo's and F0's places, bsdf.h).
+etk::EtkMaterial conductor(float alpha, int vndf) {
+    etk::EtkMaterial m = material(ETK_MAT_CONDUCTOR, 0.0f, 0.0f, alpha, vndf);
+    m.albedo = etk::make_float3(0.143f, 0.375f, 1.442f);
+    m.specular = etk::make_float3(3.983f, 2.386f, 1.603f);
+    return m;
+}
+
 std::vector<Config> configs() {
     std::vector<Config> c;
     for (float cos_o : {1.0f, 0.6f, 0.2f, 0.05f}) {
@@ -51,6 +59,9 @@ std::vector<Config> configs() {
             c.push_back(
                 {"plastic vndf", material(ETK_MAT_MICROFACET, 0.5f, 0.04f, alpha, 1), cos_o});
         }
+        for (float alpha : {0.05f, 0.5f})
+            for (int vndf : {0, 1})
+                c.push_back({vndf ? "conductor vndf" : "conductor", conductor(alpha, vndf), cos_o});
     }
     return c;
 }
@@ -198,6 +209,58 @@ TEST(Bsdf, NothingBelowTheHorizonOrFromBehind) {
     EXPECT_EQ(etk::etk_bsdf_eval(m, down, up).x, 0.0f);
     EXPECT_EQ(etk::etk_bsdf_pdf(m, up, down), 0.0f);
     EXPECT_EQ(etk::etk_bsdf_sample(m, down, etk::make_float2(0.3f, 0.7f), 0.1f).pdf, 0.0f);
+}
+
+// The conductor's Fresnel reflectance: a dielectric's when k = 0 (at every angle, against
+// dielectric.h's own formula), the closed form ((n - 1)^2 + k^2) / ((n + 1)^2 + k^2) head-on, 1 at
+// grazing incidence, and between 0 and 1 growing towards grazing for metals.
+TEST(Bsdf, ConductorFresnelIsTheDielectricsAtZeroKAndTheClosedFormHeadOn) {
+    for (float eta : {1.1f, 1.33f, 1.5f, 2.4f, 3.5f})
+        for (int i = 0; i <= 100; ++i) {
+            const float c = std::max(1e-4f, i / 100.0f);
+            EXPECT_NEAR(etk::etk_fresnel_conductor1(eta, 0.0f, c),
+                        etk::etk_fresnel_dielectric(c, eta), 2e-6f)
+                << "eta " << eta << " cos " << c;
+        }
+    const float metals[][2] = {{0.143f, 3.983f}, {0.201f, 3.913f}, {1.658f, 9.224f},
+                               {4.370f, 5.207f}, {1.0f, 0.5f},     {0.05f, 0.05f}};
+    for (const auto& nk : metals) {
+        const float n = nk[0], k = nk[1];
+        EXPECT_NEAR(etk::etk_fresnel_conductor1(n, k, 1.0f),
+                    ((n - 1) * (n - 1) + k * k) / ((n + 1) * (n + 1) + k * k), 1e-6f);
+        EXPECT_NEAR(etk::etk_fresnel_conductor1(n, k, 0.0f), 1.0f, 1e-6f);
+        for (int i = 0; i <= 100; ++i) {
+            const float f = etk::etk_fresnel_conductor1(n, k, i / 100.0f);
+            ASSERT_TRUE(f >= 0.0f && f <= 1.0f) << n << " " << k << " " << i;
+        }
+    }
+}
+
+// A conductor whose reflectance is 1 everywhere (k -> infinity) is the Cook-Torrance lobe of
+// F0 = 1 with no base: the same GGX, Smith and sampling, only the Fresnel factor differs.
+TEST(Bsdf, ConductorOfUnitReflectanceIsTheMicrofacetLobeOfUnitF0) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> U(0.0f, 0.99999994f);
+    for (float alpha : {0.05f, 0.3f, 1.0f})
+        for (int vndf : {0, 1}) {
+            etk::EtkMaterial metal = material(ETK_MAT_CONDUCTOR, 0.0f, 0.0f, alpha, vndf);
+            metal.albedo = etk::make_float3(1.0f, 1.0f, 1.0f);
+            metal.specular = etk::make_float3(1e4f, 1e4f, 1e4f);
+            const etk::EtkMaterial ct = material(ETK_MAT_MICROFACET, 0.0f, 1.0f, alpha, vndf);
+            for (int k = 0; k < 2000; ++k) {
+                const etk::float3 wo = wo_of(std::max(0.02f, U(rng)));
+                const etk::float2 u = etk::make_float2(U(rng), U(rng));
+                const float lobe = U(rng);
+                const etk::EtkBsdfSample a = etk::etk_bsdf_sample(metal, wo, u, lobe),
+                                         b = etk::etk_bsdf_sample(ct, wo, u, lobe);
+                ASSERT_EQ(a.pdf, b.pdf);
+                ASSERT_NEAR(a.weight.x, b.weight.x, 1e-3f * b.weight.x + 1e-7f);
+                if (b.pdf > 0.0f) {
+                    const float f = etk::etk_bsdf_eval(ct, wo, b.wi).y;
+                    ASSERT_NEAR(etk::etk_bsdf_eval(metal, wo, b.wi).y, f, 1e-3f * f);
+                }
+            }
+        }
 }
 
 } // namespace

@@ -37,6 +37,7 @@ const char* kScene = R"({
               "roughness": {"checker": {"color0": 0.02, "color1": 0.5}}},
     "brushed": {"type": "microfacet", "roughness": 0.2, "specular": [0.95, 0.64, 0.54]},
     "chrome": {"type": "mirror", "specular": [0.9, 0.9, 0.9]},
+    "gold": {"type": "conductor", "eta": [0.143, 0.375, 1.442], "k": [3.983, 2.386, 1.603], "roughness": 0.1},
     "glass": {"type": "dielectric", "ior": 1.5},
     "frosted": {"type": "dielectric", "ior": 1.5, "roughness": 0.15, "tint": [0.85, 0.95, 1.0]}
   },
@@ -47,7 +48,8 @@ const char* kScene = R"({
     {"type": "sphere", "center": [0, 0.5, 0], "radius": 0.5, "material": "brushed", "segments": 12},
     {"type": "sphere", "center": [1.2, 0.5, 0], "radius": 0.5, "material": "chrome", "segments": 12},
     {"type": "sphere", "center": [2.4, 0.5, 0], "radius": 0.5, "material": "glass", "segments": 12},
-    {"type": "sphere", "center": [0.6, 0.5, 1.2], "radius": 0.4, "material": "frosted", "segments": 12}
+    {"type": "sphere", "center": [0.6, 0.5, 1.2], "radius": 0.4, "material": "frosted", "segments": 12},
+    {"type": "sphere", "center": [-0.6, 0.5, 1.2], "radius": 0.4, "material": "gold", "segments": 12}
   ],
   "render": {"spp": 2, "max_depth": 6, "strategy": "mis", "sampler": "sobol", "seed": 1}
 })";
@@ -100,7 +102,8 @@ TEST(Memcheck, EveryMaterialAndStrategyRendersNatively) {
 
 TEST(Memcheck, MeshSceneRendersNatively) {
     ETT_DATA_FILE(mesh, "meshes/cornell_box.obj");
-    render_every_strategy(load_small(std::string(ENVTRACE_SOURCE_DIR) + "/scenes/cornell_box.json"));
+    render_every_strategy(
+        load_small(std::string(ENVTRACE_SOURCE_DIR) + "/scenes/cornell_box.json"));
 }
 
 TEST(Memcheck, LightSetAndSisRenderNatively) {

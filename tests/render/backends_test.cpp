@@ -36,10 +36,11 @@ std::string write_scene(const std::string& name, const std::string& map, bool bu
       << map << R"(", "rotation": 30},
   "materials": {
     "ground": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]},
-    "clay": {"type": "diffuse", "albedo": [0.8, 0.4, 0.3]},
     "glossy": {"type": "plastic", "albedo": [0.2, 0.3, 0.7], "roughness": 0.2},
     "metal": {"type": "microfacet", "specular": [0.9, 0.8, 0.6], "roughness": 0.35},
-    "chrome": {"type": "mirror", "specular": [0.9, 0.9, 0.9]}
+    "chrome": {"type": "mirror", "specular": [0.9, 0.9, 0.9]},
+    "gold": {"type": "conductor", "eta": [0.143, 0.375, 1.442], "k": [3.983, 2.386, 1.603],
+             "roughness": 0.25}
   },
   "shapes": [
     {"type": "quad", "center": [0, 0, 0], "size": 8, "material": "ground"},
@@ -51,7 +52,7 @@ std::string write_scene(const std::string& name, const std::string& map, bool bu
     {"type": "sphere", "center": [1.3, 0.4, -0.5], "radius": 0.4, "material": "chrome"}
 )";
     else
-        f << R"(    {"type": "sphere", "center": [-1.0, 0.5, 0], "radius": 0.5, "material": "clay"},
+        f << R"(    {"type": "sphere", "center": [-1.0, 0.5, 0], "radius": 0.5, "material": "gold"},
     {"type": "sphere", "center": [0, 0.5, -0.2], "radius": 0.5, "material": "metal"},
     {"type": "sphere", "center": [1.0, 0.5, 0], "radius": 0.5, "material": "chrome",
      "segments": 24, "smooth": false}

@@ -8,6 +8,7 @@ and box-filtered pixels, and materials whose models are the same in both:
   mirror       a perfect mirror of reflectance R              -> conductor (material none, R)
   microfacet   GGX alpha, separable Smith, F0 = 1             -> roughconductor, ggx, material none
                (Schlick's Fresnel of F0 = 1 is 1: the lobe's D, G and sampling compared alone)
+  conductor    GGX alpha, complex index eta + i k per channel -> roughconductor, ggx, eta, k
   dielectric   smooth or GGX (Walter) glass of index ior      -> dielectric / roughdielectric
 
 Mitsuba's max_depth counts the emitter's vertex too: envtrace's depth d is Mitsuba's d + 1. Each
@@ -49,6 +50,12 @@ CASES = {
     "mirror_smooth": ("smooth.pfm", {"type": "mirror", "specular": [0.9, 0.7, 0.5]}, 3),
     "metal_a0.2_sun": ("sun.pfm", {"type": "microfacet", "specular": [1, 1, 1], "roughness": 0.2}, 3),
     "metal_a0.05_smooth": ("smooth.pfm", {"type": "microfacet", "specular": [1, 1, 1], "roughness": 0.05}, 3),
+    # Metals of complex index (Mitsuba 3.9.1's RGB eta and k for Au and Cu): the conductor's
+    # Fresnel reflectance, which Mitsuba's roughconductor states the same way.
+    "gold_a0.2_sun": ("sun.pfm", {"type": "conductor", "eta": [0.143036, 0.375307, 1.44205],
+                                  "k": [3.983, 2.38556, 1.60336], "roughness": 0.2}, 3),
+    "copper_a0.05_smooth": ("smooth.pfm", {"type": "conductor", "eta": [0.201005, 0.92375, 1.10222],
+                                           "k": [3.91326, 2.45305, 2.14209], "roughness": 0.05}, 3),
     "glass_sun": ("sun.pfm", {"type": "dielectric", "ior": 1.5}, 16),
     "glass_smooth": ("smooth.pfm", {"type": "dielectric", "ior": 1.5}, 16),
     "rough_glass_a0.3_sun": ("sun.pfm", {"type": "dielectric", "ior": 1.5, "roughness": 0.3}, 16),
@@ -68,8 +75,9 @@ TEXTURED = {"type": "diffuse", "albedo": {"texture": "ground.png", "uv_scale": 2
 GROUND_OF = {"textured_ground_sun": TEXTURED}
 # --tiny (the ctest run): the analytic maps without the sun's caustics, whose few-sample estimates
 # are too heavy-tailed for four seeds to measure their noise.
-TINY = ["diffuse_sun", "metal_a0.2_sun", "metal_a0.05_smooth", "mirror_smooth", "glass_smooth",
-        "rough_glass_a0.1_smooth", "textured_ground_sun", "diffuse_grace", "matpreview_diffuse"]
+TINY = ["diffuse_sun", "metal_a0.2_sun", "metal_a0.05_smooth", "gold_a0.2_sun", "mirror_smooth",
+        "glass_smooth", "rough_glass_a0.1_smooth", "textured_ground_sun", "diffuse_grace",
+        "matpreview_diffuse"]
 # --check: a case agrees when its blocks' z-scores have an rms of at most Z_RMS (about 1 when the
 # two renderers agree, more with few seeds, whose spread estimates are t-distributed) and its image
 # mean is within MEAN_TOL plus four standard errors of Mitsuba's.
@@ -268,6 +276,9 @@ def mitsuba_bsdf(mi, mat, tmp=None):
     if t == "microfacet":  # F0 = 1: Schlick's Fresnel is 1, as a conductor's of material "none"
         assert mat["specular"] == [1, 1, 1]
         return {"type": "roughconductor", "material": "none", "distribution": "ggx", "alpha": mat["roughness"]}
+    if t == "conductor":
+        return {"type": "roughconductor", "distribution": "ggx", "alpha": mat["roughness"],
+                "eta": {"type": "rgb", "value": mat["eta"]}, "k": {"type": "rgb", "value": mat["k"]}}
     if t == "dielectric":
         if mat.get("roughness", 0.0) < 1e-3:
             return {"type": "dielectric", "int_ior": mat["ior"], "ext_ior": 1.0}

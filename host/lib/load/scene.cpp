@@ -143,7 +143,7 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
     Material m;
     m.name = name;
     r.expect_object(j);
-    r.warn_unknown_keys(j, {"type", "albedo", "specular", "roughness", "ior", "tint"});
+    r.warn_unknown_keys(j, {"type", "albedo", "specular", "roughness", "ior", "tint", "eta", "k"});
     const std::string type = r.string(j, "type", "diffuse");
     if (type == "diffuse") {
         m.type = ETK_MAT_DIFFUSE;
@@ -169,13 +169,39 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
                                " (use \"tint\" for a coloured transmission, \"ior\", "
                                "\"roughness\")");
         return m;
+    } else if (type == "conductor" || type == "metal") {
+        // A metal: the GGX lobe with the Fresnel reflectance of a complex index eta + i k per
+        // channel (bsdf.h); the default is silver (Mitsuba 3.9.1's RGB eta and k for "Ag").
+        m.type = ETK_MAT_CONDUCTOR;
+        m.eta = read_vec3(j, "eta", glm::vec3(0.155f, 0.117f, 0.138f), r);
+        m.k = read_vec3(j, "k", glm::vec3(4.83f, 3.12f, 2.15f), r);
+        for (const char* key : {"eta", "k"}) {
+            const glm::vec3 v = key[0] == 'e' ? m.eta : m.k;
+            const float lo = key[0] == 'e' ? 0.01f : 0.0f;
+            if (glm::any(glm::lessThan(v, glm::vec3(lo))) ||
+                glm::any(glm::greaterThan(v, glm::vec3(100.0f))))
+                r.at(key).fail(std::string("each component must be within [") +
+                               (key[0] == 'e' ? "0.01" : "0") + ", 100]");
+        }
+        for (const char* key : {"albedo", "specular", "ior", "tint"})
+            if (j.contains(key))
+                r.at(key).fail(std::string("a conductor has no \"") + key +
+                               "\" (its colour is its complex index: \"eta\" and \"k\", per "
+                               "channel; and \"roughness\")");
+        m.roughness_tex = read_texture_param(j, "roughness", TextureUse::data, dir, r, textures);
+        if (m.roughness_tex < 0)
+            m.roughness = read_float(j, "roughness", 0.1f, 0.0f, 1.0f, r);
+        return m;
     } else {
         r.at("type").fail("unknown material type " + json_excerpt(j["type"]) +
-                          " (use diffuse, microfacet, plastic, mirror or dielectric)");
+                          " (use diffuse, microfacet, plastic, conductor, mirror or dielectric)");
     }
     for (const char* key : {"ior", "tint"})
         if (j.contains(key))
             r.at(key).fail(std::string("only a dielectric material has \"") + key + "\"");
+    for (const char* key : {"eta", "k"})
+        if (j.contains(key))
+            r.at(key).fail(std::string("only a conductor material has \"") + key + "\"");
     // Each may be a texture instead of a constant (load/texture.h).
     m.albedo_tex = read_texture_param(j, "albedo", TextureUse::colour, dir, r, textures);
     m.specular_tex = read_texture_param(j, "specular", TextureUse::colour, dir, r, textures);

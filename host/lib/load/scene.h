@@ -22,6 +22,8 @@ struct Material {
     // Textures (indices into Scene::textures, -1: none) that replace albedo, specular, roughness.
     int albedo_tex = -1, specular_tex = -1, roughness_tex = -1;
     float ior = 1.5f; // dielectrics: index of refraction inside (the front face is outside)
+    // Conductors: complex index of refraction eta + i k per channel, relative to the outside.
+    glm::vec3 eta{0.2f}, k{3.0f};
 };
 
 struct Camera {

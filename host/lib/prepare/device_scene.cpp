@@ -122,7 +122,8 @@ std::vector<int> share_bins(const std::vector<Material>& materials) {
         std::vector<std::pair<int, int>> keys;
         for (const Material& m : materials) {
             const int octave =
-                m.type == ETK_MAT_MICROFACET || m.type == ETK_MAT_DIELECTRIC
+                m.type == ETK_MAT_MICROFACET || m.type == ETK_MAT_CONDUCTOR ||
+                        m.type == ETK_MAT_DIELECTRIC
                     ? static_cast<int>(std::floor(std::log2(std::max(m.roughness, 1e-3f))))
                     : 0;
             const std::pair<int, int> key{m.type, octave};
@@ -142,11 +143,13 @@ void add_materials(const Scene& scene, DeviceScene& d) {
         uint32_t type = static_cast<uint32_t>(m.type);
         float type_bits;
         std::memcpy(&type_bits, &type, 4);
-        d.materials.push_back(etk::make_float4(m.albedo.x, m.albedo.y, m.albedo.z, type_bits));
-        // Dielectrics keep their ior where the others keep F0 (bsdf.h).
+        // Conductors keep eta where the others keep the albedo and k where they keep F0;
+        // dielectrics their ior in F0's first slot (bsdf.h).
+        const bool metal = m.type == ETK_MAT_CONDUCTOR;
+        const glm::vec3 a = metal ? m.eta : m.albedo, b = metal ? m.k : m.specular;
+        d.materials.push_back(etk::make_float4(a.x, a.y, a.z, type_bits));
         const bool glass = m.type == ETK_MAT_DIELECTRIC || m.type == ETK_MAT_SMOOTH_DIELECTRIC;
-        d.materials.push_back(etk::make_float4(glass ? m.ior : m.specular.x, m.specular.y,
-                                               m.specular.z, m.roughness));
+        d.materials.push_back(etk::make_float4(glass ? m.ior : b.x, b.y, b.z, m.roughness));
     }
     if (d.materials.empty())
         d.materials.resize(2);
