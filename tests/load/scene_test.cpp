@@ -358,6 +358,8 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
         {"materials", R"({"m": {"type": "conductor", "k": [1, 2, 1e3]}})", "materials.m.k"},
         {"materials", R"({"m": {"type": "microfacet", "k": [1, 2, 3]}})",
          "materials.m.k: only a conductor"},
+        {"materials", R"({"m": {"type": "glass", "eta": [1, 2, 3]}})",
+         "materials.m.eta: a dielectric has no eta"},
         {"shapes", R"([{"type": "quad", "transform": 5}])", "shapes[0].transform: expected"},
         {"shapes", R"([{"type": "quad", "transform": {"rotate": [0, 1, 0, "x"]}}])",
          "shapes[0].transform.rotate[3]"},

@@ -26,9 +26,11 @@ Writes OUT/peer_mitsuba.md (default docs/figures/peer_mitsuba/)."""
 import json
 import math
 import os
-import subprocess
+import re
+import struct
 import sys
 import time
+import zlib
 
 import numpy as np
 
@@ -176,8 +178,6 @@ def ground_obj(path, s=4.0):
 def write_texture(path, n=32):
     """A smooth 8-bit sRGB texture as PNG: red grows with u (to the right), green with v (up: the
     top row is v = 1), blue constant."""
-    import struct
-    import zlib
     u = (np.arange(n) + 0.5) / n
     img = np.zeros((n, n, 3), np.uint8)
     img[..., 0] = np.round(40 + 200 * u)[None, :]
@@ -238,7 +238,6 @@ def mitsuba_matpreview(mi, tmp, case, size, spp, seed):
     """The XML as shipped, with its shapes read from the OBJ conversions (texture coordinates as
     stored), a box filter (envtrace's
     pixels), the map resampled onto Mitsuba's grid and the object's plastic made diffuse."""
-    import re
     envmap, mat, depth = CASES[case]
     ref = os.path.join(common.data_dir(), "reference", "matpreview")
     with open(os.path.join(ref, "matpreview_scene.xml")) as f:

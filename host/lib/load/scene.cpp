@@ -163,7 +163,7 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
             m.type = ETK_MAT_SMOOTH_DIELECTRIC;
         m.ior = read_float(j, "ior", 1.5f, 0.25f, 4.0f, r);
         m.albedo = glm::clamp(read_vec3(j, "tint", glm::vec3(1.0f), r), 0.0f, 1.0f);
-        for (const char* key : {"albedo", "specular"})
+        for (const char* key : {"albedo", "specular", "eta", "k"})
             if (j.contains(key))
                 r.at(key).fail(std::string("a dielectric has no ") + key +
                                " (use \"tint\" for a coloured transmission, \"ior\", "
