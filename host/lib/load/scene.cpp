@@ -171,18 +171,17 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
         return m;
     } else if (type == "conductor" || type == "metal") {
         // A metal: the GGX lobe with the Fresnel reflectance of a complex index eta + i k per
-        // channel (bsdf.h); the default is silver (Mitsuba 3.9.1's RGB eta and k for "Ag").
+        // channel (bsdf.h); the defaults (scene.h) are silver's.
         m.type = ETK_MAT_CONDUCTOR;
-        m.eta = read_vec3(j, "eta", glm::vec3(0.155f, 0.117f, 0.138f), r);
-        m.k = read_vec3(j, "k", glm::vec3(4.83f, 3.12f, 2.15f), r);
-        for (const char* key : {"eta", "k"}) {
-            const glm::vec3 v = key[0] == 'e' ? m.eta : m.k;
-            const float lo = key[0] == 'e' ? 0.01f : 0.0f;
+        auto index = [&](const char* key, glm::vec3 v, float lo, const char* range) {
+            v = read_vec3(j, key, v, r);
             if (glm::any(glm::lessThan(v, glm::vec3(lo))) ||
                 glm::any(glm::greaterThan(v, glm::vec3(100.0f))))
-                r.at(key).fail(std::string("each component must be within [") +
-                               (key[0] == 'e' ? "0.01" : "0") + ", 100]");
-        }
+                r.at(key).fail(std::string("each component must be within ") + range);
+            return v;
+        };
+        m.eta = index("eta", m.eta, 0.01f, "[0.01, 100]");
+        m.k = index("k", m.k, 0.0f, "[0, 100]");
         for (const char* key : {"albedo", "specular", "ior", "tint"})
             if (j.contains(key))
                 r.at(key).fail(std::string("a conductor has no \"") + key +

@@ -22,8 +22,9 @@ struct Material {
     // Textures (indices into Scene::textures, -1: none) that replace albedo, specular, roughness.
     int albedo_tex = -1, specular_tex = -1, roughness_tex = -1;
     float ior = 1.5f; // dielectrics: index of refraction inside (the front face is outside)
-    // Conductors: complex index of refraction eta + i k per channel, relative to the outside.
-    glm::vec3 eta{0.2f}, k{3.0f};
+    // Conductors: complex index of refraction eta + i k per channel, relative to the outside;
+    // the default is silver (Mitsuba 3.9.1's RGB eta and k for "Ag").
+    glm::vec3 eta{0.155f, 0.117f, 0.138f}, k{4.83f, 3.12f, 2.15f};
 };
 
 struct Camera {
