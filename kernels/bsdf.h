@@ -140,12 +140,16 @@ ETK_FN float3 etk_microfacet_fresnel(EtkMaterial m, float cos_d) {
                                        : etk_schlick(m.specular, cos_d);
 }
 
+// The share of the Lambertian base under the GGX lobe: what the lobe's F0 leaves; none under a
+// conductor (whose albedo slot holds eta).
+ETK_FN float etk_base_share(EtkMaterial m) {
+    return m.type == ETK_MAT_CONDUCTOR ? 0.0f : 1.0f - etk_max3(m.specular);
+}
+
 // Probability of choosing the specular lobe of a microfacet material with a diffuse base.
 ETK_FN float etk_specular_weight(EtkMaterial m) {
-    if (m.type == ETK_MAT_CONDUCTOR)
-        return 1.0f;
     float ws = etk_luma(m.specular);
-    float wd = etk_luma(m.albedo) * (1.0f - etk_max3(m.specular));
+    float wd = etk_luma(m.albedo) * etk_base_share(m);
     return ws + wd > 0.0f ? ws / (ws + wd) : 1.0f;
 }
 
@@ -172,9 +176,7 @@ ETK_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
     float g = etk_smith_g1(wo.z, m.alpha) * etk_smith_g1(wi.z, m.alpha);
     float3 f = etk_microfacet_fresnel(m, dot(wi, h));
     float3 spec = f * (d * g / (4.0f * wo.z * wi.z));
-    if (m.type == ETK_MAT_CONDUCTOR)
-        return spec;
-    return spec + m.albedo * (ETK_INV_PI * (1.0f - etk_max3(m.specular)));
+    return spec + m.albedo * (ETK_INV_PI * etk_base_share(m));
 }
 
 ETK_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {

@@ -263,4 +263,30 @@ TEST(Bsdf, ConductorOfUnitReflectanceIsTheMicrofacetLobeOfUnitF0) {
         }
 }
 
+// A metal's value is its Fresnel reflectance at wi . h times the lobe of unit reflectance: the
+// conductor's Fresnel is the one evaluated (gold, per channel), nothing else of the lobe changes.
+TEST(Bsdf, ConductorIsItsFresnelTimesTheLobeOfUnitReflectance) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> U(0.0f, 0.99999994f);
+    for (float alpha : {0.05f, 0.3f}) {
+        const etk::EtkMaterial gold = conductor(alpha, 1),
+                               unit = material(ETK_MAT_MICROFACET, 0.0f, 1.0f, alpha, 1);
+        for (int k = 0; k < 2000; ++k) {
+            const etk::float3 wo = wo_of(std::max(0.02f, U(rng)));
+            const etk::EtkBsdfSample s =
+                etk::etk_bsdf_sample(unit, wo, etk::make_float2(U(rng), U(rng)), U(rng));
+            if (!(s.pdf > 0.0f))
+                continue;
+            const etk::float3 h = etk::normalize(wo + s.wi);
+            const etk::float3 f = etk::etk_fresnel_conductor(gold.albedo, gold.specular,
+                                                             etk::dot(s.wi, h)),
+                              one = etk::etk_bsdf_eval(unit, wo, s.wi),
+                              g = etk::etk_bsdf_eval(gold, wo, s.wi);
+            ASSERT_NEAR(g.x, f.x * one.x, 1e-5f * f.x * one.x);
+            ASSERT_NEAR(g.z, f.z * one.z, 1e-5f * f.z * one.z);
+            ASSERT_EQ(etk::etk_bsdf_pdf(gold, wo, s.wi), etk::etk_bsdf_pdf(unit, wo, s.wi));
+        }
+    }
+}
+
 } // namespace

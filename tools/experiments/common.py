@@ -4,7 +4,6 @@ to temporary JSON files, cached references (tools/make_reference), renders and c
 Every script takes --tiny (small images and sample counts: the ctest smoke run) and --out DIR."""
 import argparse
 import csv
-import hashlib
 import json
 import os
 import subprocess
@@ -114,6 +113,17 @@ def pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def read_pfm(path):
+    """A PFM image as float64 (h, w, channels), top row first (PFM stores the bottom row first)."""
+    import numpy as np
+    with open(path, "rb") as f:
+        kind = f.readline().strip()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    return data.reshape(h, w, 3 if kind == b"PF" else 1)[::-1].astype(np.float64)
 
 
 def tmpdir(name):

@@ -105,16 +105,6 @@ def file_scene(path, cache, size):
     return name, out
 
 
-def read_pfm(path):
-    with open(path, "rb") as f:
-        kind = f.readline().strip()
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
-    c = 3 if kind == b"PF" else 1
-    return data.reshape(h, w, c).astype(np.float64)
-
-
 def bands(width):
     """Column ranges of the material bands: the image split evenly, one sphere in each."""
     n = len(MATERIALS)
@@ -133,7 +123,7 @@ def render(scene, out, strategy, budget, seed, extra):
             json.dump(s, f)
     args = ["--time-limit", str(budget), "--seed", str(seed)] + args + extra
     stats = common.render(scene, out, args)
-    return read_pfm(out), stats
+    return common.read_pfm(out), stats
 
 
 def strategy_args(strategy):
@@ -162,7 +152,7 @@ def reference(scene, name, ref_seconds, cache, extra):
         if not os.path.exists(out):
             common.render(scene, out, ["--time-limit", str(ref_seconds / 2), "--seed", str(seed),
                                        "--strategy", "mis"] + extra)
-        halves.append(read_pfm(out))
+        halves.append(common.read_pfm(out))
     ref = 0.5 * (halves[0] + halves[1])
     var = 0.25 * (halves[0] - halves[1]) ** 2  # E[(h1-h2)^2/4] = var(mean of two)
     return ref, var

@@ -152,7 +152,7 @@ def mitsuba_grid_map(tmp, name):
     if not os.path.exists(out):
         pfm = os.path.join(tmp, "converted.pfm")
         common.run([common.envtrace(), "convert", os.path.join(common.data_dir(), "envmaps", name), pfm])
-        img = read_pfm(pfm)
+        img = common.read_pfm(pfm)
         h = img.shape[0]
         y = np.arange(h) / (h - 1) * h - 0.5
         r0 = np.floor(y).astype(int)
@@ -234,7 +234,7 @@ def envtrace_matpreview(tmp, case, size):
     return path
 
 
-def mitsuba_matpreview(mi, tmp, case, size, spp, seed):
+def mitsuba_matpreview(mi, tmp, case, size, spp):
     """The XML as shipped, with its shapes read from the OBJ conversions (texture coordinates as
     stored), a box filter (envtrace's
     pixels), the map resampled onto Mitsuba's grid and the object's plastic made diffuse."""
@@ -256,8 +256,7 @@ def mitsuba_matpreview(mi, tmp, case, size, spp, seed):
                  f'<bsdf type="diffuse" id="bsdf-matpreview"><rgb name="reflectance" value="{albedo}"/></bsdf>',
                  xml, flags=re.S)
     assert xml.count('type="obj"') == 3 and "plastic" not in xml
-    scene = mi.load_string(xml, spp=spp, width=matpreview_width(size), height=size, max_depth=depth + 1)
-    return np.array(mi.render(scene, seed=seed), dtype=np.float64)[:, :, :3]
+    return mi.load_string(xml, spp=spp, width=matpreview_width(size), height=size, max_depth=depth + 1)
 
 
 def mitsuba_bsdf(mi, mat, tmp=None):
@@ -286,12 +285,13 @@ def mitsuba_bsdf(mi, mat, tmp=None):
     raise ValueError(t)
 
 
-def mitsuba_render(mi, tmp, case, size, spp, seed):
+def mitsuba_scene(mi, tmp, case, size, spp):
+    """The case's scene, loaded once and rendered with each seed."""
     envmap, mat, depth = CASES[case]
     if case.startswith("matpreview"):
-        return mitsuba_matpreview(mi, tmp, case, size, spp, seed)
+        return mitsuba_matpreview(mi, tmp, case, size, spp)
     T = mi.ScalarTransform4f
-    scene = mi.load_dict({
+    return mi.load_dict({
         "type": "scene",
         "integrator": {"type": "path", "max_depth": depth + 1},
         "sensor": {"type": "perspective", "fov": CAMERA["fov"], "fov_axis": "y",
@@ -305,16 +305,6 @@ def mitsuba_render(mi, tmp, case, size, spp, seed):
         "object": {"type": "obj", "filename": os.path.join(tmp, "sphere.obj"), "face_normals": True,
                    "to_world": T().translate([0, 0.8, 0]) @ T().scale(0.8), "bsdf": mitsuba_bsdf(mi, mat)},
     })
-    return np.array(mi.render(scene, seed=seed), dtype=np.float64)[:, :, :3]
-
-
-def read_pfm(path):
-    with open(path, "rb") as f:
-        f.readline()
-        w, h = (int(t) for t in f.readline().split())
-        scale = float(f.readline())
-        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
-    return data.reshape(h, w, 3)[::-1].astype(np.float64)
 
 
 def blocks(img, n=16):
@@ -325,16 +315,18 @@ def blocks(img, n=16):
 def compare_case(mi, tmp, case, args):
     """Both renderers, args.seeds seeds each; the statistics of one row of the report."""
     scene = envtrace_scene(tmp, case, args.size)
-    et, ms, et_t, ms_t = [], [], 0.0, 0.0
+    t0 = time.time()
+    scene_ms = mitsuba_scene(mi, tmp, case, args.size, args.spp)
+    et, ms, et_t, ms_t = [], [], 0.0, time.time() - t0
     for seed in range(1, args.seeds + 1):
         img = os.path.join(tmp, f"{case}_{seed}.pfm")
         t0 = time.time()
         common.run([common.envtrace(), "render", scene, "--spp", str(args.spp), "--seed", str(seed),
                     "--backend", args.backend, "--strategy", args.strategy, "-o", img])
         et_t += time.time() - t0
-        et.append(read_pfm(img))
+        et.append(common.read_pfm(img))
         t0 = time.time()
-        ms.append(mitsuba_render(mi, tmp, case, args.size, args.spp, seed))
+        ms.append(np.array(mi.render(scene_ms, seed=seed), dtype=np.float64)[:, :, :3])
         ms_t += time.time() - t0
     et, ms = np.array(et), np.array(ms)
     finite = bool(np.isfinite(et).all() and np.isfinite(ms).all())

@@ -171,8 +171,9 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
         return m;
     } else if (type == "conductor" || type == "metal") {
         // A metal: the GGX lobe with the Fresnel reflectance of a complex index eta + i k per
-        // channel (bsdf.h); the defaults (scene.h) are silver's.
+        // channel (bsdf.h); the defaults (scene.h) are silver's. Its roughness is read below.
         m.type = ETK_MAT_CONDUCTOR;
+        m.roughness = 0.1f;
         auto index = [&](const char* key, glm::vec3 v, float lo, const char* range) {
             v = read_vec3(j, key, v, r);
             if (glm::any(glm::lessThan(v, glm::vec3(lo))) ||
@@ -182,15 +183,11 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
         };
         m.eta = index("eta", m.eta, 0.01f, "[0.01, 100]");
         m.k = index("k", m.k, 0.0f, "[0, 100]");
-        for (const char* key : {"albedo", "specular", "ior", "tint"})
+        for (const char* key : {"albedo", "specular"})
             if (j.contains(key))
                 r.at(key).fail(std::string("a conductor has no \"") + key +
                                "\" (its colour is its complex index: \"eta\" and \"k\", per "
                                "channel; and \"roughness\")");
-        m.roughness_tex = read_texture_param(j, "roughness", TextureUse::data, dir, r, textures);
-        if (m.roughness_tex < 0)
-            m.roughness = read_float(j, "roughness", 0.1f, 0.0f, 1.0f, r);
-        return m;
     } else {
         r.at("type").fail("unknown material type " + json_excerpt(j["type"]) +
                           " (use diffuse, microfacet, plastic, conductor, mirror or dielectric)");
@@ -199,7 +196,7 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
         if (j.contains(key))
             r.at(key).fail(std::string("only a dielectric material has \"") + key + "\"");
     for (const char* key : {"eta", "k"})
-        if (j.contains(key))
+        if (m.type != ETK_MAT_CONDUCTOR && j.contains(key))
             r.at(key).fail(std::string("only a conductor material has \"") + key + "\"");
     // Each may be a texture instead of a constant (load/texture.h).
     m.albedo_tex = read_texture_param(j, "albedo", TextureUse::colour, dir, r, textures);
