@@ -52,7 +52,7 @@ def main():
                     out = os.path.join(work, f"{m}-d{depth}-{name}-{seed}.pfm")
                     stats = common.render(scene, out, ["--spp", str(a.spp), "--seed", str(seed),
                                                        "--strategy", "mis"] + extra)
-                    imgs.append(efficiency.read_pfm(out))
+                    imgs.append(common.read_pfm(out))
                     spp_s = stats["seconds_per_spp"]
                 res[name] = (relative_variance(*imgs), spp_s)
             left = res["split"][0] / res["mis"][0] if res["mis"][0] > 0 else float("nan")
