@@ -118,9 +118,11 @@ ETK_FN float etk_fresnel_conductor1(float eta, float k, float cos_i) {
     float ab2 = sqrt(fmax(t0 * t0 + 4.0f * eta * eta * k * k, 0.0f)); // a^2 + b^2
     float a = sqrt(fmax(0.5f * (ab2 + t0), 0.0f));
     float t1 = ab2 + c2, t2 = 2.0f * a * sqrt(c2);
-    float rs = (t1 - t2) / fmax(t1 + t2, 1e-30f);
+    // Clamped: where eta ~ 1 and k ~ 0 the differences t1 - t2 and t3 - t4 are rounding only and
+    // can come out below zero (a negative reflectance makes negative pixels).
+    float rs = clamp((t1 - t2) / fmax(t1 + t2, 1e-30f), 0.0f, 1.0f);
     float t3 = c2 * ab2 + s2 * s2, t4 = t2 * s2;
-    float rp = rs * (t3 - t4) / fmax(t3 + t4, 1e-30f);
+    float rp = rs * clamp((t3 - t4) / fmax(t3 + t4, 1e-30f), 0.0f, 1.0f);
     return 0.5f * (rs + rp);
 }
 ETK_FN float3 etk_fresnel_conductor(float3 eta, float3 k, float cos_i) {

@@ -234,6 +234,14 @@ TEST(Bsdf, ConductorFresnelIsTheDielectricsAtZeroKAndTheClosedFormHeadOn) {
             ASSERT_TRUE(f >= 0.0f && f <= 1.0f) << n << " " << k << " " << i;
         }
     }
+    // Near eta = 1, k = 0 (a channel a user sets to "no metal") the reflectance is rounding
+    // only: never below zero, or the pixels it lights go negative.
+    for (float n : {0.999f, 1.0f, 1.001f})
+        for (float k : {0.0f, 1e-4f, 1e-3f})
+            for (int i = 0; i <= 10000; ++i) {
+                const float f = etk::etk_fresnel_conductor1(n, k, i / 10000.0f);
+                ASSERT_TRUE(f >= 0.0f && f <= 1.0f) << n << " " << k << " " << i << ": " << f;
+            }
 }
 
 // A conductor whose reflectance is 1 everywhere (k -> infinity) is the Cook-Torrance lobe of

@@ -363,6 +363,16 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
         {"shapes", R"([{"type": "quad", "transform": 5}])", "shapes[0].transform: expected"},
         {"shapes", R"([{"type": "quad", "transform": {"rotate": [0, 1, 0, "x"]}}])",
          "shapes[0].transform.rotate[3]"},
+        // A column-major matrix (translation in the last row) or a projective one: refused.
+        {"shapes",
+         R"([{"type": "quad", "transform": {"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 2,0,0,1]}}])",
+         "shapes[0].transform.matrix: the last row must be [0, 0, 0, 1]"},
+        {"shapes",
+         R"([{"type": "quad", "transform": {"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,2]}}])",
+         "shapes[0].transform.matrix: the last row"},
+        // A NUL in a name would cut it short where the system reads it: another file opened.
+        {"shapes", R"([{"type": "mesh", "file": "a.obj\u0000b.obj"}])",
+         "shapes[0].file: contains a NUL character"},
         {"shapes", R"([{"type": "sphere", "smooth": "no"}])", "shapes[0].smooth"},
         {"shapes", R"([5])", "shapes[0]: expected an object"},
         {"shapes", R"({"type": "sphere"})", "shapes: expected an array"},

@@ -68,6 +68,14 @@ glm::mat4 read_transform(const json& s, const JsonReader& r) {
         for (int r = 0; r < 4; ++r)
             for (int c = 0; c < 4; ++c) // glm is column-major
                 m[c][r] = static_cast<float>(rm.at(4 * r + c).number(a[4 * r + c], -big, big));
+        // Only affine transforms: a mesh is moved, not projected. A bottom row other than
+        // [0, 0, 0, 1] is most often a column-major matrix pasted here (its translation in the last
+        // row), which would otherwise lose its translation without a word.
+        if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+            rm.fail("the last row must be [0, 0, 0, 1] (an affine transform, row-major: the "
+                    "translation is the last column), got [" +
+                    json_excerpt(a[12]) + ", " + json_excerpt(a[13]) + ", " + json_excerpt(a[14]) +
+                    ", " + json_excerpt(a[15]) + "]");
         const float det = glm::determinant(glm::mat3(m));
         if (!(std::fabs(det) > 0.0f) || !std::isfinite(det))
             rm.fail("is singular (or its determinant overflows)");

@@ -270,7 +270,13 @@ int64_t JsonReader::integer(const json& v, int64_t lo, int64_t hi) const {
 std::string JsonReader::string(const json& v) const {
     if (!v.is_string())
         fail("expected a string, got " + json_excerpt(v));
-    return v.get<std::string>();
+    std::string s = v.get<std::string>();
+    // A "\u0000" would cut a file name short where the operating system reads it (another file
+    // opened, or an output written under a truncated name): no name or path of a scene holds one.
+    if (s.find('\0') != std::string::npos)
+        fail("contains a NUL character (\\u0000) at position " + std::to_string(s.find('\0')) +
+             ": " + json_excerpt(v));
+    return s;
 }
 
 bool JsonReader::boolean(const json& v) const {
