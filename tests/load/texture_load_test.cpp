@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <filesystem>
 #include <fstream>
 #include <random>
 
@@ -156,6 +157,56 @@ TEST(TextureLoad, BadMtlMapsAreErrorsNamingFileMaterialAndKey) {
     et::TriangleSoup soup;
     EXPECT_NO_THROW(
         et::load_obj(textured_obj(dir, "map_Kd missing.png\n"), glm::mat4(1.0f), -1, mats, soup));
+}
+
+// The MTL format's -s / -o / -t take one to three numbers; tinyobjloader reads three, and
+// took the file name for the missing ones (the texture vanished without a word). Short forms keep
+// their map and take the defaults; a statement left without a file name is an error.
+TEST(TextureLoad, MtlOptionsWithFewerNumbersKeepTheirMap) {
+    const std::string dir = ett::scratch_dir("texload-short-options");
+    write_png(dir + "/wood.png", 1, 1, {10, 20, 30});
+    std::filesystem::create_directories(dir + "/tex");
+    write_png(dir + "/tex/w.png", 1, 1, {1, 2, 3});
+    struct Case {
+        std::string body;
+        glm::vec2 scale, offset;
+    };
+    const Case cases[] = {
+        {"map_Kd -s 2 3 wood.png\n", {2, 3}, {0, 0}},
+        {"map_Kd -s 2 wood.png\n", {2, 1}, {0, 0}},
+        {"map_Kd -o 0.5 wood.png\n", {1, 1}, {0.5f, 0}},
+        {"map_Kd -blendu on -o 0.25 0.5 -s 4 wood.png\r\n", {4, 1}, {0.25f, 0.5f}},
+        {"  map_Kd -mm 0 1 -t 1 wood.png\n", {1, 1}, {0, 0}},
+        {"map_Kd tex\\w.png\n", {1, 1}, {0, 0}}, // a Windows folder separator
+    };
+    for (const Case& c : cases) {
+        std::vector<et::Material> mats;
+        et::TriangleSoup soup;
+        et::TextureSet textures;
+        et::load_obj(textured_obj(dir, c.body), glm::mat4(1.0f), -1, mats, soup, &textures);
+        ASSERT_GE(mats.size(), 1u);
+        ASSERT_GE(mats[0].albedo_tex, 0) << c.body;
+        const et::Texture& t = textures.textures()[mats[0].albedo_tex];
+        EXPECT_EQ(t.uv_scale, c.scale) << c.body;
+        EXPECT_EQ(t.uv_offset, c.offset) << c.body;
+    }
+    auto error = [&](const std::string& body) {
+        return error_of([&] {
+            std::vector<et::Material> mats;
+            et::TriangleSoup soup;
+            et::TextureSet textures;
+            et::load_obj(textured_obj(dir, body), glm::mat4(1.0f), -1, mats, soup, &textures);
+        });
+    };
+    // The file is missing: an error (it passed silently when its name was taken for a number).
+    std::string e = error("map_Kd -s 2 2 nothere.png\n");
+    EXPECT_NE(e.find("nothere.png"), std::string::npos) << e;
+    e = error("Kd 1 1 1\nmap_Kd -s 2 2\n");
+    EXPECT_NE(e.find("quad.mtl: line 3: map_Kd names no file"), std::string::npos) << e;
+    e = error("map_Kd -s nan 1 1 wood.png\n");
+    EXPECT_NE(e.find("map_Kd -s: the numbers must be finite"), std::string::npos) << e;
+    e = error("map_Kd -o wood.png\n");
+    EXPECT_NE(e.find("map_Kd -o takes one to three numbers"), std::string::npos) << e;
 }
 
 TEST(TextureLoad, JsonTexturesAndCheckers) {

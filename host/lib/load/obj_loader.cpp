@@ -2,6 +2,7 @@
 #include "util/file_check.h"
 #include "util/json_file.h"
 #include "kernels/bsdf.h"
+#include "load/mtl_options.h"
 #include "load/scene.h"
 
 #include <tiny_obj_loader.h>
@@ -79,7 +80,8 @@ class MtlReader : public tinyobj::MaterialReader {
                 *warning += "material file '" + excerpt(name, 60) + "' not found\n";
             return false;
         }
-        std::istringstream in(read_regular_file(p.string(), kMaxMtlBytes, "MTL file"));
+        std::istringstream in(normalise_mtl_texture_options(
+            read_regular_file(p.string(), kMaxMtlBytes, "MTL file"), p.string()));
         tinyobj::LoadMtl(names, materials, &in, warning, err);
         return true;
     }
@@ -106,9 +108,21 @@ int mtl_texture(const std::string& obj_path, const tinyobj::material_t& m, const
     for (float v : {scale.x, scale.y, offset.x, offset.y})
         if (!std::isfinite(v) || std::fabs(v) > 1e6f)
             throw Error(where + ": -s / -o values must be finite and within +-1e6");
-    const std::filesystem::path p = std::filesystem::path(name).is_absolute()
-                                        ? std::filesystem::path(name)
-                                        : std::filesystem::path(obj_path).parent_path() / name;
+    auto resolve = [&](const std::string& n) {
+        return std::filesystem::path(n).is_absolute()
+                   ? std::filesystem::path(n)
+                   : std::filesystem::path(obj_path).parent_path() / n;
+    };
+    std::filesystem::path p = resolve(name);
+    // MTL files written on Windows separate folders by '\': where no file has the name as
+    // written, the one with '/' in their place is meant.
+    std::error_code ec;
+    if (name.find('\\') != std::string::npos && !std::filesystem::exists(p, ec)) {
+        std::string slashed = name;
+        std::replace(slashed.begin(), slashed.end(), '\\', '/');
+        if (std::filesystem::exists(resolve(slashed), ec))
+            p = resolve(slashed);
+    }
     return textures.add_file(p.string(), use, scale, offset, where);
 }
 
