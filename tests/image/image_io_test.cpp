@@ -74,7 +74,6 @@ template <class F> void expect_error_naming(const std::string& path, F call) {
     }
 }
 
-
 // A deflate stream (zlib) of stored blocks: valid for any inflater, no compression library needed.
 std::string zlib_stored(const std::string& data) {
     std::string z = "\x78\x01";
@@ -102,7 +101,9 @@ std::string zlib_stored(const std::string& data) {
 // of `rps` rows. By hand: OpenImageIO's writer does not write MinIsWhite.
 std::string miniswhite_tiff(int w, int h, int spp, int rps, const std::string& px) {
     auto le16 = [](uint32_t v) { return std::string{char(v), char(v >> 8)}; };
-    auto le32 = [](uint32_t v) { return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)}; };
+    auto le32 = [](uint32_t v) {
+        return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+    };
     std::string file = "II*" + std::string(1, '\0') + le32(0); // IFD offset patched below
     const size_t strip_bytes = static_cast<size_t>(w) * spp * rps;
     std::vector<uint32_t> offsets, counts;
@@ -237,6 +238,68 @@ TEST(ImageIo, PfmReadsBottomUpFloatsExactly) {
     ASSERT_EQ(img.height, h);
     for (size_t i = 0; i < px.size(); ++i)
         ASSERT_EQ(img.rgb[i], px[i]) << "index " << i;
+}
+
+// A header written with Windows line ends ("PF\r\n5 3\r\n-1.0\r\n"): the pixels start after
+// the last '\n' (read one byte early, every texel was a denormal and the map came out black).
+TEST(ImageIo, PfmWithCrLfHeaderReadsTheSamePixels) {
+    const std::string dir = ett::scratch_dir("image-io-pfm-crlf");
+    const int w = 5, h = 3;
+    const auto px = hdr_pixels(w, h, 3, 7);
+    {
+        std::ofstream out(dir + "/crlf.pfm", std::ios::binary);
+        out << "PF\r\n" << w << " " << h << "\r\n-1.0\r\n";
+        for (int y = h - 1; y >= 0; --y)
+            out.write(reinterpret_cast<const char*>(&px[3 * static_cast<size_t>(y) * w]),
+                      3 * w * sizeof(float));
+    }
+    const et::RgbImage img = et::read_rgb_image(dir + "/crlf.pfm");
+    ASSERT_EQ(img.width, w);
+    ASSERT_EQ(img.height, h);
+    for (size_t i = 0; i < px.size(); ++i)
+        ASSERT_EQ(img.rgb[i], px[i]) << "index " << i;
+}
+
+// Pixels not stored as shown -- a Radiance file stored bottom-up ("+Y H +X W"), an EXR whose data
+// window is part of its display window -- are refused with the command that writes them upright,
+// not lit upside down or stretched over the sphere.
+TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
+    const std::string dir = ett::scratch_dir("image-io-orientation");
+    {
+        // Flat RGBE: value 1 is mantissa 128, exponent 129.
+        std::ofstream out(dir + "/up.hdr", std::ios::binary);
+        out << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n+Y 2 +X 4\n";
+        for (int i = 0; i < 8; ++i)
+            out << char(128) << char(128) << char(128) << char(129);
+    }
+    std::string e;
+    try {
+        et::read_rgb_image(dir + "/up.hdr");
+    } catch (const et::Error& x) {
+        e = x.what();
+    }
+    EXPECT_NE(e.find("up.hdr: stored flipped vertically (orientation 4)"), std::string::npos) << e;
+    EXPECT_NE(e.find("--reorient"), std::string::npos) << e;
+
+    auto out = OIIO::ImageOutput::create(dir + "/crop.exr");
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(8, 4, 3, OIIO::TypeDesc::FLOAT);
+    spec.full_width = 16;
+    spec.full_height = 8;
+    ASSERT_TRUE(out->open(dir + "/crop.exr", spec)) << out->geterror();
+    const std::vector<float> px(8 * 4 * 3, 1.0f);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    out->close();
+    e.clear();
+    try {
+        et::read_rgb_image(dir + "/crop.exr");
+    } catch (const et::Error& x) {
+        e = x.what();
+    }
+    EXPECT_NE(e.find("crop.exr: its pixels (data window 8x4+0+0) are not its picture (display "
+                     "window 16x8+0+0)"),
+              std::string::npos)
+        << e;
 }
 
 TEST(ImageIo, PfmRoundTripIsExact) {
@@ -558,7 +621,7 @@ TEST(ImageIo, ReaderBandsOfAnySizeGiveTheWholeImage) {
         auto out = OIIO::ImageOutput::create(path);
         ASSERT_TRUE(out);
         OIIO::ImageSpec spec(w, h, v.channels, v.type);
-        spec.y = v.y_origin;
+        spec.y = spec.full_y = v.y_origin; // the display window where the data is
         if (v.tile)
             spec.tile_width = spec.tile_height = v.tile;
         else
@@ -640,8 +703,9 @@ std::vector<std::array<unsigned char, 4>> rgbe_pixels(int w, std::mt19937& rng) 
 
 // Radiance pixels are decoded by envtrace (OpenImageIO reads the header): every file decodes bit
 // for bit as OpenImageIO's reader decodes it, or both refuse it. RLE and flat scanlines, mixed,
-// narrow and wide (flat) images, bottom-up files, every exponent (OpenImageIO's table has three
-// entries that are not powers of two), and broken runs, widths and ends.
+// narrow and wide (flat) images, bottom-up files (refused: not upright), every exponent
+// (OpenImageIO's table has three entries that are not powers of two), and broken runs, widths and
+// ends.
 TEST(ImageIo, RadianceDecodedBitForBitAsOpenImageIo) {
     const std::string dir = ett::scratch_dir("image-io-rgbe");
     std::mt19937 rng(3);
@@ -698,6 +762,13 @@ TEST(ImageIo, RadianceDecodedBitForBitAsOpenImageIo) {
                       0)
                 << name;
         } catch (const et::Error& e) {
+            // OpenImageIO reads a bottom-up file's rows as stored (and says so in its
+            // Orientation); envtrace refuses to light a scene upside down.
+            if (name == "bottom-up") {
+                EXPECT_NE(std::string(e.what()).find("flipped vertically"), std::string::npos)
+                    << e.what();
+                continue;
+            }
             EXPECT_FALSE(oiio_ok) << name << ": OpenImageIO reads it, envtrace says " << e.what();
             EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
         }
@@ -712,7 +783,9 @@ TEST(ImageIo, MinIsWhiteTiffOfManyChannelsReadsInvertedWithoutOverrun) {
     const std::string path = ett::scratch_dir("image-io-miniswhite") + "/mw.tif";
     const int w = 128, h = 64, spp = 64, rps = 16;
     std::string px(static_cast<size_t>(w) * h * spp, '\x55');
-    auto stored = [](int x, int y, int c) { return static_cast<unsigned char>(x * 3 + y * 5 + c * 7); };
+    auto stored = [](int x, int y, int c) {
+        return static_cast<unsigned char>(x * 3 + y * 5 + c * 7);
+    };
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
             for (int c = 0; c < 3; ++c)
@@ -740,14 +813,17 @@ TEST(ImageIo, MinIsWhiteTiffOfManyChannelsReadsInvertedWithoutOverrun) {
 // deflate is one et::Error naming the file, not a crash.
 TEST(ImageIo, MinIsWhiteTiffsOfFewChannelsAndBrokenStripsReadWithoutOverrun) {
     const std::string dir = ett::scratch_dir("image-io-miniswhite-few");
-    auto stored = [](int x, int y, int c) { return static_cast<unsigned char>(x * 5 + y * 3 + c * 11); };
+    auto stored = [](int x, int y, int c) {
+        return static_cast<unsigned char>(x * 5 + y * 3 + c * 11);
+    };
     for (int spp : {2, 3, 4}) {
         const int w = 64, h = 48, rps = 8;
         std::string px(static_cast<size_t>(w) * h * spp, '\0');
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x)
                 for (int c = 0; c < spp; ++c)
-                    px[(static_cast<size_t>(y) * w + x) * spp + c] = static_cast<char>(stored(x, y, c));
+                    px[(static_cast<size_t>(y) * w + x) * spp + c] =
+                        static_cast<char>(stored(x, y, c));
         const std::string path = dir + "/mw" + std::to_string(spp) + ".tif";
         std::ofstream(path, std::ios::binary) << miniswhite_tiff(w, h, spp, rps, px);
         const et::RgbImage img = et::read_rgb_image(path);
@@ -837,8 +913,10 @@ TEST(ImageIo, ExrAttributeSizesBeyondTheFileAreRefusedBeforeOpenExrAllocates) {
                                     le32(4000) + le32(4000) + std::string(8, '\0');
     const std::string negative = magic + std::string("owner\0string\0", 13) + le32(0xfffffff0u);
     const std::vector<std::pair<std::string, std::string>> files = {
-        {"huge-string.exr", huge_string}, {"huge-string.png", huge_string},
-        {"big-preview.exr", big_preview}, {"negative.exr", negative}};
+        {"huge-string.exr", huge_string},
+        {"huge-string.png", huge_string},
+        {"big-preview.exr", big_preview},
+        {"negative.exr", negative}};
     for (const auto& [name, bytes] : files) {
         const std::string path = dir + "/" + name;
         std::ofstream(path, std::ios::binary) << bytes;
@@ -984,12 +1062,10 @@ TEST(ImageIo, ExrHeadersThatCannotBeRightAreRefusedBeforeOpenExrReadsThem) {
     variant("chlist-twice", "appears twice in the channel list", [](HandExr& e) {
         e.attrs[0] = exr_attr("channels", "chlist", exr_chlist({"B", "B", "R"}));
     });
-    variant("chlist-empty", "channel list is empty", [](HandExr& e) {
-        e.attrs[0] = exr_attr("channels", "chlist", exr_chlist({}));
-    });
-    variant("box-size", "a box2i has 16 bytes", [](HandExr& e) {
-        e.attrs.push_back(exr_attr("crop", "box2i", std::string(8, '\0')));
-    });
+    variant("chlist-empty", "channel list is empty",
+            [](HandExr& e) { e.attrs[0] = exr_attr("channels", "chlist", exr_chlist({})); });
+    variant("box-size", "a box2i has 16 bytes",
+            [](HandExr& e) { e.attrs.push_back(exr_attr("crop", "box2i", std::string(8, '\0'))); });
     variant("float-size", "a float has 4 bytes", [](HandExr& e) {
         e.attrs[5] = exr_attr("pixelAspectRatio", "float", std::string(40, '\0'));
     });
@@ -997,27 +1073,20 @@ TEST(ImageIo, ExrHeadersThatCannotBeRightAreRefusedBeforeOpenExrReadsThem) {
         e.attrs.push_back(
             exr_attr("multiView", "stringvector", le32(5) + "right" + le32(0x41000004) + "le"));
     });
-    variant("huge-string", "claims 1700000000 bytes", [](HandExr& e) {
-        e.attrs.push_back(exr_attr("owner", "string", "abc", 1700000000));
-    });
-    variant("no-data-window", "no dataWindow attribute", [](HandExr& e) {
-        e.attrs.erase(e.attrs.begin() + 2);
-    });
-    variant("no-channels", "no channels attribute", [](HandExr& e) {
-        e.attrs.erase(e.attrs.begin());
-    });
-    variant("data-window-type", "expected type box2i", [](HandExr& e) {
-        e.attrs[2] = exr_attr("dataWindow", "v2f", std::string(8, '\0'));
-    });
-    variant("attribute-twice", "appears twice", [](HandExr& e) {
-        e.attrs.push_back(e.attrs[4]);
-    });
+    variant("huge-string", "claims 1700000000 bytes",
+            [](HandExr& e) { e.attrs.push_back(exr_attr("owner", "string", "abc", 1700000000)); });
+    variant("no-data-window", "no dataWindow attribute",
+            [](HandExr& e) { e.attrs.erase(e.attrs.begin() + 2); });
+    variant("no-channels", "no channels attribute",
+            [](HandExr& e) { e.attrs.erase(e.attrs.begin()); });
+    variant("data-window-type", "expected type box2i",
+            [](HandExr& e) { e.attrs[2] = exr_attr("dataWindow", "v2f", std::string(8, '\0')); });
+    variant("attribute-twice", "appears twice", [](HandExr& e) { e.attrs.push_back(e.attrs[4]); });
     variant("compression", "unknown compression method 42", [](HandExr& e) {
         e.attrs[1] = exr_attr("compression", "compression", std::string(1, char(42)));
     });
-    variant("window-empty", "dataWindow (0, 0) - (-5, 1) is empty", [](HandExr& e) {
-        e.attrs[2] = exr_attr("dataWindow", "box2i", exr_box(0, 0, -5, 1));
-    });
+    variant("window-empty", "dataWindow (0, 0) - (-5, 1) is empty",
+            [](HandExr& e) { e.attrs[2] = exr_attr("dataWindow", "box2i", exr_box(0, 0, -5, 1)); });
     // 300000000 x 1 float RGB: 3.6 GB of texels, refused by the budget before OpenEXR sees it.
     // PIZ: no ratio bound on what the file holds, so the budget is what refuses it.
     variant("window-budget", "memory budget", [](HandExr& e) {
@@ -1093,11 +1162,11 @@ TEST(ImageIo, ValidExrLayoutsStillLoadPastTheHeaderWalk) {
         int channels = 3;
     };
     std::vector<Layout> layouts;
-    for (const char* c : {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa",
-                          "dwab"})
+    for (const char* c :
+         {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"})
         for (OIIO::TypeDesc t : {OIIO::TypeDesc::HALF, OIIO::TypeDesc::FLOAT})
-            layouts.push_back({std::string(c) + (t == OIIO::TypeDesc::HALF ? "-half" : "-float"),
-                               t, c});
+            layouts.push_back(
+                {std::string(c) + (t == OIIO::TypeDesc::HALF ? "-half" : "-float"), t, c});
     layouts.push_back({"tiled-16", OIIO::TypeDesc::HALF, "zip", 16, 16});
     layouts.push_back({"tiled-odd", OIIO::TypeDesc::FLOAT, "piz", 24, 10});
     layouts.push_back({"tiled-big", OIIO::TypeDesc::FLOAT, "zip", 64, 64});
@@ -1110,8 +1179,8 @@ TEST(ImageIo, ValidExrLayoutsStillLoadPastTheHeaderWalk) {
         auto out = OIIO::ImageOutput::create(path);
         ASSERT_TRUE(out);
         OIIO::ImageSpec spec(w, h, l.channels, l.type);
-        spec.x = l.x;
-        spec.y = l.y;
+        spec.x = spec.full_x = l.x; // a picture off the origin, the data window its whole
+        spec.y = spec.full_y = l.y;
         spec.tile_width = l.tile_w;
         spec.tile_height = l.tile_h;
         spec.attribute("compression", l.compression);

@@ -117,8 +117,9 @@ PfmSource::PfmSource(const std::string& path, uint64_t file_bytes)
         throw Error(path + ": cannot open: " + std::strerror(errno));
     // The header: three whitespace-separated tokens after the magic, then one whitespace byte.
     std::string tokens[4];
+    int c = 0;
     for (int t = 0; t < 4; ++t) {
-        int c = std::fgetc(f);
+        c = std::fgetc(f);
         while (t > 0 && c != EOF && std::isspace(c))
             c = std::fgetc(f);
         while (c != EOF && !std::isspace(c) && tokens[t].size() < 32) {
@@ -147,6 +148,13 @@ PfmSource::PfmSource(const std::string& path, uint64_t file_bytes)
     const uint64_t stored =
         lw > 0 && lh > 0 ? checked_mul(checked_mul(lw, lh, path), 4 * channels, path) : 0;
     check_declared_size(path, lw, lh, 1, stored, file_bytes);
+    // A header written with Windows line ends ("-1.0\r\n"): the pixels start after the '\n',
+    // which the file's size confirms (read one byte early, every texel was garbage).
+    if (c == '\r' && file_bytes == header + 1 + stored && std::fgetc(f) == '\n')
+        header += 1;
+    if (file_bytes > header + stored)
+        warn(path + ": " + std::to_string(file_bytes - header - stored) +
+             " bytes after the pixels are ignored (is the header's size right?)");
     if (file_bytes < header + stored)
         throw Error(path + ": truncated PFM: " + std::to_string(lw) + "x" + std::to_string(lh) +
                     " needs " + std::to_string(stored) + " bytes of pixels, the file has " +

@@ -267,6 +267,44 @@ bool starts_with(const std::string& path, const char* magic) {
     return ok;
 }
 
+// Files whose stored pixels are not the picture as shown: turned (an orientation other than
+// "normal": Radiance's "+Y H +X W", EXIF's rotations) or covering another window than the one
+// shown (an EXR's data window inside or around its display window). Read as stored, a map would
+// light the scene upside down, mirrored or stretched without a word; refused instead, with the
+// command that writes the picture as shown.
+void check_upright_and_whole(const std::string& path, const ImageSpec& spec) {
+    static const char* const names[] = {"",
+                                        "normal",
+                                        "flipped horizontally",
+                                        "rotated 180 degrees",
+                                        "flipped vertically",
+                                        "transposed",
+                                        "rotated 90 degrees clockwise",
+                                        "transversed",
+                                        "rotated 90 degrees counter-clockwise"};
+    const int o = spec.get_int_attribute("Orientation", 1);
+    if (o != 1)
+        throw Error(path + ": stored " +
+                    (o >= 2 && o <= 8 ? names[o] : "in an unknown orientation") + " (orientation " +
+                    std::to_string(o) +
+                    "), which envtrace does not apply; write it upright first, e.g. oiiotool '" +
+                    path + "' --reorient -o upright" + lower_extension(path));
+    const bool full_known = spec.full_width > 0 && spec.full_height > 0;
+    if (full_known && (spec.x != spec.full_x || spec.y != spec.full_y ||
+                       spec.width != spec.full_width || spec.height != spec.full_height)) {
+        auto window = [](int w, int h, int x, int y) {
+            return std::to_string(w) + "x" + std::to_string(h) + (x >= 0 ? "+" : "") +
+                   std::to_string(x) + (y >= 0 ? "+" : "") + std::to_string(y);
+        };
+        throw Error(path + ": its pixels (data window " +
+                    window(spec.width, spec.height, spec.x, spec.y) +
+                    ") are not its picture (display window " +
+                    window(spec.full_width, spec.full_height, spec.full_x, spec.full_y) +
+                    "); write the picture as shown first, e.g. oiiotool '" + path +
+                    "' --croptofull -o whole" + lower_extension(path));
+    }
+}
+
 // An image OpenImageIO reads, decoded a band of rows at a time.
 struct OiioSource final : RowSource {
     std::unique_ptr<BufferedFileProxy> proxy; // outlives `in`, which reads through it
@@ -329,6 +367,7 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
     if (spec.deep)
         throw Error(path + ": deep images are not supported");
     check_declared_size(path, w, h, spec.depth, spec.image_bytes(true), file_bytes);
+    check_upright_and_whole(path, spec);
 
     // Which channels become R, G, B.
     idx[1] = nch > 1 ? 1 : 0;
