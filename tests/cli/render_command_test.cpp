@@ -20,6 +20,7 @@
 #include <iterator>
 #include <sys/wait.h>
 #include <thread>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -43,7 +44,8 @@ std::string write_scene(const std::string& dir, const std::string& map_name = "s
     write_file(dir + "/s.json", R"({
   "camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
   "film": {"width": 16, "height": 12},
-  "environment": {"map": ")" + dir + "/maps/" + map_name +
+  "environment": {"map": ")" + dir + "/maps/" +
+                                    map_name +
                                     R"("},
   "materials": {"m": {"type": "plastic", "albedo": 0.6, "roughness": 0.3}},
   "shapes": [{"type": "sphere", "radius": 0.6, "center": [0, 0.6, 0], "material": "m"},
@@ -173,8 +175,8 @@ TEST(RenderCommand, ForeignStatesAreRefused) {
     const std::string dir = ett::scratch_dir("render_foreign_state");
     const std::string scene = write_scene(dir);
     const std::string state = dir + "/out.envtrace-state";
-    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr", {"--spp", "4", "--checkpoint",
-                                                                 "1000", "--seed", "1"}),
+    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr",
+                                       {"--spp", "4", "--checkpoint", "1000", "--seed", "1"}),
                                   dir),
                 0);
     const std::string bytes = read_file(state);
@@ -192,9 +194,8 @@ TEST(RenderCommand, ForeignStatesAreRefused) {
     refused({"--spp", "8", "--seed", "1", "--max-depth", "2"}, "of another render");
     refused({"--spp", "2", "--seed", "1"}, "more than");
     // The right state resumes.
-    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr",
-                                       {"--spp", "8", "--seed", "1", "--resume"}),
-                                  dir),
+    expect_exit(ett::run_envtrace(
+                    args(scene, dir + "/out.exr", {"--spp", "8", "--seed", "1", "--resume"}), dir),
                 0);
     const std::string missing = dir + "/none.envtrace-state";
     const ett::CliRun r = ett::run_envtrace(
@@ -207,14 +208,31 @@ TEST(RenderCommand, ForeignStatesAreRefused) {
 TEST(RenderCommand, TinyTimeLimitStillRendersASample) {
     const std::string dir = ett::scratch_dir("render_time_limit");
     const std::string scene = write_scene(dir);
-    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr", {"--time-limit", "1e-9"}), dir),
-                0);
+    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr", {"--time-limit", "1e-9"}), dir), 0);
     EXPECT_EQ(metadata(dir + "/out.exr", "spp"), "1");
     const et::RgbImage img = et::read_rgb_image(dir + "/out.exr");
     double sum = 0;
     for (float v : img.rgb)
         sum += v;
     EXPECT_GT(sum, 0.0);
+}
+
+// A film the machine cannot hold is refused up front, naming its size, with nothing written
+// (it grew to 17 GB over 40 s before "out of memory", or met the OOM killer). Skipped on a
+// machine that could hold a 16384 x 16384 film (about 70 GB).
+TEST(RenderCommand, FilmBeyondTheMachinesMemoryIsRefusedUpFront) {
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    if (pages > 0 && page > 0 && double(pages) * double(page) > 60e9)
+        GTEST_SKIP() << "this machine could hold the film";
+    const std::string dir = ett::scratch_dir("render_huge_film");
+    write_file(dir + "/s.json", R"({"environment": {"sky": {"resolution": [64, 32]}},
+  "film": {"width": 16384, "height": 16384}, "shapes": [{"type": "sphere"}]})");
+    const ett::CliRun r = ett::run_envtrace(args(dir + "/s.json", dir + "/out.exr", {}), dir);
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("film 16384 x 16384 (film.width, film.height) needs about"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(dir + "/out.exr"));
 }
 
 // No output (the image, its PNG or EXR twin, --stats, the state) may be an input of the run:
@@ -235,14 +253,14 @@ TEST(RenderCommand, OutputsNeverReplaceInputs) {
             EXPECT_TRUE(temporaries_in(dir).empty());
             EXPECT_TRUE(temporaries_in(dir + "/maps").empty());
         };
-        refused(map, {});                                    // -o the map itself
+        refused(map, {}); // -o the map itself
         // Outputs whose EXR or PNG twin is the map.
         const std::vector<std::string> twins =
             map_name == "s.exr" ? std::vector<std::string>{"s.png", "s.jpg"}
                                 : std::vector<std::string>{"s.exr", "./s.pfm", "s.hdr"};
         for (const auto& t : twins)
             refused(dir + "/maps/" + t, {});
-        refused(dir + "/out.exr", {"--stats", scene});       // --stats over the scene
+        refused(dir + "/out.exr", {"--stats", scene});                    // --stats over the scene
         refused(dir + "/out.exr", {"--checkpoint", "1", "--state", map}); // the state
         EXPECT_FALSE(fs::exists(dir + "/out.exr"));
     }

@@ -2,16 +2,43 @@
 
 #include "render/executor_cl.h"
 #include "render/executor_cpu.h"
+#include "render/film_aovs.h"
 #include "util/error.h"
+#include "util/file_check.h"
 #include "util/timer.h"
 
 #include <algorithm>
 #include <string>
+#include <unistd.h>
 
 namespace et {
 
+namespace {
+
+// A film the machine cannot hold is an error before anything is allocated, naming its size (a
+// 16384 x 16384 film grew to 17 GB over 40 s before "out of memory", or met the OOM killer).
+// Per pixel: the exact sums (and their AOVs), the device's film fields and the host's copy of
+// them, and the image written at the end (mean and preview).
+int checked_film_width(const DeviceScene& scene) {
+    const uint64_t pixels = uint64_t(scene.width()) * uint64_t(scene.height());
+    const uint64_t per_pixel = sizeof(FilmSums::Pixel) +
+                               (scene.settings.aovs ? sizeof(AovPixel) : 0) +
+                               2 * 4 * sizeof(etk::float4) + 8 * sizeof(float);
+    const uint64_t need = pixels * per_pixel;
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    const uint64_t have = pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) : 0;
+    if (have > 0 && need > have)
+        throw Error("film " + std::to_string(scene.width()) + " x " +
+                    std::to_string(scene.height()) + " (film.width, film.height) needs about " +
+                    byte_text(need) + " for its sums and buffers, more than this machine's " +
+                    byte_text(have) + " of memory: render a smaller film");
+    return scene.width();
+}
+
+} // namespace
+
 Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
-    : scene_(scene), film_(scene.width(), scene.height()),
+    : scene_(scene), film_(checked_film_width(scene), scene.height()),
       sums_(scene.width(), scene.height(), scene.settings.aovs), device_(make_device(film_)) {
     std::copy(scene.params.light_share, scene.params.light_share + ETK_SHARE_BINS, shares_.begin());
     std::copy(scene.params.bin_flags, scene.params.bin_flags + ETK_SHARE_BINS, flags_.begin());
