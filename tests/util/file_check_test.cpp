@@ -37,6 +37,33 @@ TEST(FileCheck, ReadsRegularFiles) {
     EXPECT_EQ(et::read_regular_file(dir + "/link.txt", 100, "text"), "hello");
 }
 
+// Text in UTF-16 or UTF-32 (with or without a byte order mark) is an error naming the encoding;
+// a UTF-8 byte order mark is dropped; binary that merely holds NULs is passed on.
+TEST(FileCheck, TextFilesNameTheirWideEncoding) {
+    const std::string dir = ett::scratch_dir("file-check-text");
+    auto write = [&](const std::string& name, const std::string& bytes) {
+        std::ofstream(dir + "/" + name, std::ios::binary) << bytes;
+        return dir + "/" + name;
+    };
+    const std::string le = write("le.obj", std::string("\xFF\xFEv\0 \0"
+                                                       "0\0",
+                                                       8));
+    expect_error([&] { et::read_text_file(le, 100, "OBJ file"); }, le,
+                 "the OBJ file is UTF-16 (little-endian) text");
+    const std::string be = write("be.obj", std::string("\xFE\xFF\0v\0 ", 6));
+    expect_error([&] { et::read_text_file(be, 100, "OBJ file"); }, be, "UTF-16 (big-endian)");
+    const std::string u32 = write("u32.json", std::string("\xFF\xFE\0\0{\0\0\0", 8));
+    expect_error([&] { et::read_text_file(u32, 100, "scene file"); }, u32, "UTF-32");
+    const std::string nobom = write("nobom.obj", std::string("v\0 \0"
+                                                             "0\0",
+                                                             6));
+    expect_error([&] { et::read_text_file(nobom, 100, "OBJ file"); }, nobom, "UTF-16");
+    EXPECT_EQ(et::read_text_file(write("bom.obj", "\xEF\xBB\xBFv 0 0 0\n"), 100, "OBJ file"),
+              "v 0 0 0\n");
+    const std::string gz("\x1f\x8b\x08\x00\x00\x00", 6); // not text, but not wide text either
+    EXPECT_EQ(et::read_text_file(write("gz.obj", gz), 100, "OBJ file"), gz);
+}
+
 TEST(FileCheck, RefusesEverythingElseWithoutBlocking) {
     const std::string dir = ett::scratch_dir("file-check-bad");
     // A FIFO with no writer: opening it for reading would block forever.

@@ -81,7 +81,7 @@ class MtlReader : public tinyobj::MaterialReader {
             return false;
         }
         std::istringstream in(normalise_mtl_texture_options(
-            read_regular_file(p.string(), kMaxMtlBytes, "MTL file"), p.string()));
+            read_text_file(p.string(), kMaxMtlBytes, "MTL file"), p.string()));
         tinyobj::LoadMtl(names, materials, &in, warning, err);
         return true;
     }
@@ -130,7 +130,7 @@ int mtl_texture(const std::string& obj_path, const tinyobj::material_t& m, const
 
 void load_obj(const std::string& path, const glm::mat4& transform, int override_material,
               std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures) {
-    std::istringstream obj(read_regular_file(path, kMaxMeshBytes, "OBJ file"));
+    std::istringstream obj(read_text_file(path, kMaxMeshBytes, "OBJ file"));
     tinyobj::attrib_t attrib_data;
     std::vector<tinyobj::shape_t> shapes_data;
     std::vector<tinyobj::material_t> mtls_data;

@@ -26,6 +26,12 @@ uint64_t check_regular_file(const std::string& path, uint64_t max_bytes, const c
 // check is still refused; a file that grows while read is cut off at the cap with an error.
 std::string read_regular_file(const std::string& path, uint64_t max_bytes, const char* what);
 
+// read_regular_file for text formats (scene JSON, OBJ, MTL): a UTF-8 byte order mark is dropped
+// (OBJ readers take it for part of the first statement), and UTF-16 or UTF-32 text -- Notepad's
+// "Unicode", PowerShell's Out-File -- is an error saying so (its NUL bytes read as no statements
+// at all: "no faces", "malformed JSON").
+std::string read_text_file(const std::string& path, uint64_t max_bytes, const char* what);
+
 // "12.3 MiB", "4 GiB": a byte count for messages.
 std::string byte_text(uint64_t bytes);
 

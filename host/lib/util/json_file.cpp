@@ -139,7 +139,7 @@ std::string json_excerpt(const json& v) {
 }
 
 json read_json_file(const std::string& path, const char* what) {
-    return parse_json_text(path, read_regular_file(path, kMaxJsonBytes, what));
+    return parse_json_text(path, read_text_file(path, kMaxJsonBytes, what));
 }
 
 json parse_json_text(const std::string& path, const std::string& text) {
