@@ -7,6 +7,7 @@
 #include "util/output_batch.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,10 @@ void run(const LightsArgs& a) {
     // a bad --plot leaves no light set behind.
     if (!a.plot.empty())
         check_writable_format(a.plot);
+    // The light set is JSON: under another name ("-o lights.exr") it would pass for an image.
+    if (std::filesystem::path(a.output).extension() != ".json")
+        throw Error(a.output + ": the light set is written as JSON: name it .json (--plot "
+                               "writes an image of the directions)");
     DistributionOptions opt;
     opt.blur_sigma = a.blur;
     EnvMap env = load_envmap(a.map, opt);

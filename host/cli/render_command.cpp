@@ -47,7 +47,8 @@ std::pair<std::string, std::string> output_names(const std::string& out) {
         return {fs::path(p).replace_extension(".exr").string(), out};
     if (ext == ".exr" || ext == ".hdr" || ext == ".pfm")
         return {out, have_image_library() ? fs::path(p).replace_extension(".png").string() : ""};
-    throw Error(out + ": unsupported output format '" + ext + "' (use .exr, .hdr, .pfm or .png)");
+    throw Error(out + ": unsupported output format '" + ext +
+                "' (use .exr, .hdr, .pfm, or .png / .jpg for the preview beside an .exr)");
 }
 
 namespace {
@@ -349,6 +350,10 @@ void run(const RenderArgs& a, Globals& g) {
         if (!png_name.empty())
             check_writable_format(png_name);
         keep_state = a.checkpoint >= 0 || a.resume || partial;
+        if (!a.state.empty() && !keep_state)
+            throw Error("--state " + a.state +
+                        ": names the state of --checkpoint, --resume or --sample-range; this "
+                        "render keeps none (add --checkpoint SECONDS to save one)");
         state_path = !a.state.empty() ? a.state
                      : partial ? fs::path(exr_name).replace_extension("").string() + ".samples-" +
                                      std::to_string(range.first) + "-" +

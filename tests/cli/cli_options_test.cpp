@@ -162,6 +162,32 @@ TEST(CliOptions, LightSetsRoundTripThroughTheCommandLine) {
     }
 }
 
+// Options and names that would be silently ignored or mislabelled are refused, saying why.
+TEST(CliOptions, MisnamedOutputsAndIdleOptionsAreRefused) {
+    const std::string dir = ett::scratch_dir("cli-opt-misnamed");
+    const std::string scene = write_scene(dir);
+    // A light set is JSON, whatever -o is called.
+    expect_error(
+        ett::run_envtrace({"lights", dir + "/sky.pfm", "-n", "4", "-o", dir + "/l.exr"}, dir),
+        "l.exr: the light set is written as JSON");
+    EXPECT_FALSE(fs::exists(dir + "/l.exr"));
+    // --state without anything that keeps a state.
+    expect_error(
+        ett::run_envtrace(render(scene, dir + "/o.exr", {"--state", dir + "/x.state"}), dir),
+        "this render keeps none");
+    EXPECT_FALSE(fs::exists(dir + "/o.exr"));
+    // The message for a bad output names the preview formats it takes too.
+    expect_error(ett::run_envtrace(render(scene, dir + "/o.txt"), dir), ".png / .jpg");
+    // A black map makes no lights by either method.
+    et::write_image(dir + "/black.pfm", 8, 4, 3, std::vector<float>(8 * 4 * 3, 0.0f));
+    for (const char* method : {"ours", "sis"})
+        expect_error(ett::run_envtrace({"lights", dir + "/black.pfm", "-n", "4", "--method", method,
+                                        "-o", dir + "/b.json"},
+                                       dir),
+                     "emits no light");
+    EXPECT_FALSE(fs::exists(dir + "/b.json"));
+}
+
 TEST(CliOptions, AFailingPlotLeavesNoLightSet) {
     const std::string dir = ett::scratch_dir("cli-opt-plot");
     write_scene(dir);

@@ -374,6 +374,7 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
         {"shapes", R"([{"type": "mesh", "file": "a.obj\u0000b.obj"}])",
          "shapes[0].file: contains a NUL character"},
         {"shapes", R"([{"type": "sphere", "smooth": "no"}])", "shapes[0].smooth"},
+        {"environment", R"({"map": ""})", "environment.map: the file name is empty"},
         {"shapes", R"([5])", "shapes[0]: expected an object"},
         {"shapes", R"({"type": "sphere"})", "shapes: expected an array"},
         {"render", R"({"seed": -1})", "render.seed"},

@@ -267,6 +267,14 @@ bool starts_with(const std::string& path, const char* magic) {
     return ok;
 }
 
+// "R, G" (at most 8 names) for messages.
+std::string channel_list(const ImageSpec& spec) {
+    std::string out;
+    for (int c = 0; c < spec.nchannels && c < 8; ++c)
+        out += (c ? ", " : "") + spec.channelnames[static_cast<size_t>(c)];
+    return out + (spec.nchannels > 8 ? ", ..." : "");
+}
+
 // Files whose stored pixels are not the picture as shown: turned (an orientation other than
 // "normal": Radiance's "+Y H +X W", EXIF's rotations) or covering another window than the one
 // shown (an EXR's data window inside or around its display window). Read as stored, a map would
@@ -380,6 +388,12 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
         idx[1] = g;
         idx[2] = b;
     }
+    // Channels named as colour but not all three (an "R, G" EXR): read as grey from the first,
+    // which is not the picture -- said once, not silently.
+    if (!(r >= 0 && g >= 0 && b >= 0) && (g >= 0 || b >= 0))
+        warn(path + ": has colour channels but not all of R, G and B (" + channel_list(spec) +
+             "); read as grey from channel '" + spec.channelnames[static_cast<size_t>(idx[0])] +
+             "'");
     lo = std::min({idx[0], idx[1], idx[2]});
     hi = std::max({idx[0], idx[1], idx[2]}) + 1;
     const std::string cs = spec.get_string_attribute("oiio:ColorSpace");

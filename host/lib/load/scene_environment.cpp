@@ -48,7 +48,10 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     if (env.contains("map") && env.contains("sky"))
         r.fail("has both \"map\" and \"sky\": give one");
     if (env.contains("map")) {
-        const std::string path = resolve_data_file(r.string(env, "map", ""), scene_dir);
+        const std::string name = r.string(env, "map", "");
+        if (name.empty())
+            r.at("map").fail("the file name is empty");
+        const std::string path = resolve_data_file(name, scene_dir);
         map = load_envmap(path, options);
     } else if (const nlohmann::json* sp = r.object(env, "sky")) {
         const auto& s = *sp;

@@ -77,6 +77,8 @@ LightSet make_lights_ours(const EnvMap& env, int n, uint32_t seed, bool voronoi_
 }
 
 LightSet make_lights_sis(const EnvMap& env, int n, const SisOptions& options) {
+    if (!env.dist.has_light()) // as make_lights_ours: no zero-power lights written as a result
+        throw Error(env.name + ": the map emits no light: no lights to make");
     SisOptions o = options;
     o.samples = n;
     SisResult r = build_sis(env, o);
