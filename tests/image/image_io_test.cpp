@@ -302,6 +302,21 @@ TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
         << e;
 }
 
+// A Radiance file of CIE XYZ pixels: refused naming its format (OpenImageIO says it has none).
+TEST(ImageIo, RadianceXyzeIsRefusedByName) {
+    const std::string path = ett::scratch_dir("image-io-xyze") + "/xyz.hdr";
+    std::ofstream(path, std::ios::binary) << "#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 1 +X 2\n"
+                                          << std::string(8, char(128));
+    std::string e;
+    try {
+        et::read_rgb_image(path);
+    } catch (const et::Error& x) {
+        e = x.what();
+    }
+    EXPECT_NE(e.find("xyz.hdr: Radiance XYZE pixels (CIE XYZ) are not read"), std::string::npos)
+        << e;
+}
+
 TEST(ImageIo, PfmRoundTripIsExact) {
     const std::string dir = ett::scratch_dir("image-io-pfm");
     const int w = 19, h = 11;

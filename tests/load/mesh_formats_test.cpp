@@ -290,7 +290,10 @@ TEST_F(MeshFormats, PlyHostileFilesAreErrors) {
     expect_error("index.ply", bad, "vertex index 9 is out of range");
     std::string nan = tet_ply_ascii();
     nan.replace(nan.find("end_header\n") + 11, 8, "nan"); // the first x, "0.000000"
-    expect_error("nan.ply", nan, "not finite");
+    expect_error("nan.ply", nan, "coordinate x (nan) is not a finite float");
+    std::string big = tet_ply_ascii(); // finite in the file, beyond a float
+    big.replace(big.find("end_header\n") + 11, 8, "1e300");
+    expect_error("big.ply", big, "coordinate x (1e+300) is not a finite float");
     expect_error("notply.ply", "solid cube\n", "not a PLY file");
     expect_error("fmt.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown format");
     std::string word = tet_ply_ascii();

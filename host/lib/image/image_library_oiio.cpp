@@ -267,6 +267,28 @@ bool starts_with(const std::string& path, const char* magic) {
     return ok;
 }
 
+// The FORMAT= value of a Radiance header ("" when absent), from its first 64 kB: OpenImageIO
+// reports an XYZE file as having no FORMAT at all.
+std::string radiance_format(const std::string& path) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f)
+        return "";
+    std::string head(65536, '\0');
+    head.resize(std::fread(&head[0], 1, head.size(), f));
+    std::fclose(f);
+    for (size_t at = 0; at < head.size();) {
+        size_t end = head.find('\n', at);
+        end = end == std::string::npos ? head.size() : end;
+        if (end == at) // the blank line that ends the header
+            break;
+        const std::string line = head.substr(at, end - at);
+        if (line.rfind("FORMAT=", 0) == 0)
+            return line.substr(7, line.find_last_not_of(" \t\r") - 6);
+        at = end + 1;
+    }
+    return "";
+}
+
 // "R, G" (at most 8 names) for messages.
 std::string channel_list(const ImageSpec& spec) {
     std::string out;
@@ -345,6 +367,9 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
         const ExrHeaderInfo exr = check_exr_header(path, file_bytes);
         check_declared_size(path, exr.width, exr.height, 1, exr.stored_bytes, file_bytes);
     }
+    if (starts_with(path, "#?") && radiance_format(path) == "32-bit_rle_xyze")
+        throw Error(path + ": Radiance XYZE pixels (CIE XYZ) are not read; write the map as RGBE "
+                           "(Radiance's ra_xyze -r IN OUT) or as OpenEXR");
     if (starts_with(path, "#?")) { // Radiance HDR, read through our buffered proxy
         proxy = std::make_unique<BufferedFileProxy>(path, file_bytes);
         Filesystem::IOProxy* p = proxy.get();

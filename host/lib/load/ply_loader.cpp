@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -365,9 +366,12 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
                 const float f = static_cast<float>(v);
                 const std::string& n = p.name;
                 if (n == "x" || n == "y" || n == "z") {
-                    if (!std::isfinite(f))
-                        body.fail("vertex " + std::to_string(row) + ": coordinate " + n +
-                                  " is not finite");
+                    if (!std::isfinite(f)) {
+                        char text[32];
+                        std::snprintf(text, sizeof text, "%.9g", v);
+                        body.fail("vertex " + std::to_string(row) + ": coordinate " + n + " (" +
+                                  text + ") is not a finite float");
+                    }
                     pos_v[row][n[0] - 'x'] = f;
                 } else if (has_normals && (n == "nx" || n == "ny" || n == "nz")) {
                     nrm_v[row][n[1] - 'x'] = f;
