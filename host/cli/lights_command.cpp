@@ -6,6 +6,7 @@
 #include "image/preview.h"
 #include "util/output_batch.h"
 
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -27,7 +28,10 @@ void run(const LightsArgs& a) {
     if (!a.plot.empty())
         check_writable_format(a.plot);
     // The light set is JSON: under another name ("-o lights.exr") it would pass for an image.
-    if (std::filesystem::path(a.output).extension() != ".json")
+    std::string ext = std::filesystem::path(a.output).extension().string();
+    for (char& c : ext)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".json")
         throw Error(a.output + ": the light set is written as JSON: name it .json (--plot "
                                "writes an image of the directions)");
     DistributionOptions opt;

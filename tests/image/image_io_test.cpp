@@ -278,7 +278,10 @@ TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
     } catch (const et::Error& x) {
         e = x.what();
     }
-    EXPECT_NE(e.find("up.hdr: stored flipped vertically (orientation 4)"), std::string::npos) << e;
+    EXPECT_NE(e.find("up.hdr: its pixels need flipping vertically (stored bottom-up) to be "
+                     "upright (orientation 4)"),
+              std::string::npos)
+        << e;
     EXPECT_NE(e.find("--reorient"), std::string::npos) << e;
 
     auto out = OIIO::ImageOutput::create(dir + "/crop.exr");
@@ -300,6 +303,26 @@ TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
                      "window 16x8+0+0)"),
               std::string::npos)
         << e;
+
+    // A PNG placed on a page by an oFFs offset (ImageMagick's -crop without +repage) is its
+    // picture: OpenImageIO reports the offset as a data window, but only an EXR has two windows.
+    auto png = OIIO::ImageOutput::create(dir + "/offset.png");
+    ASSERT_TRUE(png);
+    OIIO::ImageSpec ps(4, 2, 3, OIIO::TypeDesc::UINT8);
+    ps.x = 3;
+    ps.y = 2;
+    ASSERT_TRUE(png->open(dir + "/offset.png", ps)) << png->geterror();
+    const std::vector<unsigned char> bytes(4 * 2 * 3, 255);
+    ASSERT_TRUE(png->write_image(OIIO::TypeDesc::UINT8, bytes.data()));
+    png->close();
+    auto in = OIIO::ImageInput::open(dir + "/offset.png");
+    ASSERT_TRUE(in);
+    EXPECT_EQ(in->spec().x, 3) << "the test needs a PNG with an offset";
+    in.reset();
+    const et::RgbImage img = et::read_rgb_image(dir + "/offset.png");
+    EXPECT_EQ(img.width, 4);
+    EXPECT_EQ(img.height, 2);
+    EXPECT_EQ(img.rgb, std::vector<float>(4 * 2 * 3, 1.0f));
 }
 
 // A Radiance file of CIE XYZ pixels: refused naming its format (OpenImageIO says it has none).
@@ -780,7 +803,7 @@ TEST(ImageIo, RadianceDecodedBitForBitAsOpenImageIo) {
             // OpenImageIO reads a bottom-up file's rows as stored (and says so in its
             // Orientation); envtrace refuses to light a scene upside down.
             if (name == "bottom-up") {
-                EXPECT_NE(std::string(e.what()).find("flipped vertically"), std::string::npos)
+                EXPECT_NE(std::string(e.what()).find("flipping vertically"), std::string::npos)
                     << e.what();
                 continue;
             }

@@ -422,6 +422,15 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
             expect_clean_error(run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir),
                                "s.json: " + c.path, dir);
     }
+    // A matrix whose last row is [0, 0, 0, 1] up to round-off (1e-9 from a float or numpy
+    // print) is the affine transform it means.
+    {
+        Part q;
+        q.shapes = R"([{"type": "quad", "transform": {"matrix": [1,0,0,2, 0,1,0,0, 0,0,1,0,
+                                                                  1e-9,0,-1e-9,1.0000001]}}])";
+        write_file(dir + "/s.json", q.text(dir));
+        EXPECT_NO_THROW(et::load_scene(dir + "/s.json"));
+    }
     // Integers written as floats are the same integers (documented): 2.0 spp renders.
     Part p;
     p.render = R"({"spp": 2.0, "seed": 7e0})";

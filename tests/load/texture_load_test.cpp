@@ -207,6 +207,10 @@ TEST(TextureLoad, MtlOptionsWithFewerNumbersKeepTheirMap) {
     EXPECT_NE(e.find("map_Kd -s: the numbers must be finite"), std::string::npos) << e;
     e = error("map_Kd -o wood.png\n");
     EXPECT_NE(e.find("map_Kd -o takes one to three numbers"), std::string::npos) << e;
+    e = error("map_Ks\n");
+    EXPECT_NE(e.find("line 2: map_Ks names no file"), std::string::npos) << e;
+    // Statements envtrace ignores stay ignored, whatever they hold.
+    EXPECT_EQ(error("map_Kd wood.png\nmap_Ka\nbump -bm\nmap_d -s nan 1 1 x.png\n"), "");
 }
 
 TEST(TextureLoad, JsonTexturesAndCheckers) {

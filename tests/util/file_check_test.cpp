@@ -48,16 +48,21 @@ TEST(FileCheck, TextFilesNameTheirWideEncoding) {
     const std::string le = write("le.obj", std::string("\xFF\xFEv\0 \0"
                                                        "0\0",
                                                        8));
-    expect_error([&] { et::read_text_file(le, 100, "OBJ file"); }, le,
-                 "the OBJ file is UTF-16 (little-endian) text");
+    expect_error(
+        [&] { et::read_text_file(le, 100, "OBJ file"); }, le,
+        "the OBJ file is UTF-16LE text; save it as UTF-8 (or ASCII), e.g. iconv -f UTF-16LE");
     const std::string be = write("be.obj", std::string("\xFE\xFF\0v\0 ", 6));
-    expect_error([&] { et::read_text_file(be, 100, "OBJ file"); }, be, "UTF-16 (big-endian)");
+    expect_error([&] { et::read_text_file(be, 100, "OBJ file"); }, be, "UTF-16BE");
     const std::string u32 = write("u32.json", std::string("\xFF\xFE\0\0{\0\0\0", 8));
-    expect_error([&] { et::read_text_file(u32, 100, "scene file"); }, u32, "UTF-32");
+    expect_error([&] { et::read_text_file(u32, 100, "scene file"); }, u32, "UTF-32LE");
     const std::string nobom = write("nobom.obj", std::string("v\0 \0"
                                                              "0\0",
                                                              6));
-    expect_error([&] { et::read_text_file(nobom, 100, "OBJ file"); }, nobom, "UTF-16");
+    expect_error([&] { et::read_text_file(nobom, 100, "OBJ file"); }, nobom, "UTF-16LE");
+    const std::string nobom_be = write("nobom_be.obj", std::string("\0v\0 \0"
+                                                                   "0",
+                                                                   6));
+    expect_error([&] { et::read_text_file(nobom_be, 100, "OBJ file"); }, nobom_be, "UTF-16BE");
     EXPECT_EQ(et::read_text_file(write("bom.obj", "\xEF\xBB\xBFv 0 0 0\n"), 100, "OBJ file"),
               "v 0 0 0\n");
     const std::string gz("\x1f\x8b\x08\x00\x00\x00", 6); // not text, but not wide text either

@@ -302,24 +302,28 @@ std::string channel_list(const ImageSpec& spec) {
 // shown (an EXR's data window inside or around its display window). Read as stored, a map would
 // light the scene upside down, mirrored or stretched without a word; refused instead, with the
 // command that writes the picture as shown.
-void check_upright_and_whole(const std::string& path, const ImageSpec& spec) {
-    static const char* const names[] = {"",
-                                        "normal",
-                                        "flipped horizontally",
-                                        "rotated 180 degrees",
-                                        "flipped vertically",
-                                        "transposed",
-                                        "rotated 90 degrees clockwise",
-                                        "transversed",
-                                        "rotated 90 degrees counter-clockwise"};
+void check_upright_and_whole(const std::string& path, const ImageSpec& spec, bool exr) {
+    // What the stored pixels need to be shown upright (EXIF's orientations 2-8; 0, which some
+    // cameras write, means unspecified: as stored).
+    static const char* const needs[] = {"",
+                                        "",
+                                        "flipping horizontally",
+                                        "turning 180 degrees",
+                                        "flipping vertically (stored bottom-up)",
+                                        "transposing",
+                                        "turning 90 degrees clockwise",
+                                        "transversing",
+                                        "turning 90 degrees counter-clockwise"};
     const int o = spec.get_int_attribute("Orientation", 1);
-    if (o != 1)
-        throw Error(path + ": stored " +
-                    (o >= 2 && o <= 8 ? names[o] : "in an unknown orientation") + " (orientation " +
-                    std::to_string(o) +
-                    "), which envtrace does not apply; write it upright first, e.g. oiiotool '" +
-                    path + "' --reorient -o upright" + lower_extension(path));
-    const bool full_known = spec.full_width > 0 && spec.full_height > 0;
+    if (o != 1 && o != 0)
+        throw Error(path + ": its pixels need " +
+                    (o >= 2 && o <= 8 ? needs[o] : "an unknown reorientation") +
+                    " to be upright (orientation " + std::to_string(o) +
+                    "), which envtrace does not apply; write it upright first, e.g. oiiotool \"" +
+                    path + "\" --reorient -o upright" + lower_extension(path));
+    // Only OpenEXR separates the two windows (a PNG's oFFs offset, which OpenImageIO reports as
+    // a data window off a display window at 0, places the picture on a page: it is the picture).
+    const bool full_known = exr && spec.full_width > 0 && spec.full_height > 0;
     if (full_known && (spec.x != spec.full_x || spec.y != spec.full_y ||
                        spec.width != spec.full_width || spec.height != spec.full_height)) {
         auto window = [](int w, int h, int x, int y) {
@@ -330,8 +334,8 @@ void check_upright_and_whole(const std::string& path, const ImageSpec& spec) {
                     window(spec.width, spec.height, spec.x, spec.y) +
                     ") are not its picture (display window " +
                     window(spec.full_width, spec.full_height, spec.full_x, spec.full_y) +
-                    "); write the picture as shown first, e.g. oiiotool '" + path +
-                    "' --croptofull -o whole" + lower_extension(path));
+                    "); write the picture as shown first, e.g. oiiotool \"" + path +
+                    "\" --croptofull -o whole" + lower_extension(path));
     }
 }
 
@@ -367,10 +371,10 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
         const ExrHeaderInfo exr = check_exr_header(path, file_bytes);
         check_declared_size(path, exr.width, exr.height, 1, exr.stored_bytes, file_bytes);
     }
-    if (starts_with(path, "#?") && radiance_format(path) == "32-bit_rle_xyze")
-        throw Error(path + ": Radiance XYZE pixels (CIE XYZ) are not read; write the map as RGBE "
-                           "(Radiance's ra_xyze -r IN OUT) or as OpenEXR");
     if (starts_with(path, "#?")) { // Radiance HDR, read through our buffered proxy
+        if (radiance_format(path) == "32-bit_rle_xyze")
+            throw Error(path + ": Radiance XYZE pixels (CIE XYZ) are not read; write the map as "
+                               "RGBE (Radiance's ra_xyze -r IN OUT) or as OpenEXR");
         proxy = std::make_unique<BufferedFileProxy>(path, file_bytes);
         Filesystem::IOProxy* p = proxy.get();
         ImageSpec hdr_config = config;
@@ -400,7 +404,8 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
     if (spec.deep)
         throw Error(path + ": deep images are not supported");
     check_declared_size(path, w, h, spec.depth, spec.image_bytes(true), file_bytes);
-    check_upright_and_whole(path, spec);
+    const bool exr = std::string(in->format_name()) == "openexr";
+    check_upright_and_whole(path, spec, exr);
 
     // Which channels become R, G, B.
     idx[1] = nch > 1 ? 1 : 0;
@@ -413,9 +418,10 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
         idx[1] = g;
         idx[2] = b;
     }
-    // Channels named as colour but not all three (an "R, G" EXR): read as grey from the first,
-    // which is not the picture -- said once, not silently.
-    if (!(r >= 0 && g >= 0 && b >= 0) && (g >= 0 || b >= 0))
+    // An EXR's channels named as colour but not all three ("R, G"): read as grey from the first,
+    // which is not the picture -- said once, not silently. (Other readers name unnamed channels
+    // R, G, ... themselves: a grey + alpha TIFF would read as "R, G".)
+    if (exr && !(r >= 0 && g >= 0 && b >= 0) && (g >= 0 || b >= 0))
         warn(path + ": has colour channels but not all of R, G and B (" + channel_list(spec) +
              "); read as grey from channel '" + spec.channelnames[static_cast<size_t>(idx[0])] +
              "'");

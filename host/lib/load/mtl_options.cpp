@@ -10,9 +10,10 @@
 namespace et {
 namespace {
 
+// The texture statements envtrace reads (obj_loader.cpp); the others (map_Ka, bump, map_d, ...)
+// are ignored, and pass unchanged whatever they hold.
 bool is_texture_statement(const std::string& key) {
-    return key.rfind("map_", 0) == 0 || key == "bump" || key == "disp" || key == "decal" ||
-           key == "refl" || key == "norm";
+    return key == "map_Kd" || key == "map_Ks" || key == "map_Pr" || key == "map_Ns";
 }
 
 // The whole token as a number, or false.
@@ -46,7 +47,8 @@ std::string normalise_statement(const std::string& line, const std::string& wher
         const size_t before = pos;
         const std::string tok = next_token(line, &pos);
         if (tok.empty())
-            throw Error(where + ": " + key + " names no file after its options");
+            throw Error(where + ": " + key + " names no file" +
+                        (out == key ? "" : " after its options"));
         if (tok == "-s" || tok == "-o" || tok == "-t") {
             const double fallback = tok == "-s" ? 1.0 : 0.0;
             double v[3] = {fallback, fallback, fallback};

@@ -1,4 +1,5 @@
-// MTL texture statements (map_Kd, bump, ...) as tinyobjloader can read them. The MTL format lets
+// The MTL texture statements envtrace reads (map_Kd, map_Ks, map_Pr, map_Ns) as tinyobjloader can
+// read them. The MTL format lets
 // -s, -o and -t take one to three numbers ("-s u [v [w]]"); tinyobjloader always reads three, so
 // "map_Kd -s 2 2 wood.png" lost the file name to the third number and the texture vanished without
 // a word. The MTL text is rewritten before tinyobjloader sees it: every such option written out

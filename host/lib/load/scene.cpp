@@ -71,11 +71,15 @@ glm::mat4 read_transform(const json& s, const JsonReader& r) {
         // Only affine transforms: a mesh is moved, not projected. A bottom row other than
         // [0, 0, 0, 1] is most often a column-major matrix pasted here (its translation in the last
         // row), which would otherwise lose its translation without a word.
-        if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+        // (Within 1e-6: a float or numpy round-off there is harmless; a pasted translation is not.)
+        if (std::fabs(m[0][3]) > 1e-6f || std::fabs(m[1][3]) > 1e-6f ||
+            std::fabs(m[2][3]) > 1e-6f || std::fabs(m[3][3] - 1.0f) > 1e-6f)
             rm.fail("the last row must be [0, 0, 0, 1] (an affine transform, row-major: the "
                     "translation is the last column), got [" +
                     json_excerpt(a[12]) + ", " + json_excerpt(a[13]) + ", " + json_excerpt(a[14]) +
                     ", " + json_excerpt(a[15]) + "]");
+        m[0][3] = m[1][3] = m[2][3] = 0.0f; // exactly affine
+        m[3][3] = 1.0f;
         const float det = glm::determinant(glm::mat3(m));
         if (!(std::fabs(det) > 0.0f) || !std::isfinite(det))
             rm.fail("is singular (or its determinant overflows)");

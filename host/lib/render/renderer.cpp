@@ -17,13 +17,14 @@ namespace {
 
 // A film the machine cannot hold is an error before anything is allocated, naming its size (a
 // 16384 x 16384 film grew to 17 GB over 40 s before "out of memory", or met the OOM killer).
-// Per pixel: the exact sums (and their AOVs), the device's film fields and the host's copy of
-// them, and the image written at the end (mean and preview).
+// Per pixel, what the host allocates whatever the back end: the exact sums (and their AOVs), the
+// film's fields (all four, AOVs or not) and the image written at the end (mean and preview). A
+// device's own copy is the device's to check (executor_cl.cpp: its global memory).
 int checked_film_width(const DeviceScene& scene) {
     const uint64_t pixels = uint64_t(scene.width()) * uint64_t(scene.height());
     const uint64_t per_pixel = sizeof(FilmSums::Pixel) +
                                (scene.settings.aovs ? sizeof(AovPixel) : 0) +
-                               2 * 4 * sizeof(etk::float4) + 8 * sizeof(float);
+                               4 * sizeof(etk::float4) + 8 * sizeof(float);
     const uint64_t need = pixels * per_pixel;
     const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
     const uint64_t have = pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) : 0;

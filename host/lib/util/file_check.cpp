@@ -122,22 +122,23 @@ std::string read_regular_file(const std::string& path, uint64_t max_bytes, const
 std::string read_text_file(const std::string& path, uint64_t max_bytes, const char* what) {
     std::string text = read_regular_file(path, max_bytes, what);
     auto starts = [&](const char* bom, size_t n) { return text.compare(0, n, bom, n) == 0; };
-    const char* wide = starts("\x00\x00\xFE\xFF", 4)   ? "UTF-32 (big-endian)"
-                       : starts("\xFF\xFE\x00\x00", 4) ? "UTF-32 (little-endian)"
-                       : starts("\xFE\xFF", 2)         ? "UTF-16 (big-endian)"
-                       : starts("\xFF\xFE", 2)         ? "UTF-16 (little-endian)"
+    // The encoding as iconv names it (a BOM-less UTF-16 guessed from ASCII's NUL bytes).
+    const char* wide = starts("\x00\x00\xFE\xFF", 4)   ? "UTF-32BE"
+                       : starts("\xFF\xFE\x00\x00", 4) ? "UTF-32LE"
+                       : starts("\xFE\xFF", 2)         ? "UTF-16BE"
+                       : starts("\xFF\xFE", 2)         ? "UTF-16LE"
                                                        : nullptr;
-    // Without a byte order mark: ASCII text in UTF-16 has a NUL in every other byte.
     if (!wide && text.size() >= 4) {
         const bool z[4] = {text[0] == '\0', text[1] == '\0', text[2] == '\0', text[3] == '\0'};
         if (z[0] && !z[1] && z[2] && !z[3])
-            wide = "UTF-16 (big-endian)";
+            wide = "UTF-16BE";
         else if (!z[0] && z[1] && !z[2] && z[3])
-            wide = "UTF-16 (little-endian)";
+            wide = "UTF-16LE";
     }
     if (wide)
         throw Error(path + ": the " + what + " is " + wide +
-                    " text; save it as UTF-8 (or ASCII), e.g. iconv -f UTF-16 -t UTF-8");
+                    " text; save it as UTF-8 (or ASCII), e.g. iconv -f " + wide +
+                    " -t UTF-8 IN > OUT");
     if (starts("\xEF\xBB\xBF", 3))
         text.erase(0, 3);
     return text;
