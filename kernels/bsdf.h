@@ -51,7 +51,7 @@ ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
     float4 a = mats[2 * id], b = mats[2 * id + 1];
     EtkMaterial m;
     m.albedo = make_float3(a.x, a.y, a.z);
-    m.type = (int)as_uint(a.w);
+    m.type = (int)a.w; // a float value, not int bits: a.w rides along in albedo's fourth lane
     m.specular = make_float3(b.x, b.y, b.z);
     m.alpha = fmax(b.w, 1e-3f);
     m.vndf = 0;

@@ -431,7 +431,9 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
         if (etk_max3(c) > 0.0f) {
             // Shadow rays stop at any surface, glass included: light through glass (caustics)
             // is the continuation's to find, as indirect light, never the light sample's.
-            P.shadow_o[slot] = etk_f4(etk_surface_origin(s, wi_world), as_float((uint)learn_key));
+            // The key as a float value (exact below 2^24), never an int's bits: o.w rides along
+            // in the origin's fourth lane through the traversal (params.h).
+            P.shadow_o[slot] = etk_f4(etk_surface_origin(s, wi_world), (float)learn_key);
             P.shadow_d[slot] = etk_f4(wi_world, 3.0e38f);
             P.shadow_L[slot] = etk_f4(c, learn_val);
             if (p.guide_learn)
@@ -543,7 +545,7 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
         P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.shadow_L[slot]), r.w);
     }
     if (p.guide_learn) { // the visibility strategy's records, in shadow-queue order (host reads)
-        P.guide_key[i] = (int)as_uint(o.w);
+        P.guide_key[i] = (int)o.w;
         P.guide_val[i] = visible ? P.shadow_L[slot].w : 0.0f;
         float t; // where an unoccluded ray leaves the scene's box: the portal table's record
         P.guide_exit[i] =

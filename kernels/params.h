@@ -58,7 +58,11 @@ ETK_FN int etk_learning_flags(int k) {
 // 4-byte members only: passed by value to kernels, so host and device layouts agree.
 typedef struct {
     EtkEnvMap env;
-    float eye[3], forward[3], right[3], up[3]; // right/up scaled by the field of view
+    // right/up scaled by the field of view. Four floats each, the fourth 0: a compiler may load a
+    // float3 as four floats, and the fourth of up[3] was the int `width`, whose bits read as a
+    // float are a denormal -- every product in that lane then took a microcode assist (PoCL's
+    // generate stage ran 3x slower for it, issue 12). No int's bits in a float lane.
+    float eye[4], forward[4], right[4], up[4];
     int width, height;
     int max_depth, rr_depth;
     int strategy, heuristic;

@@ -140,14 +140,13 @@ std::vector<int> share_bins(const std::vector<Material>& materials) {
 
 void add_materials(const Scene& scene, DeviceScene& d) {
     for (const auto& m : scene.materials) {
-        uint32_t type = static_cast<uint32_t>(m.type);
-        float type_bits;
-        std::memcpy(&type_bits, &type, 4);
+        // The type as a float value (bsdf.h: never an int's bits, a denormal in albedo's lane).
+        const float type_value = static_cast<float>(m.type);
         // Conductors keep eta where the others keep the albedo and k where they keep F0;
         // dielectrics their ior in F0's first slot (bsdf.h).
         const bool metal = m.type == ETK_MAT_CONDUCTOR;
         const glm::vec3 a = metal ? m.eta : m.albedo, b = metal ? m.k : m.specular;
-        d.materials.push_back(etk::make_float4(a.x, a.y, a.z, type_bits));
+        d.materials.push_back(etk::make_float4(a.x, a.y, a.z, type_value));
         const bool glass = m.type == ETK_MAT_DIELECTRIC || m.type == ETK_MAT_SMOOTH_DIELECTRIC;
         d.materials.push_back(etk::make_float4(glass ? m.ior : b.x, b.y, b.z, m.roughness));
     }
@@ -200,6 +199,10 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
         p.guide_origin[k] = lo[k];
     p.guide_inv_cell = static_cast<float>(opt.resolution) / longest;
     p.guide_slots = opt.slots;
+    // Shadow rays carry their record's key as a float value (integrator.h): exact below 2^24.
+    if (static_cast<int64_t>(opt.slots) * ETK_GUIDE_REGIONS > (int64_t(1) << 24))
+        throw Error("visibility options: " + std::to_string(opt.slots) +
+                    " slots are more than the shadow rays' keys can name");
     // Depth 1 has no continuation to guide (the last bounce's is not guided: integrator.h).
     p.guide_continuation = opt.continuation && scene.settings.max_depth > 1 ? 1 : 0;
     d.guide_regions = guide_region_tables(d.env_dist, p.env.dist_w, p.env.dist_h);
