@@ -82,7 +82,7 @@ ETK_FN float3 etk_env_radiance(ETK_GLOBAL const float* texels, EtkEnvMap env, fl
 }
 
 // Solid-angle density of sampling world direction d (at map coordinates uv).
-ETK_FN float etk_env_pdf_uv(ETK_GLOBAL const float* dist, EtkEnvMap env, float2 uv) {
+ETK_FORCE_INLINE_FN float etk_env_pdf_uv(ETK_GLOBAL const float* dist, EtkEnvMap env, float2 uv) {
     if (!env.has_light)
         return 0.0f;
     return etk_latlong_pdf_to_solid_angle(etk_pdf_2d(dist, env.dist_w, env.dist_h, uv), uv.y);
