@@ -221,43 +221,35 @@ TEST(ImageIo, ExrRoundTripIsExact) {
     EXPECT_EQ(img.at(5, 17)[1], px[3 * (17 * w + 5) + 1]);
 }
 
-TEST(ImageIo, PfmReadsBottomUpFloatsExactly) {
-    // PFM by hand: header, then little-endian floats, bottom row first.
-    const std::string dir = ett::scratch_dir("image-io-pfm-read");
-    const int w = 5, h = 3;
-    const auto px = hdr_pixels(w, h, 3, 2);
+// A PFM written by hand -- `header`, then little-endian floats, bottom row first -- reads as
+// the pixels written.
+static void expect_hand_written_pfm_reads(const std::string& path, const std::string& header, int w,
+                                          int h, uint32_t seed) {
+    const auto px = hdr_pixels(w, h, 3, seed);
     {
-        std::ofstream out(dir + "/hand.pfm", std::ios::binary);
-        out << "PF\n" << w << " " << h << "\n-1.0\n";
+        std::ofstream out(path, std::ios::binary);
+        out << header;
         for (int y = h - 1; y >= 0; --y)
             out.write(reinterpret_cast<const char*>(&px[3 * static_cast<size_t>(y) * w]),
                       3 * w * sizeof(float));
     }
-    const et::RgbImage img = et::read_rgb_image(dir + "/hand.pfm");
+    const et::RgbImage img = et::read_rgb_image(path);
     ASSERT_EQ(img.width, w);
     ASSERT_EQ(img.height, h);
     for (size_t i = 0; i < px.size(); ++i)
         ASSERT_EQ(img.rgb[i], px[i]) << "index " << i;
 }
 
-// A header written with Windows line ends ("PF\r\n5 3\r\n-1.0\r\n"): the pixels start after
-// the last '\n' (read one byte early, every texel was a denormal and the map came out black).
+TEST(ImageIo, PfmReadsBottomUpFloatsExactly) {
+    expect_hand_written_pfm_reads(ett::scratch_dir("image-io-pfm-read") + "/hand.pfm",
+                                  "PF\n5 3\n-1.0\n", 5, 3, 2);
+}
+
+// A header written with Windows line ends: the pixels start after the last '\n' (read one
+// byte early, every texel was a denormal and the map came out black).
 TEST(ImageIo, PfmWithCrLfHeaderReadsTheSamePixels) {
-    const std::string dir = ett::scratch_dir("image-io-pfm-crlf");
-    const int w = 5, h = 3;
-    const auto px = hdr_pixels(w, h, 3, 7);
-    {
-        std::ofstream out(dir + "/crlf.pfm", std::ios::binary);
-        out << "PF\r\n" << w << " " << h << "\r\n-1.0\r\n";
-        for (int y = h - 1; y >= 0; --y)
-            out.write(reinterpret_cast<const char*>(&px[3 * static_cast<size_t>(y) * w]),
-                      3 * w * sizeof(float));
-    }
-    const et::RgbImage img = et::read_rgb_image(dir + "/crlf.pfm");
-    ASSERT_EQ(img.width, w);
-    ASSERT_EQ(img.height, h);
-    for (size_t i = 0; i < px.size(); ++i)
-        ASSERT_EQ(img.rgb[i], px[i]) << "index " << i;
+    expect_hand_written_pfm_reads(ett::scratch_dir("image-io-pfm-crlf") + "/crlf.pfm",
+                                  "PF\r\n5 3\r\n-1.0\r\n", 5, 3, 7);
 }
 
 // Pixels not stored as shown -- a Radiance file stored bottom-up ("+Y H +X W"), an EXR whose data
@@ -272,12 +264,15 @@ TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
         for (int i = 0; i < 8; ++i)
             out << char(128) << char(128) << char(128) << char(129);
     }
-    std::string e;
-    try {
-        et::read_rgb_image(dir + "/up.hdr");
-    } catch (const et::Error& x) {
-        e = x.what();
-    }
+    auto error_of = [](const std::string& path) -> std::string {
+        try {
+            et::read_rgb_image(path);
+        } catch (const et::Error& x) {
+            return x.what();
+        }
+        return "";
+    };
+    std::string e = error_of(dir + "/up.hdr");
     EXPECT_NE(e.find("up.hdr: its pixels need flipping vertically (stored bottom-up) to be "
                      "upright (orientation 4)"),
               std::string::npos)
@@ -293,12 +288,7 @@ TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
     const std::vector<float> px(8 * 4 * 3, 1.0f);
     ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
     out->close();
-    e.clear();
-    try {
-        et::read_rgb_image(dir + "/crop.exr");
-    } catch (const et::Error& x) {
-        e = x.what();
-    }
+    e = error_of(dir + "/crop.exr");
     EXPECT_NE(e.find("crop.exr: its pixels (data window 8x4+0+0) are not its picture (display "
                      "window 16x8+0+0)"),
               std::string::npos)

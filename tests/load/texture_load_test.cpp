@@ -57,6 +57,16 @@ std::string error_of(const std::function<void()>& f) {
     return "";
 }
 
+// The error (or "") of loading DIR/quad.obj with an MTL of the given body, textures read.
+std::string textured_obj_error(const std::string& dir, const std::string& mtl_body) {
+    return error_of([&] {
+        std::vector<et::Material> mats;
+        et::TriangleSoup soup;
+        et::TextureSet textures;
+        et::load_obj(textured_obj(dir, mtl_body), glm::mat4(1.0f), -1, mats, soup, &textures);
+    });
+}
+
 TEST(TextureLoad, MtlMapsAndTextureCoordinates) {
     const std::string dir = ett::scratch_dir("texload-mtl");
     write_png(dir + "/wood.png", 2, 1, {0, 64, 128, 255, 200, 32});
@@ -124,14 +134,7 @@ TEST(TextureLoad, MapNsIsARoughnessMapAndFilesAreReadOnce) {
 
 TEST(TextureLoad, BadMtlMapsAreErrorsNamingFileMaterialAndKey) {
     const std::string dir = ett::scratch_dir("texload-bad");
-    auto load = [&](const std::string& body) {
-        return error_of([&] {
-            std::vector<et::Material> mats;
-            et::TriangleSoup soup;
-            et::TextureSet textures;
-            et::load_obj(textured_obj(dir, body), glm::mat4(1.0f), -1, mats, soup, &textures);
-        });
-    };
+    auto load = [&](const std::string& body) { return textured_obj_error(dir, body); };
     std::string e = load("map_Kd missing.png\n");
     EXPECT_NE(e.find("quad.obj: material 'wood': map_Kd 'missing.png'"), std::string::npos) << e;
     EXPECT_NE(e.find("missing.png"), std::string::npos) << e;
@@ -190,14 +193,7 @@ TEST(TextureLoad, MtlOptionsWithFewerNumbersKeepTheirMap) {
         EXPECT_EQ(t.uv_scale, c.scale) << c.body;
         EXPECT_EQ(t.uv_offset, c.offset) << c.body;
     }
-    auto error = [&](const std::string& body) {
-        return error_of([&] {
-            std::vector<et::Material> mats;
-            et::TriangleSoup soup;
-            et::TextureSet textures;
-            et::load_obj(textured_obj(dir, body), glm::mat4(1.0f), -1, mats, soup, &textures);
-        });
-    };
+    auto error = [&](const std::string& body) { return textured_obj_error(dir, body); };
     // The file is missing: an error (it passed silently when its name was taken for a number).
     std::string e = error("map_Kd -s 2 2 nothere.png\n");
     EXPECT_NE(e.find("nothere.png"), std::string::npos) << e;
