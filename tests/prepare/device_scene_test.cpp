@@ -1,0 +1,61 @@
+// prepare/device_scene: what the kernels load as float vectors holds no int's bits. A compiler may
+// load a float3 as four floats; where the fourth was an int (EtkParams' film width after `up`, a
+// material's type after its albedo), its bits read as a float were a denormal, and every product
+// in that unused lane took a microcode assist (PoCL's generate stage ran 3x slower, issue 12).
+#include "load/scene.h"
+#include "prepare/device_scene.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+#include <fstream>
+
+namespace {
+
+bool denormal(float v) {
+    return std::fpclassify(v) == FP_SUBNORMAL;
+}
+
+TEST(DeviceScene, FloatVectorsHoldNoIntBits) {
+    const std::string dir = ett::scratch_dir("device-scene-lanes");
+    std::ofstream(dir + "/s.json") << R"({
+  "camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
+  "film": {"width": 512, "height": 384},
+  "environment": {"sky": {"resolution": [64, 32]}},
+  "materials": {"d": {"type": "diffuse", "albedo": 0.5},
+                "p": {"type": "plastic", "albedo": 0.5, "roughness": 0.3},
+                "g": {"type": "glass", "ior": 1.5},
+                "s": {"type": "glass", "ior": 1.5, "roughness": 0.2},
+                "m": {"type": "microfacet", "specular": 0.9, "roughness": 0.2},
+                "c": {"type": "conductor"}},
+  "shapes": [{"type": "sphere", "material": "d"}, {"type": "sphere", "material": "p"},
+             {"type": "sphere", "material": "g"}, {"type": "sphere", "material": "s"},
+             {"type": "sphere", "material": "m"}, {"type": "sphere", "material": "c"}]
+})";
+    const et::Scene s = et::load_scene(dir + "/s.json");
+    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+    const etk::EtkParams& p = ds.params;
+    for (const float* v : {p.eye, p.forward, p.right, p.up}) {
+        EXPECT_EQ(v[3], 0.0f) << "a camera vector's fourth float";
+        for (int k = 0; k < 3; ++k)
+            EXPECT_FALSE(denormal(v[k]));
+    }
+    ASSERT_GE(ds.materials.size(), 12u);
+    for (size_t i = 0; i < ds.materials.size(); ++i) {
+        const etk::float4 m = ds.materials[i];
+        for (float v : {m.x, m.y, m.z, m.w})
+            EXPECT_FALSE(denormal(v)) << "material float4 " << i;
+    }
+    // The type rides in the albedo's fourth lane as its value: every kind once.
+    std::vector<float> types;
+    for (size_t i = 0; i < ds.materials.size(); i += 2)
+        types.push_back(ds.materials[i].w);
+    for (int t : {ETK_MAT_DIFFUSE, ETK_MAT_MICROFACET, ETK_MAT_DIELECTRIC,
+                  ETK_MAT_SMOOTH_DIELECTRIC, ETK_MAT_CONDUCTOR})
+        EXPECT_NE(std::find(types.begin(), types.end(), static_cast<float>(t)), types.end()) << t;
+}
+
+} // namespace
