@@ -1,14 +1,13 @@
 #include "commands.h"
 #include "util/error.h"
+#include "util/file_check.h"
 #include "image/image_io.h"
 #include "kernels/latlong.h"
 #include "prepare/light_set.h"
 #include "image/preview.h"
 #include "util/output_batch.h"
 
-#include <cctype>
 #include <cstdio>
-#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -28,10 +27,7 @@ void run(const LightsArgs& a) {
     if (!a.plot.empty())
         check_writable_format(a.plot);
     // The light set is JSON: under another name ("-o lights.exr") it would pass for an image.
-    std::string ext = std::filesystem::path(a.output).extension().string();
-    for (char& c : ext)
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".json")
+    if (lower_extension(a.output) != ".json")
         throw Error(a.output + ": the light set is written as JSON: name it .json (--plot "
                                "writes an image of the directions)");
     DistributionOptions opt;

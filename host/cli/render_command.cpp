@@ -2,6 +2,7 @@
 #include "commands.h"
 #include "util/json_file.h"
 #include "util/error.h"
+#include "util/file_check.h"
 #include "image/image_io.h"
 #include "image/preview.h"
 #include "load/scene.h"
@@ -40,9 +41,7 @@ std::pair<std::string, std::string> output_names(const std::string& out) {
                          fs::is_directory(p, ec)))
         throw Error(out + ": is a folder: name the image to write in it (e.g. " +
                     (fs::path(out) / "render.exr").lexically_normal().string() + ")");
-    std::string ext = p.extension().string();
-    for (auto& c : ext)
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const std::string ext = lower_extension(out);
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
         return {fs::path(p).replace_extension(".exr").string(), out};
     if (ext == ".exr" || ext == ".hdr" || ext == ".pfm")

@@ -25,13 +25,6 @@ namespace fs = std::filesystem;
 namespace et {
 namespace image_detail {
 
-std::string lower_extension(const std::string& path) {
-    std::string ext = fs::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
-    return ext;
-}
-
 std::string one_line(std::string s) {
     std::replace(s.begin(), s.end(), '\n', ' ');
     while (!s.empty() && s.back() == ' ')
@@ -42,7 +35,6 @@ std::string one_line(std::string s) {
 } // namespace image_detail
 
 using image_detail::check_declared_size;
-using image_detail::lower_extension;
 using image_detail::one_line;
 using image_detail::RowSource;
 

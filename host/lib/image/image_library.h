@@ -40,7 +40,6 @@ void write_with_library(const std::string& path, const std::string& file, int wi
                         const std::vector<std::string>* names);
 
 // Shared with image_io.cpp, which defines them.
-std::string lower_extension(const std::string& path);
 std::string one_line(std::string s);
 // The declared size of an image against what can be held and indexed, before any pixel is read.
 void check_declared_size(const std::string& path, int64_t w, int64_t h, int64_t depth,

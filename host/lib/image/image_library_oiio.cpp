@@ -2,6 +2,7 @@
 #include "image/exr_header.h"
 #include "image/image_io.h"
 #include "image/image_library.h"
+#include "util/file_check.h"
 
 #include "util/error.h"
 

@@ -299,9 +299,7 @@ glm::mat4 node_matrix(const tinygltf::Node& n, const GltfReader& r, size_t index
 void load_gltf(const std::string& path, const glm::mat4& transform, int override_material,
                std::vector<Material>& materials, TriangleSoup& out) {
     const std::string bytes = read_regular_file(path, kMaxMeshBytes, "glTF file");
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) // ASCII only: std::tolower of a negative char is undefined
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const std::string ext = lower_extension(path);
     const bool binary = ext == ".glb" || bytes.compare(0, 4, "glTF") == 0;
     const std::string prepared = binary ? prepare_glb(path, bytes) : prepare_json(path, bytes);
     if (prepared.size() > std::numeric_limits<unsigned int>::max())

@@ -2,6 +2,7 @@
 // (scenes/README.md lists them).
 #include "load/scene.h"
 #include "util/error.h"
+#include "util/file_check.h"
 
 #include <cctype>
 #include <filesystem>
@@ -10,9 +11,7 @@ namespace et {
 
 void load_mesh(const std::string& path, const glm::mat4& transform, int override_material,
                std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) // ASCII only: std::tolower of a negative char is undefined
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const std::string ext = lower_extension(path);
     const size_t before = out.size();
     if (ext == ".ply")
         load_ply(path, transform, override_material, materials, out);

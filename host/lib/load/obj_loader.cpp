@@ -62,6 +62,24 @@ std::string tinyobj_text(std::string msg) {
     return excerpt(msg, 200);
 }
 
+// A file an OBJ or MTL names, as written or, when relative, in the OBJ's folder `dir`. Files
+// written on Windows separate folders by '\': where no file has the name as written, the one with
+// '/' in their place is meant.
+std::filesystem::path beside(const std::string& dir, const std::string& name) {
+    auto resolve = [&](const std::string& n) {
+        return std::filesystem::path(n).is_absolute() ? std::filesystem::path(n)
+                                                      : std::filesystem::path(dir) / n;
+    };
+    const std::filesystem::path p = resolve(name);
+    std::error_code ec;
+    if (name.find('\\') == std::string::npos || std::filesystem::exists(p, ec))
+        return p;
+    std::string slashed = name;
+    std::replace(slashed.begin(), slashed.end(), '\\', '/');
+    const std::filesystem::path q = resolve(slashed);
+    return std::filesystem::exists(q, ec) ? q : p;
+}
+
 // MTL files named by `mtllib`, resolved against the OBJ's folder and read through the regular-file
 // check (a FIFO or /dev/zero named as mtllib is an error, not a hang). A missing MTL is a warning
 // (tinyobjloader's), as before.
@@ -71,9 +89,7 @@ class MtlReader : public tinyobj::MaterialReader {
     bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
                     std::map<std::string, int>* names, std::string* warning,
                     std::string* err) override {
-        const std::filesystem::path p = std::filesystem::path(name).is_absolute()
-                                            ? std::filesystem::path(name)
-                                            : std::filesystem::path(dir_) / name;
+        const std::filesystem::path p = beside(dir_, name);
         std::error_code ec;
         if (!std::filesystem::exists(p, ec)) {
             if (warning)
@@ -108,21 +124,8 @@ int mtl_texture(const std::string& obj_path, const tinyobj::material_t& m, const
     for (float v : {scale.x, scale.y, offset.x, offset.y})
         if (!std::isfinite(v) || std::fabs(v) > 1e6f)
             throw Error(where + ": -s / -o values must be finite and within +-1e6");
-    auto resolve = [&](const std::string& n) {
-        return std::filesystem::path(n).is_absolute()
-                   ? std::filesystem::path(n)
-                   : std::filesystem::path(obj_path).parent_path() / n;
-    };
-    std::filesystem::path p = resolve(name);
-    // MTL files written on Windows separate folders by '\': where no file has the name as
-    // written, the one with '/' in their place is meant.
-    std::error_code ec;
-    if (name.find('\\') != std::string::npos && !std::filesystem::exists(p, ec)) {
-        std::string slashed = name;
-        std::replace(slashed.begin(), slashed.end(), '\\', '/');
-        if (std::filesystem::exists(resolve(slashed), ec))
-            p = resolve(slashed);
-    }
+    const std::filesystem::path p =
+        beside(std::filesystem::path(obj_path).parent_path().string(), name);
     return textures.add_file(p.string(), use, scale, offset, where);
 }
 

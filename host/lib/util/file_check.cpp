@@ -3,7 +3,9 @@
 
 #include "util/error.h"
 
+#include <cctype>
 #include <cerrno>
+#include <filesystem>
 #include <cstdio>
 #include <cstring>
 #include <fcntl.h>
@@ -142,6 +144,13 @@ std::string read_text_file(const std::string& path, uint64_t max_bytes, const ch
     if (starts("\xEF\xBB\xBF", 3))
         text.erase(0, 3);
     return text;
+}
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) // ASCII only: std::tolower of a negative char is undefined
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
 }
 
 } // namespace et

@@ -32,6 +32,10 @@ std::string read_regular_file(const std::string& path, uint64_t max_bytes, const
 // at all: "no faces", "malformed JSON").
 std::string read_text_file(const std::string& path, uint64_t max_bytes, const char* what);
 
+// A file name's extension in lower case, dot included (".exr"; "" without one): formats are
+// told by extension in any case.
+std::string lower_extension(const std::string& path);
+
 // "12.3 MiB", "4 GiB": a byte count for messages.
 std::string byte_text(uint64_t bytes);
 
