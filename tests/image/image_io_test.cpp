@@ -279,15 +279,19 @@ TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
         << e;
     EXPECT_NE(e.find("--reorient"), std::string::npos) << e;
 
-    auto out = OIIO::ImageOutput::create(dir + "/crop.exr");
-    ASSERT_TRUE(out);
+    // White pixels written through OpenImageIO with the windows of `spec` (its format: float).
+    auto write_white = [](const std::string& path, OIIO::ImageSpec spec) {
+        auto out = OIIO::ImageOutput::create(path);
+        ASSERT_TRUE(out);
+        ASSERT_TRUE(out->open(path, spec)) << out->geterror();
+        const std::vector<float> px(size_t(spec.width) * spec.height * spec.nchannels, 1.0f);
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data())) << out->geterror();
+        out->close();
+    };
     OIIO::ImageSpec spec(8, 4, 3, OIIO::TypeDesc::FLOAT);
     spec.full_width = 16;
     spec.full_height = 8;
-    ASSERT_TRUE(out->open(dir + "/crop.exr", spec)) << out->geterror();
-    const std::vector<float> px(8 * 4 * 3, 1.0f);
-    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
-    out->close();
+    write_white(dir + "/crop.exr", spec);
     e = error_of(dir + "/crop.exr");
     EXPECT_NE(e.find("crop.exr: its pixels (data window 8x4+0+0) are not its picture (display "
                      "window 16x8+0+0)"),
@@ -296,15 +300,10 @@ TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
 
     // A PNG placed on a page by an oFFs offset (ImageMagick's -crop without +repage) is its
     // picture: OpenImageIO reports the offset as a data window, but only an EXR has two windows.
-    auto png = OIIO::ImageOutput::create(dir + "/offset.png");
-    ASSERT_TRUE(png);
     OIIO::ImageSpec ps(4, 2, 3, OIIO::TypeDesc::UINT8);
     ps.x = 3;
     ps.y = 2;
-    ASSERT_TRUE(png->open(dir + "/offset.png", ps)) << png->geterror();
-    const std::vector<unsigned char> bytes(4 * 2 * 3, 255);
-    ASSERT_TRUE(png->write_image(OIIO::TypeDesc::UINT8, bytes.data()));
-    png->close();
+    write_white(dir + "/offset.png", ps);
     auto in = OIIO::ImageInput::open(dir + "/offset.png");
     ASSERT_TRUE(in);
     EXPECT_EQ(in->spec().x, 3) << "the test needs a PNG with an offset";
