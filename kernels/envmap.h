@@ -28,11 +28,6 @@ ETK_FN float3 etk_world_to_env(EtkEnvMap env, float3 d) {
                        -env.rot_sin * d.x + env.rot_cos * d.z);
 }
 
-ETK_FN float3 etk_texel(ETK_GLOBAL const float* texels, int w, int row, int col) {
-    ETK_GLOBAL const float* t = texels + 3 * (row * w + col);
-    return make_float3(t[0], t[1], t[2]);
-}
-
 // The bilinear lookup's four texels: rows r0, r1 and columns c0, c1 (wrapping in longitude) of a
 // w x h map, weights tx, ty of the second ones.
 typedef struct {
@@ -55,12 +50,19 @@ ETK_FN EtkTexelQuad etk_env_quad(int w, int h, float2 uv) {
     q.r1 = clamp((int)fy + 1, 0, h - 1);
     return q;
 }
-ETK_FN float3 etk_env_blend(ETK_GLOBAL const float* texels, int w, EtkTexelQuad q) {
-    float3 top =
-        etk_texel(texels, w, q.r0, q.c0) * (1.0f - q.tx) + etk_texel(texels, w, q.r0, q.c1) * q.tx;
-    float3 bot =
-        etk_texel(texels, w, q.r1, q.c0) * (1.0f - q.tx) + etk_texel(texels, w, q.r1, q.c1) * q.tx;
+// One channel c of the bilinear blend; etk_env_blend is the three (the same operations as one
+// float3 expression: component-wise). Scalar, so that a batch's loop over it vectorises.
+ETK_FN float etk_env_blend_channel(ETK_GLOBAL const float* texels, int w, EtkTexelQuad q, int c) {
+    float top = texels[3 * (q.r0 * w + q.c0) + c] * (1.0f - q.tx) +
+                texels[3 * (q.r0 * w + q.c1) + c] * q.tx;
+    float bot = texels[3 * (q.r1 * w + q.c0) + c] * (1.0f - q.tx) +
+                texels[3 * (q.r1 * w + q.c1) + c] * q.tx;
     return top * (1.0f - q.ty) + bot * q.ty;
+}
+ETK_FN float3 etk_env_blend(ETK_GLOBAL const float* texels, int w, EtkTexelQuad q) {
+    return make_float3(etk_env_blend_channel(texels, w, q, 0),
+                       etk_env_blend_channel(texels, w, q, 1),
+                       etk_env_blend_channel(texels, w, q, 2));
 }
 // Bilinear lookup at (u, v) with texel centres at half-integers: wraps in u, clamps at the poles.
 ETK_FN float3 etk_env_lookup_uv(ETK_GLOBAL const float* texels, int w, int h, float2 uv) {
@@ -98,6 +100,15 @@ typedef struct {
     int row, col; // distribution cell
 } EtkEnvSample;
 
+// Its two halves: the world direction at longitude coordinate u and (sin, cos) theta, and the
+// solid-angle density from pdf_uv and sin theta.
+ETK_FN float3 etk_env_sample_dir(EtkEnvMap env, float u, float2 theta) {
+    return etk_env_to_world(env, etk_latlong_dir(u, theta.y, theta.x));
+}
+ETK_FN float etk_env_sample_pdf(EtkEnvMap env, float pdf_uv, float sin_theta) {
+    return env.has_light ? etk_latlong_pdf_to_solid_angle_sin(pdf_uv, sin_theta) : 0.0f;
+}
+
 // The sample at map coordinates uv (distribution cell row, col) drawn with density pdf_uv on the
 // unit square: its world direction and solid-angle density, from one sin/cos of theta. Every
 // technique that samples the map ends here (etk_env_sample; visibility_guide.h).
@@ -107,8 +118,8 @@ ETK_FN EtkEnvSample etk_env_sample_at(EtkEnvMap env, float2 uv, float pdf_uv, in
     s.row = row;
     s.col = col;
     float2 theta = etk_sincospi(uv.y);
-    s.dir = etk_env_to_world(env, etk_latlong_dir(uv.x, theta.y, theta.x));
-    s.pdf = env.has_light ? etk_latlong_pdf_to_solid_angle_sin(pdf_uv, theta.x) : 0.0f;
+    s.dir = etk_env_sample_dir(env, uv.x, theta);
+    s.pdf = etk_env_sample_pdf(env, pdf_uv, theta.x);
     return s;
 }
 
@@ -133,67 +144,127 @@ ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, 
 // (tools/bench/README.md). One constant for the host (which launches one work-item per batch) and
 // the device.
 #define ETK_LIGHT_BATCH 32
-ETK_FN void etk_env_sample_batch(ETK_GLOBAL const float* dist, EtkEnvMap env, const float2* xi,
-                                 EtkEnvSample* out) {
+// Every loop runs over arrays of scalars: LLVM (PoCL) vectorises no loop that holds a
+// vector-typed value (a float2 or float3), GCC (native) splits those itself.
+// The first half: map coordinates (u, v), their density on the square and the cell, from the
+// sample values (xu, xv).
+ETK_FN void etk_env_sample_batch_uv(ETK_GLOBAL const float* dist, EtkEnvMap env, const float* xu,
+                                    const float* xv, float* u, float* v, float* pdf_uv, int* row,
+                                    int* col) {
     int w = env.dist_w, h = env.dist_h;
-    int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH], lo[ETK_LIGHT_BATCH], hi[ETK_LIGHT_BATCH];
-    int far[ETK_LIGHT_BATCH];
-    float u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pu[ETK_LIGHT_BATCH], pv[ETK_LIGHT_BATCH];
-    float3 head[ETK_LIGHT_BATCH];
+    int lo[ETK_LIGHT_BATCH], hi[ETK_LIGHT_BATCH], far[ETK_LIGHT_BATCH];
+    float pu[ETK_LIGHT_BATCH], pv[ETK_LIGHT_BATCH];
+    float h0[ETK_LIGHT_BATCH], h1[ETK_LIGHT_BATCH], h2[ETK_LIGHT_BATCH]; // etk_interval_head
     ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
     ETK_GLOBAL const float* mguide = dist + etk_dist2d_marginal_guide(w, h);
     // Rows: the marginal's guide ranges, their first entries, the answers.
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        etk_guide_range(mguide, h, xi[k].y, &lo[k], &hi[k]);
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        head[k] = etk_interval_head(mcdf, h, lo[k]);
+        etk_guide_range(mguide, h, xv[k], &lo[k], &hi[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        far[k] = etk_interval_beyond_head(lo[k], hi[k], head[k], xi[k].y);
-        row[k] = etk_interval_in_head(lo[k], hi[k], head[k], xi[k].y);
+        h0[k] = etk_interval_head_entry(mcdf, h, lo[k], 0);
+        h1[k] = etk_interval_head_entry(mcdf, h, lo[k], 1);
+        h2[k] = etk_interval_head_entry(mcdf, h, lo[k], 2);
+    }
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        far[k] = etk_interval_beyond_head(lo[k], hi[k], h2[k], xv[k]);
+        row[k] = etk_interval_in_head(lo[k], hi[k], h0[k], h1[k], xv[k]);
     }
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         if (far[k])
-            row[k] = etk_find_interval_between(mcdf, lo[k] + 3, hi[k], xi[k].y);
+            row[k] = etk_find_interval_between(mcdf, lo[k] + 3, hi[k], xv[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
         int cell;
-        v[k] = etk_sample_1d_in(mcdf, h, row[k], xi[k].y, &pv[k], &cell);
+        v[k] = etk_sample_1d_in(mcdf, h, row[k], xv[k], &pv[k], &cell);
     }
     // Columns: the same steps in each row's conditional.
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        etk_guide_range(etk_dist2d_row_guide(dist, w, h, row[k]), w, xi[k].x, &lo[k], &hi[k]);
+        etk_guide_range(etk_dist2d_row_guide(dist, w, h, row[k]), w, xu[k], &lo[k], &hi[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) // all of them requested before any is waited for
         ETK_PREFETCH(etk_dist2d_row_cdf(dist, w, h, row[k]) + lo[k] + 1);
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        head[k] = etk_interval_head(etk_dist2d_row_cdf(dist, w, h, row[k]), w, lo[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        far[k] = etk_interval_beyond_head(lo[k], hi[k], head[k], xi[k].x);
-        col[k] = etk_interval_in_head(lo[k], hi[k], head[k], xi[k].x);
+        ETK_GLOBAL const float* cdf = etk_dist2d_row_cdf(dist, w, h, row[k]);
+        h0[k] = etk_interval_head_entry(cdf, w, lo[k], 0);
+        h1[k] = etk_interval_head_entry(cdf, w, lo[k], 1);
+        h2[k] = etk_interval_head_entry(cdf, w, lo[k], 2);
+    }
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        far[k] = etk_interval_beyond_head(lo[k], hi[k], h2[k], xu[k]);
+        col[k] = etk_interval_in_head(lo[k], hi[k], h0[k], h1[k], xu[k]);
     }
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         if (far[k])
             col[k] = etk_find_interval_between(etk_dist2d_row_cdf(dist, w, h, row[k]), lo[k] + 3,
-                                               hi[k], xi[k].x);
+                                               hi[k], xu[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
         int cell;
-        u[k] = etk_sample_1d_in(etk_dist2d_row_cdf(dist, w, h, row[k]), w, col[k], xi[k].x, &pu[k],
+        u[k] = etk_sample_1d_in(etk_dist2d_row_cdf(dist, w, h, row[k]), w, col[k], xu[k], &pu[k],
                                 &cell);
     }
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        out[k] = etk_env_sample_at(env, make_float2(u[k], v[k]), pv[k] * pu[k], row[k], col[k]);
+        pdf_uv[k] = pv[k] * pu[k];
+}
+// The second half: etk_env_sample_at's steps (direction and solid-angle density, as arrays).
+ETK_FN void etk_env_sample_batch_dir(EtkEnvMap env, const float* u, const float* v,
+                                     const float* pdf_uv, float* dx, float* dy, float* dz,
+                                     float* pdf) {
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        float2 theta = etk_sincospi(v[k]);
+        float3 d = etk_env_sample_dir(env, u[k], theta);
+        dx[k] = d.x;
+        dy[k] = d.y;
+        dz[k] = d.z;
+        pdf[k] = etk_env_sample_pdf(env, pdf_uv[k], theta.x);
+    }
+}
+// Both, as EtkEnvSamples: etk_env_sample's values for each (tests/kernels/cdf_guide_test.cpp).
+ETK_FN void etk_env_sample_batch(ETK_GLOBAL const float* dist, EtkEnvMap env, const float* xu,
+                                 const float* xv, EtkEnvSample* out) {
+    float u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pdf_uv[ETK_LIGHT_BATCH];
+    float dx[ETK_LIGHT_BATCH], dy[ETK_LIGHT_BATCH], dz[ETK_LIGHT_BATCH], pdf[ETK_LIGHT_BATCH];
+    int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH];
+    etk_env_sample_batch_uv(dist, env, xu, xv, u, v, pdf_uv, row, col);
+    etk_env_sample_batch_dir(env, u, v, pdf_uv, dx, dy, dz, pdf);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        out[k].dir = make_float3(dx[k], dy[k], dz[k]);
+        out[k].pdf = pdf[k];
+        out[k].uv = make_float2(u[k], v[k]);
+        out[k].row = row[k];
+        out[k].col = col[k];
+    }
 }
 
-// The radiance of a batch's samples (etk_env_radiance_uv's bits), their texels' lines requested
-// for the whole batch before any is read: the shade stage would otherwise miss on each.
-ETK_FN void etk_env_radiance_batch(ETK_GLOBAL const float* texels, EtkEnvMap env,
-                                   const EtkEnvSample* s, float3* L) {
-    EtkTexelQuad q[ETK_LIGHT_BATCH];
+// The radiance of a batch's samples (etk_env_radiance_uv's bits) as three arrays, their texels'
+// lines requested for the whole batch before any is read: the shade stage would otherwise miss
+// on each.
+ETK_FN void etk_env_radiance_batch(ETK_GLOBAL const float* texels, EtkEnvMap env, const float* u,
+                                   const float* v, float* r, float* g, float* b) {
+    int r0[ETK_LIGHT_BATCH], r1[ETK_LIGHT_BATCH], c0[ETK_LIGHT_BATCH], c1[ETK_LIGHT_BATCH];
+    float tx[ETK_LIGHT_BATCH], ty[ETK_LIGHT_BATCH];
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        q[k] = etk_env_quad(env.tex_w, env.tex_h, s[k].uv);
-        ETK_PREFETCH(texels + 3 * (q[k].r0 * env.tex_w + q[k].c0));
-        ETK_PREFETCH(texels + 3 * (q[k].r1 * env.tex_w + q[k].c0));
+        EtkTexelQuad q = etk_env_quad(env.tex_w, env.tex_h, make_float2(u[k], v[k]));
+        r0[k] = q.r0;
+        r1[k] = q.r1;
+        c0[k] = q.c0;
+        c1[k] = q.c1;
+        tx[k] = q.tx;
+        ty[k] = q.ty;
     }
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        L[k] = etk_env_blend(texels, env.tex_w, q[k]) * env.scale;
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        ETK_PREFETCH(texels + 3 * (r0[k] * env.tex_w + c0[k]));
+        ETK_PREFETCH(texels + 3 * (r1[k] * env.tex_w + c0[k]));
+    }
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        EtkTexelQuad q;
+        q.r0 = r0[k];
+        q.r1 = r1[k];
+        q.c0 = c0[k];
+        q.c1 = c1[k];
+        q.tx = tx[k];
+        q.ty = ty[k];
+        r[k] = etk_env_blend_channel(texels, env.tex_w, q, 0) * env.scale;
+        g[k] = etk_env_blend_channel(texels, env.tex_w, q, 1) * env.scale;
+        b[k] = etk_env_blend_channel(texels, env.tex_w, q, 2) * env.scale;
+    }
 }
 
 ETK_END

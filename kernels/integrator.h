@@ -272,19 +272,25 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
     (void)out;
     (void)F;
     int n = (int)Q.counters[ETK_Q_SHADE], first = i * ETK_LIGHT_BATCH;
-    float2 xi[ETK_LIGHT_BATCH];
-    EtkEnvSample ls[ETK_LIGHT_BATCH];
+    float xu[ETK_LIGHT_BATCH], xv[ETK_LIGHT_BATCH];
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
         int slot = Q.shade[min(first + k, n - 1)];
-        xi[k] = etk_dims(p, P.pixel[slot], etk_vertex_pair((int)P.ray_o[slot].w));
+        float2 xi = etk_dims(p, P.pixel[slot], etk_vertex_pair((int)P.ray_o[slot].w));
+        xu[k] = xi.x;
+        xv[k] = xi.y;
     }
-    float3 L[ETK_LIGHT_BATCH];
-    etk_env_sample_batch(etk_light_dist(S, p), p.env, xi, ls);
-    etk_env_radiance_batch(S.env_texels, p.env, ls, L);
+    // Arrays of scalars (etk_env_sample_batch_uv): the loops vectorise on PoCL too.
+    float u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pdf_uv[ETK_LIGHT_BATCH];
+    float dx[ETK_LIGHT_BATCH], dy[ETK_LIGHT_BATCH], dz[ETK_LIGHT_BATCH], pdf[ETK_LIGHT_BATCH];
+    float Lr[ETK_LIGHT_BATCH], Lg[ETK_LIGHT_BATCH], Lb[ETK_LIGHT_BATCH];
+    int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH];
+    etk_env_sample_batch_uv(etk_light_dist(S, p), p.env, xu, xv, u, v, pdf_uv, row, col);
+    etk_env_sample_batch_dir(p.env, u, v, pdf_uv, dx, dy, dz, pdf);
+    etk_env_radiance_batch(S.env_texels, p.env, u, v, Lr, Lg, Lb);
     for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) {
         int slot = Q.shade[first + k];
-        P.light_dir[slot] = etk_f4(ls[k].dir, ls[k].pdf);
-        P.light_L[slot] = etk_f4(L[k], 0.0f);
+        P.light_dir[slot] = make_float4(dx[k], dy[k], dz[k], pdf[k]);
+        P.light_L[slot] = make_float4(Lr[k], Lg[k], Lb[k], 0.0f);
     }
 }
 

@@ -98,8 +98,13 @@ ETK_FN void etk_guide_range(ETK_GLOBAL const float* guide, int n, float u, int* 
 }
 // ...and the answer within it: first the three CDF entries after lo (one cache line, most often;
 // etk_env_sample_batch reads a batch's before it searches any)...
+ETK_FN float etk_interval_head_entry(ETK_GLOBAL const float* cdf, int n, int lo, int j) {
+    return cdf[min(lo + 1 + j, n)]; // lo + 1 <= n always: the first entry is cdf[lo + 1]
+}
 ETK_FN float3 etk_interval_head(ETK_GLOBAL const float* cdf, int n, int lo) {
-    return make_float3(cdf[lo + 1], cdf[min(lo + 2, n)], cdf[min(lo + 3, n)]);
+    return make_float3(etk_interval_head_entry(cdf, n, lo, 0),
+                       etk_interval_head_entry(cdf, n, lo, 1),
+                       etk_interval_head_entry(cdf, n, lo, 2));
 }
 // ...then the answer from them. Most cells hold at most two interval ends: the three entries are
 // counted, and the binary search runs only when the answer lies beyond them (at most ~5% of the
@@ -107,17 +112,18 @@ ETK_FN float3 etk_interval_head(ETK_GLOBAL const float* cdf, int n, int lo) {
 // search whose trip count varies with the data mispredicts a branch on most samples, and a scan
 // one entry at a time chains the loads.
 // (Its two halves: whether the answer lies beyond the three entries, and the answer when not.)
-ETK_FN int etk_interval_beyond_head(int lo, int hi, float3 head, float u) {
-    return (lo + 3 <= hi) & (head.z <= u);
+// (Scalar arguments: a loop over a batch with no vector-typed values is one LLVM can vectorise.)
+ETK_FN int etk_interval_beyond_head(int lo, int hi, float head2, float u) {
+    return (lo + 3 <= hi) & (head2 <= u);
 }
-ETK_FN int etk_interval_in_head(int lo, int hi, float3 head, float u) {
-    return lo + (int)((lo + 1 <= hi) & (head.x <= u)) + (int)((lo + 2 <= hi) & (head.y <= u));
+ETK_FN int etk_interval_in_head(int lo, int hi, float head0, float head1, float u) {
+    return lo + (int)((lo + 1 <= hi) & (head0 <= u)) + (int)((lo + 2 <= hi) & (head1 <= u));
 }
 ETK_FN int etk_find_interval_after(ETK_GLOBAL const float* cdf, int lo, int hi, float3 head,
                                    float u) {
-    if (etk_interval_beyond_head(lo, hi, head, u))
+    if (etk_interval_beyond_head(lo, hi, head.z, u))
         return etk_find_interval_between(cdf, lo + 3, hi, u);
-    return etk_interval_in_head(lo, hi, head, u);
+    return etk_interval_in_head(lo, hi, head.x, head.y, u);
 }
 ETK_FN int etk_find_interval_in(ETK_GLOBAL const float* cdf, int n, int lo, int hi, float u) {
     return etk_find_interval_after(cdf, lo, hi, etk_interval_head(cdf, n, lo), u);

@@ -96,18 +96,21 @@ ETK_FN uint etk_sobol02_y(uint index, uint scramble) {
 // Two sample values for dimensions (2 pair, 2 pair + 1) of sample `index` of `stream`.
 ETK_FN float2 etk_sample_pair(int sampler, uint seed, uint stream, uint index, uint pair) {
     uint key = etk_hash_combine(etk_hash_combine(seed, stream), pair);
+    uint bx, by; // the two values' bits; one float2 made at the end (a loop over a batch of
+                 // these then has no vector-typed values, which LLVM cannot vectorise)
     if (sampler == ETK_SAMPLER_SOBOL) {
         // r: the shuffled index i with its bits reversed, so etk_sobol02_x(i, sx) = r ^ sx and
         // etk_sobol02_y(i, sy) = etk_sobol_dim1_reversed(r) ^ sy, without reversing i back and
         // forth (the same bits; Sampler.PairEqualsTheSequenceFunctions checks it).
         uint r = etk_shuffle_index_reversed(index, etk_hash(key ^ 0x5bd1e995u));
-        uint sx = etk_hash(key ^ 0x68e31da4u);
-        uint sy = etk_hash(key ^ 0xb5297a4du);
-        return make_float2(etk_unit_float(r ^ sx), etk_unit_float(etk_sobol_dim1_reversed(r) ^ sy));
+        bx = r ^ etk_hash(key ^ 0x68e31da4u);
+        by = etk_sobol_dim1_reversed(r) ^ etk_hash(key ^ 0xb5297a4du);
+    } else {
+        uint h = etk_hash_combine(key, index);
+        bx = etk_hash(h ^ 0x1b873593u);
+        by = etk_hash(h ^ 0xcc9e2d51u);
     }
-    uint h = etk_hash_combine(key, index);
-    return make_float2(etk_unit_float(etk_hash(h ^ 0x1b873593u)),
-                       etk_unit_float(etk_hash(h ^ 0xcc9e2d51u)));
+    return make_float2(etk_unit_float(bx), etk_unit_float(by));
 }
 
 // Point j of n (a power of two) of a sample point u shifted by a rank-1 lattice: u + (j / n,

@@ -181,7 +181,12 @@ void expect_same_as_plain(const et::EnvDistribution& d, uint32_t seed) {
               etk::make_float2(0.5f, 0.5f));
     for (size_t b = 0; b < xi.size(); b += ETK_LIGHT_BATCH) {
         etk::EtkEnvSample batch[ETK_LIGHT_BATCH];
-        etk::etk_env_sample_batch(t, env, &xi[b], batch);
+        float xu[ETK_LIGHT_BATCH], xv[ETK_LIGHT_BATCH];
+        for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+            xu[k] = xi[b + k].x;
+            xv[k] = xi[b + k].y;
+        }
+        etk::etk_env_sample_batch(t, env, xu, xv, batch);
         for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
             const etk::EtkEnvSample one = etk::etk_env_sample(t, env, xi[b + k]);
             SCOPED_TRACE("u " + std::to_string(xi[b + k].x) + " v " + std::to_string(xi[b + k].y));

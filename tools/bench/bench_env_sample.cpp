@@ -132,10 +132,15 @@ void BM_EnvSampleBatch(benchmark::State& st, std::string map) {
     const Fixture& f = fixture(map);
     const float* t = f.dist.table.data();
     etk::EtkEnvSample out[ETK_LIGHT_BATCH];
+    std::vector<float> xu(f.u.size()), xv(f.u.size()); // the stage's layout: arrays of scalars
+    for (size_t k = 0; k < f.u.size(); ++k) {
+        xu[k] = f.u[k].x;
+        xv[k] = f.u[k].y;
+    }
     for (auto _ : st) {
         float acc = 0;
         for (size_t k = 0; k + ETK_LIGHT_BATCH <= f.u.size(); k += ETK_LIGHT_BATCH) {
-            etk::etk_env_sample_batch(t, f.env, &f.u[k], out);
+            etk::etk_env_sample_batch(t, f.env, &xu[k], &xv[k], out);
             for (const etk::EtkEnvSample& s : out)
                 acc += s.dir.x + s.pdf;
         }

@@ -104,10 +104,16 @@ double native_env_sampling(const et::DeviceScene& ds, long long n, int threads, 
                         acc += u[j].x + u[j].y;
                     continue;
                 }
-                if (batch > 1)
-                    etk::etk_env_sample_batch(ds.env_dist.data(), p.env, u, s);
-                else
+                if (batch > 1) {
+                    float xu[ETK_LIGHT_BATCH], xv[ETK_LIGHT_BATCH];
+                    for (int j = 0; j < batch; ++j) {
+                        xu[j] = u[j].x;
+                        xv[j] = u[j].y;
+                    }
+                    etk::etk_env_sample_batch(ds.env_dist.data(), p.env, xu, xv, s);
+                } else {
                     s[0] = etk::etk_env_sample(ds.env_dist.data(), p.env, u[0]);
+                }
                 for (int j = 0; j < m; ++j) {
                     acc += s[j].pdf;
                     if (mode == 2) {
