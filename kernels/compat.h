@@ -29,6 +29,18 @@
 #else
 #define ETK_FORCE_INLINE_FN static inline
 #endif
+// Forced inline in OpenCL C only: functions that take a struct by value (EtkMaterial, EtkEnvMap,
+// EtkParams, EtkSurface) and that PoCL leaves as calls, copying the struct through memory on
+// every call (issue 12: PoCL's shade stage 1.0-1.07x native's -> 0.85-0.94x at depth 5), while
+// GCC, forced, made the native back end slower (the visibility strategy's render +5%), so
+// natively they stay plain inline. Plain too where the host defines ETK_PLAIN_INLINE: for
+// Oclgrind, whose interpreter has no llvm.experimental.noalias.scope.decl, which clang emits when
+// it inlines a function that returns a struct (opencl_runtime.cpp).
+#ifdef ETK_PLAIN_INLINE
+#define ETK_CL_INLINE_FN ETK_FN
+#else
+#define ETK_CL_INLINE_FN ETK_FORCE_INLINE_FN
+#endif
 #define ETK_GLOBAL __global
 #define make_float2(a, b) ((float2)((a), (b)))
 #define make_float3(a, b, c) ((float3)((a), (b), (c)))
@@ -91,6 +103,7 @@ static inline float3 etk_normalize3(float3 a) {
 #else
 #define ETK_FORCE_INLINE_FN inline
 #endif
+#define ETK_CL_INLINE_FN inline // forced in OpenCL C only (above)
 #define ETK_GLOBAL
 #define ETK_UINT_MAX 0xffffffffu
 #define ETK_ATOMIC_INC(p) __atomic_fetch_add((p), 1u, __ATOMIC_RELAXED)

@@ -76,7 +76,8 @@ ETK_FN float2 etk_env_uv(EtkEnvMap env, float3 d) {
     return etk_dir_to_latlong(etk_world_to_env(env, d));
 }
 
-ETK_FN float3 etk_env_radiance_uv(ETK_GLOBAL const float* texels, EtkEnvMap env, float2 uv) {
+ETK_CL_INLINE_FN float3 etk_env_radiance_uv(ETK_GLOBAL const float* texels, EtkEnvMap env,
+                                            float2 uv) {
     return etk_env_lookup_uv(texels, env.tex_w, env.tex_h, uv) * env.scale;
 }
 ETK_FN float3 etk_env_radiance(ETK_GLOBAL const float* texels, EtkEnvMap env, float3 d) {
@@ -112,7 +113,8 @@ ETK_FN float etk_env_sample_pdf(EtkEnvMap env, float pdf_uv, float sin_theta) {
 // The sample at map coordinates uv (distribution cell row, col) drawn with density pdf_uv on the
 // unit square: its world direction and solid-angle density, from one sin/cos of theta. Every
 // technique that samples the map ends here (etk_env_sample; visibility_guide.h).
-ETK_FN EtkEnvSample etk_env_sample_at(EtkEnvMap env, float2 uv, float pdf_uv, int row, int col) {
+ETK_CL_INLINE_FN EtkEnvSample etk_env_sample_at(EtkEnvMap env, float2 uv, float pdf_uv, int row,
+                                                int col) {
     EtkEnvSample s;
     s.uv = uv;
     s.row = row;
@@ -123,7 +125,8 @@ ETK_FN EtkEnvSample etk_env_sample_at(EtkEnvMap env, float2 uv, float pdf_uv, in
     return s;
 }
 
-ETK_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env, float2 xi) {
+ETK_CL_INLINE_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env,
+                                             float2 xi) {
     float pdf_uv;
     int row, col;
     float2 uv = etk_sample_2d(dist, env.dist_w, env.dist_h, xi, &pdf_uv, &row, &col);

@@ -135,7 +135,7 @@ ETK_FN float3 etk_portal_point(ETK_GLOBAL const float* box, float2 u) {
 
 // The direction from surface s towards a point drawn from the table: aimed from the surface's
 // origin on the side it leaves by (the origin its shadow ray, or its continuation, starts from).
-ETK_FN float3 etk_portal_sample_dir(ETK_GLOBAL const float* box, EtkSurface s, float2 u) {
+ETK_CL_INLINE_FN float3 etk_portal_sample_dir(ETK_GLOBAL const float* box, EtkSurface s, float2 u) {
     float3 y = etk_portal_point(box, u);
     return normalize(y - etk_surface_origin(s, normalize(y - s.origin)));
 }

@@ -203,7 +203,7 @@ ETK_FN int etk_guide_pick_region(ETK_GLOBAL const float* cdf, float2 u, float2* 
 // A light sample of the visibility strategy at a vertex in `cell`, from u in [0,1)^2: the region
 // by inverting the cell's table, then the map inside the region. pdf: the mixture's, 0 for no
 // sample.
-ETK_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
+ETK_CL_INLINE_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
     if (!p.guide_ready)
         return etk_env_sample(S.env_dist, p.env, u);
     float2 t;

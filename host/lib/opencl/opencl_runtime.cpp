@@ -250,10 +250,13 @@ cl::Program ClRuntime::build(const std::string& file, const std::string& options
 cl::Program ClRuntime::build_source(const std::string& file, const std::string& source,
                                     const std::string& options, ProgramBuildInfo* info) {
     Timer timer;
+    // Oclgrind's interpreter lacks an intrinsic that forced inlining makes (kernels/compat.h,
+    // ETK_CL_INLINE_FN): it checks the kernels as plain inline functions, the same operations.
+    const bool plain_inline = entry_.platform_name.find("Oclgrind") != std::string::npos;
     const std::string full_options =
         std::string("-cl-std=CL1.2 ") +
         (limits_.correctly_rounded_div_sqrt ? "-cl-fp32-correctly-rounded-divide-sqrt " : "") +
-        options;
+        (plain_inline ? "-DETK_PLAIN_INLINE " : "") + options;
     const std::string key =
         cache_key(source + '\0' + full_options + '\0' + entry_.platform_name + '\0' +
                   entry_.device_name + '\0' + entry_.driver_version + '\0' + entry_.device_version);
