@@ -31,7 +31,7 @@
 #endif
 // Forced inline in OpenCL C only: functions that take a struct by value (EtkMaterial, EtkEnvMap,
 // EtkParams, EtkSurface) and that PoCL leaves as calls, copying the struct through memory on
-// every call (issue 12: PoCL's shade stage 1.0-1.07x native's -> 0.85-0.94x at depth 5), while
+// every call (issue 12: PoCL's shade stage 0.98-1.09x native's -> 0.74-0.84x at depth 5), while
 // GCC, forced, made the native back end slower (the visibility strategy's render +5%), so
 // natively they stay plain inline. Plain too where the host defines ETK_PLAIN_INLINE: for
 // Oclgrind, whose interpreter has no llvm.experimental.noalias.scope.decl, which clang emits when

@@ -262,7 +262,8 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
 }
 
 // Stage 2': the shade queue's light samples, drawn ahead of the shade stage ETK_LIGHT_BATCH at a
-// time (etk_env_sample_batch: the cache misses of a batch overlap, where one sample per shade
+// time (etk_env_sample_batch_uv / _dir, etk_env_radiance_batch: the cache misses of a batch
+// overlap, where one sample per shade
 // call leaves them in series) for the strategies whose light sample is one map sample
 // (etk_batches_light_samples). i: the batch; the queue's length is the shade counter intersect
 // left (the host launches this stage after it). A batch past the queue's end repeats its last

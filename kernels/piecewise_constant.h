@@ -89,7 +89,7 @@ ETK_FN int etk_find_interval_between(ETK_GLOBAL const float* cdf, int lo, int hi
 }
 
 // The two halves of etk_find_interval_guided (below): the range [*lo, *hi] the answer for u lies
-// in, from the guide (one load; etk_env_sample_batch issues a batch's before any CDF read)...
+// in, from the guide (one load; etk_env_sample_batch_uv issues a batch's before any CDF read)...
 ETK_FN void etk_guide_range(ETK_GLOBAL const float* guide, int n, float u, int* lo, int* hi) {
     int K = etk_guide_cells(n);
     int k = clamp((int)(u * (float)K), 0, K - 1);
@@ -97,7 +97,7 @@ ETK_FN void etk_guide_range(ETK_GLOBAL const float* guide, int n, float u, int* 
     *hi = (int)guide[k + 1];
 }
 // ...and the answer within it: first the three CDF entries after lo (one cache line, most often;
-// etk_env_sample_batch reads a batch's before it searches any)...
+// etk_env_sample_batch_uv reads a batch's before it searches any)...
 ETK_FN float etk_interval_head_entry(ETK_GLOBAL const float* cdf, int n, int lo, int j) {
     return cdf[min(lo + 1 + j, n)]; // lo + 1 <= n always: the first entry is cdf[lo + 1]
 }
@@ -215,7 +215,7 @@ ETK_FN ETK_GLOBAL const float* etk_dist2d_row_guide(ETK_GLOBAL const float* dist
 
 // Samples (u, v) on the unit square: row from the marginal, column from that row's conditional,
 // both by inversion of the CDF (the guide tables only find the interval faster).
-// etk_env_sample_batch (envmap.h) runs the same steps across a batch of samples.
+// etk_env_sample_batch_uv (envmap.h) runs the same steps across a batch of samples.
 ETK_FN float2 etk_sample_2d(ETK_GLOBAL const float* dist, int w, int h, float2 xi, float* density,
                             int* row, int* col) {
     ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);

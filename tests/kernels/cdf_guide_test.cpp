@@ -235,4 +235,45 @@ TEST(CdfGuide, SampleTwoDEqualsPlainInversion) {
     expect_same_as_plain(et::build_env_distribution(random_map(64, 32, 5), opt), 4);
 }
 
+// The sample_lights stage's radiance (etk_env_radiance_batch, per channel over arrays) gives each
+// sample the bits of the one-by-one lookup (etk_env_radiance_uv): on a map of odd size, at
+// random points and at the edges where the lookup wraps in u and clamps at the poles.
+TEST(CdfGuide, RadianceBatchEqualsOneByOneLookup) {
+    const int w = 37, h = 19;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> value(0.0f, 4.0f), unit(0.0f, 1.0f);
+    std::vector<float> texels(3 * w * h);
+    for (float& t : texels)
+        t = value(rng);
+    etk::EtkEnvMap env{};
+    env.tex_w = env.dist_w = w;
+    env.tex_h = env.dist_h = h;
+    env.scale = 1.7f;
+    env.has_light = 1;
+    std::vector<float> us = {0.0f, 0.5f / w, 1.0f - 0.5f / w, ETK_ONE_MINUS_EPS, 0.25f};
+    std::vector<float> vs = {0.0f, 0.5f / h, 1.0f - 0.5f / h, ETK_ONE_MINUS_EPS, 0.75f};
+    std::vector<float> u, v;
+    for (float a : us)
+        for (float b : vs) {
+            u.push_back(a);
+            v.push_back(b);
+        }
+    while (u.size() % ETK_LIGHT_BATCH != 0 || u.size() < 8 * ETK_LIGHT_BATCH) {
+        u.push_back(unit(rng));
+        v.push_back(unit(rng));
+    }
+    for (size_t b = 0; b < u.size(); b += ETK_LIGHT_BATCH) {
+        float r[ETK_LIGHT_BATCH], g[ETK_LIGHT_BATCH], bl[ETK_LIGHT_BATCH];
+        etk::etk_env_radiance_batch(texels.data(), env, &u[b], &v[b], r, g, bl);
+        for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+            const etk::float3 one =
+                etk::etk_env_radiance_uv(texels.data(), env, etk::make_float2(u[b + k], v[b + k]));
+            SCOPED_TRACE("u " + std::to_string(u[b + k]) + " v " + std::to_string(v[b + k]));
+            ASSERT_EQ(r[k], one.x);
+            ASSERT_EQ(g[k], one.y);
+            ASSERT_EQ(bl[k], one.z);
+        }
+    }
+}
+
 } // namespace

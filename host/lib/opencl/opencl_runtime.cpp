@@ -252,7 +252,7 @@ cl::Program ClRuntime::build_source(const std::string& file, const std::string& 
     Timer timer;
     // Oclgrind's interpreter lacks an intrinsic that forced inlining makes (kernels/compat.h,
     // ETK_CL_INLINE_FN): it checks the kernels as plain inline functions, the same operations.
-    const bool plain_inline = entry_.platform_name.find("Oclgrind") != std::string::npos;
+    const bool plain_inline = lower(entry_.platform_name).find("oclgrind") != std::string::npos;
     const std::string full_options =
         std::string("-cl-std=CL1.2 ") +
         (limits_.correctly_rounded_div_sqrt ? "-cl-fp32-correctly-rounded-divide-sqrt " : "") +
