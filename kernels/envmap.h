@@ -137,72 +137,66 @@ ETK_CL_INLINE_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEn
 // sample is a chain of dependent loads -- the row's guide entry and CDF line, then the column's --
 // which miss the cache at random rows of a large map; a core overlaps the chains of independent
 // samples only as far as its reorder window reaches, about one sample of shade-stage code.
-// Interleaving the steps of B samples (for the rows, then the columns: all guide ranges, then the
-// first CDF entries of every range -- the columns' prefetched, then plain loads, no branch between
-// them -- then all answers; then the directions) puts B chains in flight at once: the column
-// search's branch mispredicts now and then, and each misprediction would otherwise restart the
-// loads behind it. The same functions in the same order per sample as etk_env_sample, so the same
-// bits. B = 32: window_room (mis, 320 x 240, native), the shade stage and this one together 18%
-// below the shade stage alone, against 10% / 16% / 18% / 16% for B = 8 / 16 / 32 / 64
+// Interleaving the steps of B samples (etk_sample_1d_batch for the rows, then the columns: all
+// guide ranges, then the first CDF entries of every range -- prefetched, then plain loads, no
+// branch between them -- then all answers; then the directions) puts B chains in flight at once:
+// the column search's branch mispredicts now and then, and each misprediction would otherwise
+// restart the loads behind it. The same functions in the same order per sample as etk_env_sample,
+// so the same bits. B = 32: window_room (mis, 320 x 240, native), the shade stage and this one
+// together 18% below the shade stage alone, against 10% / 16% / 18% / 16% for B = 8 / 16 / 32 / 64
 // (tools/bench/README.md). One constant for the host (which launches one work-item per batch) and
 // the device.
 #define ETK_LIGHT_BATCH 32
 // Every loop runs over arrays of scalars: LLVM (PoCL) vectorises no loop that holds a
 // vector-typed value (a float2 or float3), GCC (native) splits those itself.
-// The first half: map coordinates (u, v), their density on the square and the cell, from the
-// sample values (xu, xv).
+// One 1D inversion per sample of a batch, etk_sample_1d_in(etk_find_interval_guided(...))'s steps
+// for all of them at once: sample k inverts the CDF at dist + cdf[k] (n intervals; its guide at
+// dist + guide[k]) at x[k]. The guide ranges, then the first CDF entries of every range (requested,
+// then loaded), the answers, the rare longer search, the points.
+ETK_FN void etk_sample_1d_batch(ETK_GLOBAL const float* dist, const int* cdf, const int* guide,
+                                int n, const float* x, float* point, float* density, int* cell) {
+    int lo[ETK_LIGHT_BATCH], hi[ETK_LIGHT_BATCH], far[ETK_LIGHT_BATCH];
+    float h0[ETK_LIGHT_BATCH], h1[ETK_LIGHT_BATCH], h2[ETK_LIGHT_BATCH]; // etk_interval_head
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+        etk_guide_range(dist + guide[k], n, x[k], &lo[k], &hi[k]);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) // all of them requested before any is waited for
+        ETK_PREFETCH(dist + cdf[k] + lo[k] + 1);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        h0[k] = etk_interval_head_entry(dist + cdf[k], n, lo[k], 0);
+        h1[k] = etk_interval_head_entry(dist + cdf[k], n, lo[k], 1);
+        h2[k] = etk_interval_head_entry(dist + cdf[k], n, lo[k], 2);
+    }
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        far[k] = etk_interval_beyond_head(lo[k], hi[k], h2[k], x[k]);
+        cell[k] = etk_interval_in_head(lo[k], hi[k], h0[k], h1[k], x[k]);
+    }
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+        if (far[k])
+            cell[k] = etk_find_interval_between(dist + cdf[k], lo[k] + 3, hi[k], x[k]);
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        int c;
+        point[k] = etk_sample_1d_in(dist + cdf[k], n, cell[k], x[k], &density[k], &c);
+    }
+}
+// The first half of a batch of map samples: map coordinates (u, v), their density on the square
+// and the cell, from the sample values (xu, xv): the rows from the marginal, then the columns
+// from each sample's row (etk_sample_2d's steps).
 ETK_FN void etk_env_sample_batch_uv(ETK_GLOBAL const float* dist, EtkEnvMap env, const float* xu,
                                     const float* xv, float* u, float* v, float* pdf_uv, int* row,
                                     int* col) {
     int w = env.dist_w, h = env.dist_h;
-    int lo[ETK_LIGHT_BATCH], hi[ETK_LIGHT_BATCH], far[ETK_LIGHT_BATCH];
+    int cdf[ETK_LIGHT_BATCH], guide[ETK_LIGHT_BATCH];
     float pu[ETK_LIGHT_BATCH], pv[ETK_LIGHT_BATCH];
-    float h0[ETK_LIGHT_BATCH], h1[ETK_LIGHT_BATCH], h2[ETK_LIGHT_BATCH]; // etk_interval_head
-    ETK_GLOBAL const float* mcdf = dist + etk_dist2d_marginal_cdf(h);
-    ETK_GLOBAL const float* mguide = dist + etk_dist2d_marginal_guide(w, h);
-    // Rows: the marginal's guide ranges, their first entries, the answers.
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        etk_guide_range(mguide, h, xv[k], &lo[k], &hi[k]);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        h0[k] = etk_interval_head_entry(mcdf, h, lo[k], 0);
-        h1[k] = etk_interval_head_entry(mcdf, h, lo[k], 1);
-        h2[k] = etk_interval_head_entry(mcdf, h, lo[k], 2);
+        cdf[k] = etk_dist2d_marginal_cdf(h);
+        guide[k] = etk_dist2d_marginal_guide(w, h);
     }
+    etk_sample_1d_batch(dist, cdf, guide, h, xv, v, pv, row);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        far[k] = etk_interval_beyond_head(lo[k], hi[k], h2[k], xv[k]);
-        row[k] = etk_interval_in_head(lo[k], hi[k], h0[k], h1[k], xv[k]);
+        cdf[k] = (int)(etk_dist2d_row_cdf(dist, w, h, row[k]) - dist);
+        guide[k] = (int)(etk_dist2d_row_guide(dist, w, h, row[k]) - dist);
     }
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        if (far[k])
-            row[k] = etk_find_interval_between(mcdf, lo[k] + 3, hi[k], xv[k]);
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        int cell;
-        v[k] = etk_sample_1d_in(mcdf, h, row[k], xv[k], &pv[k], &cell);
-    }
-    // Columns: the same steps in each row's conditional.
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        etk_guide_range(etk_dist2d_row_guide(dist, w, h, row[k]), w, xu[k], &lo[k], &hi[k]);
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) // all of them requested before any is waited for
-        ETK_PREFETCH(etk_dist2d_row_cdf(dist, w, h, row[k]) + lo[k] + 1);
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        ETK_GLOBAL const float* cdf = etk_dist2d_row_cdf(dist, w, h, row[k]);
-        h0[k] = etk_interval_head_entry(cdf, w, lo[k], 0);
-        h1[k] = etk_interval_head_entry(cdf, w, lo[k], 1);
-        h2[k] = etk_interval_head_entry(cdf, w, lo[k], 2);
-    }
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        far[k] = etk_interval_beyond_head(lo[k], hi[k], h2[k], xu[k]);
-        col[k] = etk_interval_in_head(lo[k], hi[k], h0[k], h1[k], xu[k]);
-    }
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
-        if (far[k])
-            col[k] = etk_find_interval_between(etk_dist2d_row_cdf(dist, w, h, row[k]), lo[k] + 3,
-                                               hi[k], xu[k]);
-    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        int cell;
-        u[k] = etk_sample_1d_in(etk_dist2d_row_cdf(dist, w, h, row[k]), w, col[k], xu[k], &pu[k],
-                                &cell);
-    }
+    etk_sample_1d_batch(dist, cdf, guide, w, xu, u, pu, col);
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         pdf_uv[k] = pv[k] * pu[k];
 }

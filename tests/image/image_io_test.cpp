@@ -264,13 +264,8 @@ TEST(ImageIo, TurnedOrCroppedPicturesAreRefused) {
         for (int i = 0; i < 8; ++i)
             out << char(128) << char(128) << char(128) << char(129);
     }
-    auto error_of = [](const std::string& path) -> std::string {
-        try {
-            et::read_rgb_image(path);
-        } catch (const et::Error& x) {
-            return x.what();
-        }
-        return "";
+    auto error_of = [](const std::string& path) {
+        return ett::error_of([&] { et::read_rgb_image(path); });
     };
     std::string e = error_of(dir + "/up.hdr");
     EXPECT_NE(e.find("up.hdr: its pixels need flipping vertically (stored bottom-up) to be "

@@ -309,7 +309,9 @@ TEST(EnvmapBadInputDeathTest, DeclaredSizeBeyondTheDataFailsBeforeTouchingIt) {
     const std::string path = ett::scratch_dir("declared-size") + "/claims.png";
     write_bytes(path, png_declaring(16000, 8000, 0));
     for (int how = 0; how < 3; ++how) {
-        SCOPED_TRACE(how == 0 ? "load_envmap, 2 threads" : how == 1 ? "load_envmap, 1 thread" : "read_rgb_image");
+        SCOPED_TRACE(how == 0   ? "load_envmap, 2 threads"
+                     : how == 1 ? "load_envmap, 1 thread"
+                                : "read_rgb_image");
         EXPECT_EXIT(
             {
                 et::set_warning_sink([](const std::string&) {});
@@ -344,13 +346,8 @@ TEST(EnvmapBadInputDeathTest, DeclaredSizeBeyondTheDataFailsBeforeTouchingIt) {
 // byte orders and grey PFMs read, and what write_image writes reads back bit for bit.
 TEST(EnvmapBadInput, PfmReadWriteAndCorruption) {
     const std::string dir = ett::scratch_dir("pfm");
-    auto error_of = [](const std::string& path) -> std::string {
-        try {
-            et::read_rgb_image(path);
-        } catch (const et::Error& e) {
-            return e.what();
-        }
-        return "(no error)";
+    auto error_of = [](const std::string& path) {
+        return ett::error_of([&] { et::read_rgb_image(path); });
     };
     write_bytes(dir + "/short.pfm", "PF\n4 2\n-1.0\n" + std::string(10, '\0'));
     write_bytes(dir + "/header.pfm", "PF\nfour 2\n-1.0\n" + std::string(96, '\0'));

@@ -48,14 +48,7 @@ std::string scene_with_material(const std::string& dir, const std::string& mater
     return path;
 }
 
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const et::Error& e) {
-        return e.what();
-    }
-    return "";
-}
+using ett::error_of;
 
 // The error (or "") of loading DIR/quad.obj with an MTL of the given body, textures read.
 std::string textured_obj_error(const std::string& dir, const std::string& mtl_body) {

@@ -6,6 +6,7 @@
 #include "render/executor_cl.h"
 #include "render/renderer.h"
 #include "render_util.h"
+#include "test_data.h"
 
 #include <gtest/gtest.h>
 
@@ -24,14 +25,7 @@ et::DeviceLimits limits(uint64_t max_alloc, uint64_t global_mem) {
     return l;
 }
 
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const et::Error& e) {
-        return e.what();
-    }
-    return "(no error)";
-}
+using ett::error_of;
 
 TEST(DeviceLimits, LocalSizeRespectsKernelDeviceAndPreferredMultiple) {
     et::DeviceLimits l = limits(1 << 30, 1 << 30);
