@@ -175,8 +175,9 @@ ETK_FORCE_INLINE_FN int etk_bvh_lane(ETK_GLOBAL const float4* packets, int in, f
 }
 
 // Closest hit with t in (0, tmax), or any hit when any_hit != 0. Returns whether it hit.
-ETK_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes, ETK_GLOBAL const float4* packets,
-                            float3 org, float3 dir, float tmax, int any_hit, EtkHit* hit) {
+ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
+                                        ETK_GLOBAL const float4* packets, float3 org, float3 dir,
+                                        float tmax, int any_hit, EtkHit* hit) {
     hit->t = tmax;
     hit->prim = -1;
     hit->b1 = hit->b2 = 0.0f;

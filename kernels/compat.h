@@ -41,6 +41,17 @@
 #else
 #define ETK_CL_INLINE_FN ETK_FORCE_INLINE_FN
 #endif
+// A call in OpenCL C: for functions with a large private array (the BVH's traversal stack).
+// PoCL gives every private array of a kernel one copy per work-item of the group (a context
+// array: the traversal stack, 768 bytes, became 49 KB a group, more than L1 holds), so a stack
+// inlined into the kernel lands at a new address for every ray; in a function of its own it
+// lives in that function's frame, one copy reused by every work-item. Natively GCC keeps such a
+// function a call anyway.
+#if defined(__clang__) || defined(__GNUC__)
+#define ETK_CL_NOINLINE_FN static __attribute__((noinline))
+#else
+#define ETK_CL_NOINLINE_FN static
+#endif
 #define ETK_GLOBAL __global
 #define make_float2(a, b) ((float2)((a), (b)))
 #define make_float3(a, b, c) ((float3)((a), (b), (c)))
@@ -103,7 +114,8 @@ static inline float3 etk_normalize3(float3 a) {
 #else
 #define ETK_FORCE_INLINE_FN inline
 #endif
-#define ETK_CL_INLINE_FN inline // forced in OpenCL C only (above)
+#define ETK_CL_INLINE_FN inline   // forced in OpenCL C only (above)
+#define ETK_CL_NOINLINE_FN inline // a call in OpenCL C only (above)
 #define ETK_GLOBAL
 #define ETK_UINT_MAX 0xffffffffu
 #define ETK_ATOMIC_INC(p) __atomic_fetch_add((p), 1u, __ATOMIC_RELAXED)
