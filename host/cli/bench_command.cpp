@@ -300,7 +300,7 @@ void add_bench_command(CLI::App& app, Globals& g) {
     cmd->add_option("--max-depth", a->max_depth,
                     "Bounces (1: direct lighting only, the paper's setting)")
         ->check(CLI::Range(1, 1000));
-    cmd->add_option("--paths", a->paths, "Paths in flight (OpenCL; 0: the whole film)")
+    cmd->add_option("--paths", a->paths, "Paths in flight per lane (OpenCL; 0: the default)")
         ->check(CLI::Range(0, 1 << 26));
     cmd->add_option("--threads", a->threads, "Native back end threads (0: all cores)")
         ->check(CLI::Range(0, 1024));

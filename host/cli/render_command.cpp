@@ -695,7 +695,9 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "Adaptive strategy: expected light samples of the two at a vertex, 0 .. "
                     "1.875, or auto (learned per material from the first passes)");
     cmd->add_option("--seed", a->seed, "Sampler seed")->check(CLI::Range(0LL, 4294967295LL));
-    cmd->add_option("--paths", a->paths, "Paths in flight (0: the whole film, capped by memory)")
+    cmd->add_option("--paths", a->paths,
+                    "Paths in flight per lane (0: the film over the lanes; on a CPU device waves "
+                    "of at most 65536; capped by memory)")
         ->check(CLI::Range(0, 1 << 26));
     cmd->add_option("--stats", a->stats_file, "Write the render summary as JSON");
     cmd->add_option("--checkpoint", a->checkpoint,

@@ -132,13 +132,13 @@ TEST(DeviceLimits, RendererChecksSceneBuffersAgainstTheDevice) {
 // Forwards to the device and records the most events held after any launch.
 class Watch : public et::StageExecutor {
   public:
-    explicit Watch(et::ClDevice& d) : d_(d) {}
-    void bind_queues(bool swapped) override { d_.bind_queues(swapped); }
-    void reset_counters() override { d_.reset_counters(); }
-    void read_counters(uint32_t* c) override { d_.read_counters(c); }
-    void read_learning(int n, int* bins) override { d_.read_learning(n, bins); }
+    explicit Watch(et::ClDevice& d) : d_(d), lane_(d.lane(0)) {}
+    void bind_queues(bool swapped) override { lane_.bind_queues(swapped); }
+    void reset_counters() override { lane_.reset_counters(); }
+    void read_counters(uint32_t* c) override { lane_.read_counters(c); }
+    void read_learning(int n, int* bins) override { lane_.read_learning(n, bins); }
     void launch(int stage, int n, const etk::EtkParams& p) override {
-        d_.launch(stage, n, p);
+        lane_.launch(stage, n, p);
         ++launches;
         most = std::max(most, d_.pending_events());
     }
@@ -146,6 +146,7 @@ class Watch : public et::StageExecutor {
 
   private:
     et::ClDevice& d_;
+    et::StageExecutor& lane_;
 };
 
 TEST(DeviceLimits, EventsAreReleasedWithinABounce) {

@@ -242,6 +242,10 @@ std::string ClRuntime::cache_dir() {
     return (fs::temp_directory_path() / "envtrace-cache").string();
 }
 
+bool ClRuntime::is_oclgrind() const {
+    return lower(entry_.platform_name).find("oclgrind") != std::string::npos;
+}
+
 cl::Program ClRuntime::build(const std::string& file, const std::string& options,
                              ProgramBuildInfo* info) {
     return build_source(file, expand_kernel_source(file), options, info);
@@ -252,7 +256,7 @@ cl::Program ClRuntime::build_source(const std::string& file, const std::string& 
     Timer timer;
     // Oclgrind's interpreter lacks an intrinsic that forced inlining makes (kernels/compat.h,
     // ETK_CL_INLINE_FN): it checks the kernels as plain inline functions, the same operations.
-    const bool plain_inline = lower(entry_.platform_name).find("oclgrind") != std::string::npos;
+    const bool plain_inline = is_oclgrind();
     const std::string full_options =
         std::string("-cl-std=CL1.2 ") +
         (limits_.correctly_rounded_div_sqrt ? "-cl-fp32-correctly-rounded-divide-sqrt " : "") +

@@ -81,6 +81,9 @@ class ClRuntime {
     const DeviceLimits& limits() const { return limits_; }
     cl::Context& context() { return context_; }
     cl::CommandQueue& queue() { return queue_; }
+    // Oclgrind's simulator: its interpreter has quirks of its own (one kernel at a time, no
+    // llvm.experimental.noalias.scope.decl) that the renderer works around.
+    bool is_oclgrind() const;
 
     // Builds kernels/<file> (includes expanded) with `options`, from the cache when it can.
     // Build errors throw et::Error carrying the compiler log (which names kernels/FILE:LINE).

@@ -1,6 +1,7 @@
 #include "render/executor_cl.h"
 
 #include "util/error.h"
+#include "util/parallel.h"
 
 #include <algorithm>
 #include <string>
@@ -53,14 +54,55 @@ std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt) {
     return out;
 }
 
+// Paths in flight per lane on a CPU device, by default. PoCL, 2 lanes, bunny_grace at depth 5
+// (512 x 512; envtrace bench --paths P, OpenCL / native): 0.96 at 131,072 (the film over two
+// lanes), 1.00 at 65,536 and 32,768; matpreview and textures the same at 65,536 and 32,768, 1-2%
+// lower at 16,384 (more launches); tools/bench/README.md.
+constexpr int kCpuWave = 65536;
+
+int default_cl_lanes(const ClRuntime& rt) {
+    // Oclgrind interprets one kernel at a time (two queues' kernels trip an assertion of its own).
+    return rt.limits().cpu && !rt.is_oclgrind() ? 2 : 1;
+}
+
+ClLane::ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
+               size_t zero_local, const std::vector<cl::Buffer>& shared, int paths)
+    : local_(local), zero_local_(zero_local), args_(shared) {
+    const cl::Device& dev = rt.device().device;
+    auto& ctx = rt.context();
+    const uint64_t n = static_cast<uint64_t>(paths);
+    queue_ = cl::CommandQueue(ctx, dev, CL_QUEUE_PROFILING_ENABLE);
+    for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s)
+        kernels_.emplace_back(program, stage_name(s));
+    zero_ = cl::Kernel(program, "zero_words");
+    seconds_.assign(etk::ETK_STAGE_COUNT, 0.0);
+#define ET_ALLOC(type, name)                                                                       \
+    args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * n);
+    ETK_PATH_FIELDS(ET_ALLOC)
+#undef ET_ALLOC
+#define ET_QUEUE(name)                                                                             \
+    args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
+    ETK_FIXED_QUEUES(ET_QUEUE)
+#undef ET_QUEUE
+    queue_a_ = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
+    queue_b_ = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
+    args_[etk::ETK_ARG_counters] =
+        cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_uint) * etk::ETK_Q_COUNT);
+    for (auto& k : kernels_)
+        for (int a = 0; a < etk::ETK_ARG_params; ++a)
+            if (a != etk::ETK_ARG_ray_in && a != etk::ETK_ARG_ray_out)
+                k.setArg(a, args_[a]);
+}
+
 ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, int paths,
-                   ProgramBuildInfo* build)
+                   ProgramBuildInfo* build, int lanes)
     : rt_(std::move(rt_ptr)), pixels_(scene.width() * scene.height()) {
     ClRuntime& rt = *rt_;
     const cl::Device& dev = rt.device().device;
     const DeviceLimits& lim = rt.limits();
+    const int nl = std::max(1, std::min(lanes > 0 ? lanes : default_cl_lanes(rt), pixels_));
     // Every buffer with its size, checked against the device before anything is allocated. The
-    // fixed ones (scene, film, counters) first; the paths in flight get a share of what is left.
+    // fixed ones (scene, film) first; the lanes' paths in flight get a share of what is left.
     std::vector<BufferRequest> buffers;
 #define ET_SCENE_SIZE(type, name)                                                                  \
     buffers.push_back({#name, std::max<uint64_t>(1, scene.name.size()) * sizeof(type)});
@@ -69,33 +111,40 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
 #define ET_FILM_SIZE(type, name) buffers.push_back({#name, uint64_t(sizeof(type)) * pixels_});
     ETK_FILM_FIELDS(ET_FILM_SIZE)
 #undef ET_FILM_SIZE
-    buffers.push_back({"counters", uint64_t(sizeof(cl_uint)) * etk::ETK_Q_COUNT});
     uint64_t fixed = 0;
     for (const BufferRequest& b : buffers)
         fixed += b.bytes;
     const uint64_t free_mem = lim.global_mem > fixed ? lim.global_mem - fixed : 0;
-    const int cap = static_cast<int>(
-        std::min<uint64_t>({uint64_t(1) << 22, lim.max_alloc / 16,
-                            std::min(free_mem, lim.global_mem / 4) / kBytesPerPath}));
-    paths_ = std::max(1, std::min(paths > 0 ? paths : pixels_, std::min(cap, pixels_)));
+    const int cap = static_cast<int>(std::min<uint64_t>(
+        {uint64_t(1) << 22, lim.max_alloc / 16,
+         std::min(free_mem, lim.global_mem / 4) / (kBytesPerPath * uint64_t(nl))}));
+    // The film shared out among the lanes in waves of equal size, as many per lane; on a CPU
+    // device waves of at most kCpuWave paths (their path state stays in cache).
+    int waves = nl;
+    if (lim.cpu)
+        waves =
+            std::max(nl, (pixels_ / kCpuWave + (pixels_ % kCpuWave ? 1 : 0) + nl - 1) / nl * nl);
+    const int share = pixels_ / waves + (pixels_ % waves ? 1 : 0);
+    paths_ = std::max(1, std::min(paths > 0 ? paths : share, std::min(cap, pixels_)));
     const uint64_t n = static_cast<uint64_t>(paths_), px = static_cast<uint64_t>(pixels_);
-#define ET_PATH_SIZE(type, name) buffers.push_back({#name, sizeof(type) * n});
-    ETK_PATH_FIELDS(ET_PATH_SIZE)
+    for (int l = 0; l < nl; ++l) {
+        const std::string lane = nl > 1 ? " (lane " + std::to_string(l) + ")" : "";
+#define ET_PATH_SIZE(type, name) buffers.push_back({#name + lane, sizeof(type) * n});
+        ETK_PATH_FIELDS(ET_PATH_SIZE)
 #undef ET_PATH_SIZE
-#define ET_QUEUE_SIZE(name) buffers.push_back({#name, sizeof(cl_int) * n});
-    ETK_QUEUES(ET_QUEUE_SIZE)
+#define ET_QUEUE_SIZE(name) buffers.push_back({#name + lane, sizeof(cl_int) * n});
+        ETK_QUEUES(ET_QUEUE_SIZE)
 #undef ET_QUEUE_SIZE
+        buffers.push_back({"counters" + lane, uint64_t(sizeof(cl_uint)) * etk::ETK_Q_COUNT});
+    }
     check_buffer_sizes(buffers, lim, rt.device().device_name);
     try {
-        queue_ = cl::CommandQueue(rt.context(), dev, CL_QUEUE_PROFILING_ENABLE);
         program_ = rt.build("wavefront.cl", "", build);
-        for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s) {
-            kernels_.emplace_back(program_, stage_name(s));
-            local_.push_back(choose_local_size(kernels_.back(), dev, lim, kStageLocalTarget));
-        }
-        zero_ = cl::Kernel(program_, "zero_words");
-        zero_local_ = choose_local_size(zero_, dev, lim, kStageLocalTarget);
-        seconds_.assign(etk::ETK_STAGE_COUNT, 0.0);
+        for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s)
+            local_.push_back(choose_local_size(cl::Kernel(program_, stage_name(s)), dev, lim,
+                                               kStageLocalTarget));
+        const size_t zero_local =
+            choose_local_size(cl::Kernel(program_, "zero_words"), dev, lim, kStageLocalTarget);
         auto& ctx = rt.context();
         args_.resize(etk::ETK_ARG_COUNT);
 #define ET_UPLOAD(type, name)                                                                      \
@@ -106,43 +155,33 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
         // the prepared scene's memory.
         args_[etk::ETK_ARG_guide_cells] = upload(ctx, scene.guide_cells, false);
         guide_floats_ = std::max<size_t>(1, scene.guide_cells.size());
-#define ET_ALLOC(type, name)                                                                       \
-    args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * n);
-        ETK_PATH_FIELDS(ET_ALLOC)
-#undef ET_ALLOC
-#define ET_QUEUE(name)                                                                             \
-    args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
-        ETK_FIXED_QUEUES(ET_QUEUE)
-#undef ET_QUEUE
-        queue_a_ = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
-        queue_b_ = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_int) * n);
 #define ET_FILM(type, name)                                                                        \
-    args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * px);            \
-    zero_words(args_[etk::ETK_ARG_##name], sizeof(type) * px / 4);
+    args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * px);
         ETK_FILM_FIELDS(ET_FILM)
 #undef ET_FILM
-        args_[etk::ETK_ARG_counters] =
-            cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_uint) * etk::ETK_Q_COUNT);
-        for (auto& k : kernels_)
-            for (int a = 0; a < etk::ETK_ARG_params; ++a)
-                if (a != etk::ETK_ARG_ray_in && a != etk::ETK_ARG_ray_out)
-                    k.setArg(a, args_[a]);
+        for (int l = 0; l < nl; ++l)
+            lanes_.push_back(
+                std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_));
+        clear_film(true);
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot set up the OpenCL renderer (") + e.what() +
                     "): " + cl_error_name(e.err()) + "; try a smaller film or --paths");
     }
 }
 
+// The lanes take waves on threads of their own (run_pass hands them out); each lane's launches
+// and reads go to its own queue, so the device runs one lane's kernels while the other's host
+// thread waits. Which lane renders a pixel changes nothing in it.
 void ClDevice::run_lanes(const std::function<void(int)>& f) {
     try {
-        f(0);
+        run_on_threads(lanes(), f);
     } catch (const cl::Error& e) {
         throw Error(std::string("OpenCL rendering failed (") + e.what() +
                     "): " + cl_error_name(e.err()));
     }
 }
 
-void ClDevice::zero_words(const cl::Buffer& buffer, uint64_t words) {
+void ClLane::zero_words(const cl::Buffer& buffer, uint64_t words) {
     zero_.setArg(0, buffer);
     zero_.setArg(1, static_cast<cl_int>(words));
     queue_.enqueueNDRangeKernel(zero_, cl::NullRange,
@@ -150,12 +189,24 @@ void ClDevice::zero_words(const cl::Buffer& buffer, uint64_t words) {
                                 cl::NDRange(zero_local_));
 }
 
-void ClDevice::finish() {
+void ClLane::finish() {
     queue_.finish();
     collect_events();
 }
 
-void ClDevice::collect_events() {
+void ClDevice::finish() {
+    for (auto& l : lanes_)
+        l->finish();
+}
+
+size_t ClDevice::pending_events() const {
+    size_t n = 0;
+    for (const auto& l : lanes_)
+        n += l->pending_events();
+    return n;
+}
+
+void ClLane::collect_events() {
     // Profiling times of the finished launches; the events are released here, so a render holds
     // at most one bounce's worth of them.
     for (auto& [stage, ev] : pending_)
@@ -165,29 +216,29 @@ void ClDevice::collect_events() {
     pending_.clear();
 }
 
-void ClDevice::bind_queues(bool swapped) {
+void ClLane::bind_queues(bool swapped) {
     for (auto& k : kernels_) {
         k.setArg(etk::ETK_ARG_ray_in, swapped ? queue_b_ : queue_a_);
         k.setArg(etk::ETK_ARG_ray_out, swapped ? queue_a_ : queue_b_);
     }
 }
 
-void ClDevice::reset_counters() {
+void ClLane::reset_counters() {
     zero_words(args_[etk::ETK_ARG_counters], etk::ETK_Q_COUNT);
 }
 
-void ClDevice::read_counters(uint32_t* out) {
+void ClLane::read_counters(uint32_t* out) {
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_counters], CL_TRUE, 0,
                              sizeof(cl_uint) * etk::ETK_Q_COUNT, out);
     // A blocking read on an in-order queue: every launch before it has finished.
     collect_events();
 }
 
-void ClDevice::read_learning(int n, int* bins) {
+void ClLane::read_learning(int n, int* bins) {
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_learn_bin], CL_TRUE, 0, sizeof(cl_int) * n, bins);
 }
 
-void ClDevice::read_guide(int n, int* keys, float* values, int* exits, float* parts) {
+void ClLane::read_guide(int n, int* keys, float* values, int* exits, float* parts) {
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_rec_parts], CL_TRUE, 0, sizeof(cl_float2) * n,
                              parts);
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_key], CL_TRUE, 0, sizeof(cl_int) * n, keys);
@@ -196,7 +247,7 @@ void ClDevice::read_guide(int n, int* keys, float* values, int* exits, float* pa
     queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_exit], CL_TRUE, 0, sizeof(cl_int) * n, exits);
 }
 
-void ClDevice::read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) {
+void ClLane::read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) {
     const size_t bytes = sizeof(cl_float4) * n;
     const std::pair<int, float*> fields[] = {{etk::ETK_ARG_ray_o, ray_o},
                                              {etk::ETK_ARG_ray_d, ray_d},
@@ -208,20 +259,21 @@ void ClDevice::read_paths(int n, float* ray_o, float* ray_d, float* beta, float*
     queue_.finish(); // the reads above are non-blocking
 }
 
+// Between passes (no lane is running): a blocking write, which every lane's later launches see.
 void ClDevice::upload_guide(const std::vector<float>& cells) {
     if (cells.size() != guide_floats_)
         throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
                     std::to_string(guide_floats_));
     try {
-        queue_.enqueueWriteBuffer(args_[etk::ETK_ARG_guide_cells], CL_TRUE, 0,
-                                  sizeof(cl_float) * cells.size(), cells.data());
+        lanes_[0]->queue().enqueueWriteBuffer(args_[etk::ETK_ARG_guide_cells], CL_TRUE, 0,
+                                              sizeof(cl_float) * cells.size(), cells.data());
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot upload the visibility tables (") + e.what() +
                     "): " + cl_error_name(e.err()));
     }
 }
 
-void ClDevice::launch(int stage, int n, const etk::EtkParams& params) {
+void ClLane::launch(int stage, int n, const etk::EtkParams& params) {
     if (n <= 0)
         return;
     cl::Kernel& k = kernels_[stage];
@@ -235,20 +287,25 @@ void ClDevice::launch(int stage, int n, const etk::EtkParams& params) {
 }
 
 // Zeroed on the device rather than uploaded from the host's zeroed film: a 512x512 film is 16 MB
-// each way per pass, 3-4% of a pass on PoCL (issue 12).
+// each way per pass, 3-4% of a pass on PoCL (issue 12). Zeroed by lane 0 and waited for, since
+// every lane writes the film.
 void ClDevice::clear_film(bool aovs) {
+    ClLane& l = *lanes_[0];
 #define ET_CLEAR(type, name)                                                                       \
     if (aovs || !film_field_is_aov(etk::ETK_ARG_##name))                                           \
-        zero_words(args_[etk::ETK_ARG_##name], sizeof(type) * pixels_ / 4);
+        l.zero_words(args_[etk::ETK_ARG_##name], sizeof(type) * pixels_ / 4);
     ETK_FILM_FIELDS(ET_CLEAR)
 #undef ET_CLEAR
+    l.queue().finish();
 }
 
+// After finish(): every lane's launches are done.
 void ClDevice::download_film(Film& film, bool aovs) {
+    cl::CommandQueue& q = lanes_[0]->queue();
 #define ET_READ(type, name)                                                                        \
     if (aovs || !film_field_is_aov(etk::ETK_ARG_##name))                                           \
-        queue_.enqueueReadBuffer(args_[etk::ETK_ARG_##name], CL_TRUE, 0,                           \
-                                 sizeof(type) * film.pixels(), film.name.data());
+        q.enqueueReadBuffer(args_[etk::ETK_ARG_##name], CL_TRUE, 0, sizeof(type) * film.pixels(),  \
+                            film.name.data());
     ETK_FILM_FIELDS(ET_READ)
 #undef ET_READ
 }
@@ -256,7 +313,10 @@ void ClDevice::download_film(Film& film, bool aovs) {
 std::vector<std::pair<std::string, double>> ClDevice::stage_seconds() {
     std::vector<std::pair<std::string, double>> out;
     for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s) {
-        out.emplace_back(stage_name(s), seconds_[s]);
+        double t = 0.0;
+        for (const auto& l : lanes_)
+            t += l->seconds()[s];
+        out.emplace_back(stage_name(s), t);
     }
     return out;
 }

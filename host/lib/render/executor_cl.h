@@ -1,6 +1,6 @@
 // The OpenCL back end: the kernels of kernels/wavefront.cl, one per stage, over device buffers
-// allocated and bound from the declarations of kernels/path_state.h. One lane: waves of up to
-// `paths` pixels run one after another on one command queue.
+// allocated and bound from the declarations of kernels/path_state.h. Each lane runs waves of up to
+// `paths` pixels one after another on a command queue of its own.
 #pragma once
 #include "opencl/opencl_runtime.h"
 #include "prepare/device_scene.h"
@@ -37,22 +37,15 @@ inline bool prefers_light_batches_on(const DeviceLimits& limits) {
     return limits.cpu;
 }
 
-class ClDevice : public WavefrontDevice, public StageExecutor {
+// One lane of the OpenCL back end: a command queue with path state, queues and counters of its
+// own (kernels/path_state.h), running waves one after another; the scene, the film and the
+// visibility tables are the device's, shared by every lane.
+class ClLane : public StageExecutor {
   public:
-    // paths: paths in flight (0: the film, capped by the device's memory).
-    ClDevice(std::unique_ptr<ClRuntime> rt, const DeviceScene& scene, int paths,
-             ProgramBuildInfo* build = nullptr);
-
-    std::string name() const override { return "opencl"; }
-    int lanes() const override { return 1; }
-    int wave_size() const override { return paths_; }
-    StageExecutor& lane(int) override { return *this; }
-    void run_lanes(const std::function<void(int)>& f) override;
-    void finish() override;
-    void clear_film(bool aovs) override;
-    void download_film(Film& film, bool aovs) override;
-    std::vector<std::pair<std::string, double>> stage_seconds() override;
-    bool prefers_light_batches() const override { return prefers_light_batches_on(rt_->limits()); }
+    // shared: every kernel argument that is not the lane's own (by ETK_ARG_*; the lane's own
+    // entries are ignored); n: paths in flight.
+    ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
+           size_t zero_local, const std::vector<cl::Buffer>& shared, int n);
 
     void bind_queues(bool swapped) override;
     void reset_counters() override;
@@ -60,30 +53,64 @@ class ClDevice : public WavefrontDevice, public StageExecutor {
     void read_learning(int n, int* bins) override;
     void read_guide(int n, int* keys, float* values, int* exits, float* parts) override;
     void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) override;
-    void upload_guide(const std::vector<float>& cells) override;
     void launch(int stage, int n, const etk::EtkParams& params) override;
 
-    // Events of launches not yet accounted (for tests: stays bounded during a render).
+    void zero_words(const cl::Buffer& buffer, uint64_t words);
+    void finish();
+    cl::CommandQueue& queue() { return queue_; }
     size_t pending_events() const { return pending_.size(); }
-    // Work-group size of each stage's kernel (by ETK_STAGE_*), as chosen for this device.
-    const std::vector<size_t>& local_sizes() const { return local_; }
+    const std::vector<double>& seconds() const { return seconds_; }
 
   private:
-    void zero_words(const cl::Buffer& buffer, uint64_t words);
     void collect_events();
 
-    std::unique_ptr<ClRuntime> rt_;
-    int pixels_, paths_;
     cl::CommandQueue queue_;
-    cl::Program program_;
-    std::vector<cl::Kernel> kernels_; // by ETK_STAGE_*
-    std::vector<size_t> local_;       // work-group size per kernel
-    cl::Kernel zero_;                 // zero_words
-    size_t zero_local_ = 1;
+    std::vector<cl::Kernel> kernels_; // by ETK_STAGE_*: a lane's own (arguments are per kernel)
+    const std::vector<size_t>& local_;
+    cl::Kernel zero_; // zero_words
+    size_t zero_local_;
     std::vector<cl::Buffer> args_; // by ETK_ARG_* (buffers only)
     cl::Buffer queue_a_, queue_b_; // bound to ray_in / ray_out
     std::vector<double> seconds_;  // per stage: finished launches
     std::vector<std::pair<int, cl::Event>> pending_;
+};
+
+// The lanes of a CPU device (PoCL): two, so that while one lane's host thread waits on a counter
+// read or launches its next stage, the other's kernels keep the device's threads busy -- what
+// the native back end's lanes do by never synchronising. One on any other device, and on Oclgrind.
+int default_cl_lanes(const ClRuntime& rt);
+
+class ClDevice : public WavefrontDevice {
+  public:
+    // paths: paths in flight per lane (0: the film shared out among the lanes, capped by the
+    // device's memory); lanes: 0 for default_cl_lanes.
+    ClDevice(std::unique_ptr<ClRuntime> rt, const DeviceScene& scene, int paths,
+             ProgramBuildInfo* build = nullptr, int lanes = 0);
+
+    std::string name() const override { return "opencl"; }
+    int lanes() const override { return static_cast<int>(lanes_.size()); }
+    int wave_size() const override { return paths_; }
+    StageExecutor& lane(int k) override { return *lanes_[k]; }
+    void run_lanes(const std::function<void(int)>& f) override;
+    void finish() override;
+    void clear_film(bool aovs) override;
+    void download_film(Film& film, bool aovs) override;
+    std::vector<std::pair<std::string, double>> stage_seconds() override;
+    bool prefers_light_batches() const override { return prefers_light_batches_on(rt_->limits()); }
+    void upload_guide(const std::vector<float>& cells) override;
+
+    // Events of launches not yet accounted, all lanes (for tests: stays bounded during a render).
+    size_t pending_events() const;
+    // Work-group size of each stage's kernel (by ETK_STAGE_*), as chosen for this device.
+    const std::vector<size_t>& local_sizes() const { return local_; }
+
+  private:
+    std::unique_ptr<ClRuntime> rt_;
+    int pixels_, paths_;
+    cl::Program program_;
+    std::vector<size_t> local_;    // work-group size per kernel
+    std::vector<cl::Buffer> args_; // the shared buffers, by ETK_ARG_*
+    std::vector<std::unique_ptr<ClLane>> lanes_;
     size_t guide_floats_ = 1; // size of the visibility tables' buffer
 };
 

@@ -65,7 +65,8 @@ class WavefrontDevice {
     // aovs false the AOV fields may be left as they are: nobody reads them.
     virtual void clear_film(bool aovs) = 0;
     virtual void download_film(Film& film, bool aovs) = 0;
-    // Time per stage so far: device time for OpenCL, summed thread time natively.
+    // Time per stage so far: summed over the lanes, device time for OpenCL (kernels of two lanes
+    // may overlap), thread time natively.
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
     // The visibility strategy's per-cell tables (EtkScene.guide_cells) for the passes to come.
     virtual void upload_guide(const std::vector<float>& cells);

@@ -1,0 +1,112 @@
+// The OpenCL back end's lanes (host/lib/render/executor_cl.h): each lane is a command queue with
+// path state of its own, running waves on a thread of its own while the others run theirs. Which
+// lane renders a pixel, and in how many waves, must change nothing: the film is the same bits with
+// one lane or several, one wave per lane or many, and so are the visibility strategy's tables,
+// which every lane's shadow rays teach during the learning passes.
+#include "render/executor_cl.h"
+#include "render/renderer.h"
+#include "render_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+namespace {
+
+// A closed room lit through one open side by a constant sky (the visibility strategy learns
+// the opening), a sphere in it.
+et::Scene room() {
+    et::Scene s =
+        ett::base_scene(23, 17, et::make_envmap("sky", ett::constant_image(32, 16, 1.0f), {}));
+    s.materials.push_back(ett::diffuse(0.7f));
+    const float h = 1.0f;
+    ett::add_square(s.triangles, glm::vec3(0, 0, 0), glm::vec3(0, 1, 0), h, 0);  // floor
+    ett::add_square(s.triangles, glm::vec3(0, 2, 0), glm::vec3(0, -1, 0), h, 0); // ceiling
+    ett::add_square(s.triangles, glm::vec3(-1, 1, 0), glm::vec3(1, 0, 0), h, 0);
+    ett::add_square(s.triangles, glm::vec3(1, 1, 0), glm::vec3(-1, 0, 0), h, 0);
+    ett::add_square(s.triangles, glm::vec3(0, 1, 1), glm::vec3(0, 0, -1), h, 0); // back
+    s.camera.eye = {0.0f, 1.0f, 0.9f};
+    s.camera.target = {0.0f, 0.8f, -1.0f};
+    s.camera.fov_deg = 80.0f;
+    s.settings.backend = et::Backend::opencl;
+    s.settings.max_depth = 3;
+    s.settings.seed = 7;
+    return s;
+}
+
+struct LaneRun {
+    std::vector<float> mean;
+    et::RenderStats stats;
+    int lanes = 0, wave = 0;
+};
+
+LaneRun render(const et::Scene& s, int lanes, int paths, int spp) {
+    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+    int used_lanes = 0, wave = 0;
+    et::Renderer r(ds, [&](et::Film&) -> std::unique_ptr<et::WavefrontDevice> {
+        auto d = std::make_unique<et::ClDevice>(std::make_unique<et::ClRuntime>(0), ds, paths,
+                                                nullptr, lanes);
+        used_lanes = d->lanes();
+        wave = d->wave_size();
+        return d;
+    });
+    for (int k = 0; k < spp; ++k)
+        r.render_sample(static_cast<uint32_t>(k));
+    return {r.sums().mean(), r.stats(), used_lanes, wave};
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+TEST(ClLanes, SameBitsWithAnyLaneCountAndWaveSize) {
+    for (et::Strategy strategy : {et::Strategy::mis, et::Strategy::visibility}) {
+        SCOPED_TRACE(et::name_of(strategy));
+        et::Scene s = room();
+        s.settings.strategy = strategy;
+        // Past the visibility strategy's 64 learning passes: the learned tables are used too.
+        const int spp = strategy == et::Strategy::visibility ? 68 : 6;
+        const LaneRun one = render(s, 1, 0, spp);
+        ASSERT_EQ(one.lanes, 1);
+        EXPECT_EQ(one.wave, 23 * 17) << "one lane, one wave: the whole film";
+        EXPECT_GT(ett::image_mean(one.mean), 0.0);
+        EXPECT_EQ(one.stats.nonfinite_samples, 0u);
+        if (strategy == et::Strategy::visibility) {
+            EXPECT_GT(one.stats.guide_records, 0u) << "nothing learned: the tables go untested";
+        }
+        // Two lanes (the film in halves), three lanes of many small waves each (the last one
+        // short), two lanes of one path each.
+        const int configs[][2] = {{2, 0}, {3, 29}, {2, 1}};
+        for (const auto& c : configs) {
+            SCOPED_TRACE("lanes " + std::to_string(c[0]) + ", paths " + std::to_string(c[1]));
+            const LaneRun r = render(s, c[0], c[1], spp);
+            EXPECT_EQ(r.lanes, c[0]);
+            EXPECT_EQ(r.wave, c[1] > 0 ? c[1] : (23 * 17 + 1) / 2);
+            EXPECT_TRUE(same_bits(one.mean, r.mean)) << "the film depends on the lanes";
+            EXPECT_EQ(one.stats.shadow_rays, r.stats.shadow_rays);
+            EXPECT_EQ(one.stats.guide_records, r.stats.guide_records);
+            double stage = 0.0;
+            for (const auto& [name, sec] : r.stats.stage_seconds)
+                stage += sec;
+            EXPECT_GT(stage, 0.0) << "every lane's launches are timed";
+        }
+    }
+}
+
+// The default: two lanes on a CPU device (PoCL, where the suite runs), waves of at most 65,536
+// paths, as many per lane.
+TEST(ClLanes, TwoLanesOnACpuDevice) {
+    et::ClRuntime rt(0);
+    ASSERT_TRUE(rt.limits().cpu) << "the suite's OpenCL device is PoCL's CPU device";
+    EXPECT_EQ(et::default_cl_lanes(rt), 2);
+    et::Scene s = room();
+    s.settings.strategy = et::Strategy::mis;
+    s.width = 400; // 160,000 pixels: 4 waves of 40,000, two per lane
+    s.height = 400;
+    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+    et::ClDevice d(std::make_unique<et::ClRuntime>(0), ds, 0);
+    EXPECT_EQ(d.lanes(), 2);
+    EXPECT_EQ(d.wave_size(), 40000);
+}
+
+} // namespace
