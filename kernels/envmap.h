@@ -173,9 +173,23 @@ ETK_FN void etk_sample_1d_batch(ETK_GLOBAL const float* dist, const int* cdf, co
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
         if (far[k])
             cell[k] = etk_find_interval_between(dist + cdf[k], lo[k] + 3, hi[k], x[k]);
+    // etk_sample_1d_in's steps, its two CDF entries gathered first: GCC then vectorises the
+    // density and the point (as one etk_sample_1d_in per sample it kept them scalar).
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
-        int c;
-        point[k] = etk_sample_1d_in(dist + cdf[k], n, cell[k], x[k], &density[k], &c);
+        h0[k] = dist[cdf[k] + cell[k]];
+        h1[k] = dist[cdf[k] + cell[k] + 1];
+    }
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+        density[k] = etk_interval_density_between(h0[k], h1[k], n);
+    // For a power-of-two n (most maps) the point's steps as one vectorisable loop; the general
+    // path's fixed-count corrections keep GCC from vectorising the loop that holds both.
+    if ((n & (n - 1)) == 0) {
+        float inv = etk_inv_pow2((uint)n);
+        for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+            point[k] = etk_cell_coordinate_pow2(cell[k], etk_interval_t(h0[k], h1[k], x[k]), inv);
+    } else {
+        for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+            point[k] = etk_interval_point(h0[k], h1[k], x[k], cell[k], n);
     }
 }
 // The first half of a batch of map samples: map coordinates (u, v), their density on the square
