@@ -41,16 +41,17 @@
 #else
 #define ETK_CL_INLINE_FN ETK_FORCE_INLINE_FN
 #endif
-// A call in OpenCL C: for functions with a large private array (the BVH's traversal stack).
-// PoCL gives every private array of a kernel one copy per work-item of the group (a context
-// array: the traversal stack, 768 bytes, became 49 KB a group, more than L1 holds), so a stack
-// inlined into the kernel lands at a new address for every ray; in a function of its own it
-// lives in that function's frame, one copy reused by every work-item. Natively GCC keeps such a
-// function a call anyway.
-#if defined(__clang__) || defined(__GNUC__)
+// A call in OpenCL C on CPU devices (the host defines ETK_CPU_DEVICE there): for functions with
+// a large private array (the BVH's traversal stack). PoCL gives every private array of a kernel
+// one copy per work-item of the group (a context array: the traversal stack, 768 bytes, became
+// 49 KB a group, more than L1 holds), so a stack inlined into the kernel lands at a new address
+// for every ray; in a function of its own it lives in that function's frame, one copy reused by
+// every work-item. Natively GCC keeps such a function a call anyway. Inline on other devices:
+// GPUs were measured with the traversal inlined, never as a call.
+#if defined(ETK_CPU_DEVICE) && (defined(__clang__) || defined(__GNUC__))
 #define ETK_CL_NOINLINE_FN static __attribute__((noinline))
 #else
-#define ETK_CL_NOINLINE_FN static
+#define ETK_CL_NOINLINE_FN ETK_FN
 #endif
 #define ETK_GLOBAL __global
 #define make_float2(a, b) ((float2)((a), (b)))

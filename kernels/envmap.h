@@ -183,7 +183,7 @@ ETK_FN void etk_sample_1d_batch(ETK_GLOBAL const float* dist, const int* cdf, co
         density[k] = etk_interval_density_between(h0[k], h1[k], n);
     // For a power-of-two n (most maps) the point's steps as one vectorisable loop; the general
     // path's fixed-count corrections keep GCC from vectorising the loop that holds both.
-    if ((n & (n - 1)) == 0) {
+    if (etk_is_pow2(n)) {
         float inv = etk_inv_pow2((uint)n);
         for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
             point[k] = etk_cell_coordinate_pow2(cell[k], etk_interval_t(h0[k], h1[k], x[k]), inv);

@@ -145,22 +145,26 @@ ETK_FN int etk_cell_of(float x, int n) {
     return clamp((int)(x * (float)n), 0, n - 1);
 }
 
-// Continuous coordinate in [i/n, (i+1)/n) for offset t in [0,1): rounding never leaves the cell,
-// so the density evaluated at the result is the density of the chosen cell. The division can
-// round across either edge (e.g. 53/100 rounds below 0.53): step back by one float at a time.
-// etk_cell_coordinate for n a power of two, inv = 1 / n (below).
+// Whether n (> 0) is a power of two: etk_cell_coordinate's exact path.
+ETK_FN int etk_is_pow2(int n) {
+    return (n & (n - 1)) == 0;
+}
+// etk_cell_coordinate for n a power of two, inv = 1 / n (etk_inv_pow2).
 ETK_FN float etk_cell_coordinate_pow2(int i, float t, float inv) {
     float hi = (float)(i + 1) * inv;
     float x = ((float)i + t) * inv;
     return x < hi ? x : as_float(as_uint(hi) - 1u);
 }
+// Continuous coordinate in [i/n, (i+1)/n) for offset t in [0,1): rounding never leaves the cell,
+// so the density evaluated at the result is the density of the chosen cell. The division can
+// round across either edge (e.g. 53/100 rounds below 0.53): step back by one float at a time.
 ETK_FN float etk_cell_coordinate(int i, float t, int n) {
     // For n a power of two (most maps) dividing by n is exact scaling, a product by 1/n (no
     // division on the sample's critical path), and x n = fl(i + t) is >= i and, after the clamp,
     // below i + 1: x is in cell i already (1/n exact: etk_inv_pow2). Otherwise rounding can be off
     // by a float step or two, which fixed-count steps mend without branches. n is the same for
     // every sample of a table, so the branch between the two is predicted.
-    if ((n & (n - 1)) == 0)
+    if (etk_is_pow2(n))
         return etk_cell_coordinate_pow2(i, t, etk_inv_pow2((uint)n));
     float x = ((float)i + t) / (float)n;
     float hi = (float)(i + 1) / (float)n;
@@ -185,8 +189,6 @@ ETK_FN float etk_interval_density(ETK_GLOBAL const float* cdf, int n, int i) {
     return etk_interval_density_between(cdf[i], cdf[i + 1], n);
 }
 
-// The point in cell i of n on [0,1] for u between the cell's CDF entries lo and hi: inversion
-// within the cell (its middle when it has no width).
 // Where u lies between the cell's CDF entries lo and hi, in (0, 1) (the middle for no width).
 ETK_FN float etk_interval_t(float lo, float hi, float u) {
     float width = hi - lo;
@@ -194,6 +196,8 @@ ETK_FN float etk_interval_t(float lo, float hi, float u) {
     // t > 0: x is never exactly 0, where the lat-long density has its zero at the pole.
     return clamp(t, 5.9604645e-8f, ETK_ONE_MINUS_EPS);
 }
+// The point in cell i of n on [0,1] for u between the cell's CDF entries lo and hi: inversion
+// within the cell (its middle when it has no width).
 ETK_FN float etk_interval_point(float lo, float hi, float u, int i, int n) {
     return etk_cell_coordinate(i, etk_interval_t(lo, hi, u), n);
 }

@@ -620,8 +620,8 @@ void run(const RenderArgs& a, Globals& g) {
         warn(a.scene + ": " + std::to_string(s.nonfinite_samples) +
              " samples were not finite and counted as zero (a renderer bug: please "
              "report the scene)");
-    std::printf("%s time per stage%s:", st.backend == Backend::cpu ? "thread" : "device",
-                cl.size() > 1 ? " (rank 0)" : "");
+    std::printf("%s time per stage, summed over the lanes%s:",
+                st.backend == Backend::cpu ? "thread" : "device", cl.size() > 1 ? " (rank 0)" : "");
     for (const auto& [name, t] : s.stage_seconds)
         std::printf(" %s %.3fs", name.c_str(), t);
     if (partial)

@@ -107,6 +107,11 @@ TEST(ClLanes, TwoLanesOnACpuDevice) {
     et::ClDevice d(std::make_unique<et::ClRuntime>(0), ds, 0);
     EXPECT_EQ(d.lanes(), 2);
     EXPECT_EQ(d.wave_size(), 40000);
+    // Paths in flight for the whole film: one wave, so one lane (a second would hold path state
+    // and render nothing).
+    et::ClDevice whole(std::make_unique<et::ClRuntime>(0), ds, 160000);
+    EXPECT_EQ(whole.lanes(), 1);
+    EXPECT_EQ(whole.wave_size(), 160000);
 }
 
 } // namespace

@@ -83,7 +83,7 @@ struct RenderSettings {
     uint32_t seed = 1;
     double time_limit = 0.0; // seconds; 0: none
     int rr_depth = 3;
-    int paths = 0; // paths in flight; 0: the film, capped by memory
+    int paths = 0; // OpenCL paths in flight per lane; 0: the film over the lanes (ClDevice)
     // Adaptive strategy: expected light samples of the two at a vertex, in [0, kMaxLightShare];
     // negative: learned per material bin from the first passes (render/light_share.h).
     float light_share = -1.0f;

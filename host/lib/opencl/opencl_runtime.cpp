@@ -260,7 +260,8 @@ cl::Program ClRuntime::build_source(const std::string& file, const std::string& 
     const std::string full_options =
         std::string("-cl-std=CL1.2 ") +
         (limits_.correctly_rounded_div_sqrt ? "-cl-fp32-correctly-rounded-divide-sqrt " : "") +
-        (plain_inline ? "-DETK_PLAIN_INLINE " : "") + options;
+        (plain_inline ? "-DETK_PLAIN_INLINE " : "") + (limits_.cpu ? "-DETK_CPU_DEVICE " : "") +
+        options; // kernels/compat.h
     const std::string key =
         cache_key(source + '\0' + full_options + '\0' + entry_.platform_name + '\0' +
                   entry_.device_name + '\0' + entry_.driver_version + '\0' + entry_.device_version);

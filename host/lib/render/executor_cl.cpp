@@ -54,10 +54,10 @@ std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt) {
     return out;
 }
 
-// Paths in flight per lane on a CPU device, by default. PoCL, 2 lanes, bunny_grace at depth 5
-// (512 x 512; envtrace bench --paths P, OpenCL / native): 0.96 at 131,072 (the film over two
-// lanes), 1.00 at 65,536 and 32,768; matpreview and textures the same at 65,536 and 32,768, 1-2%
-// lower at 16,384 (more launches); tools/bench/README.md.
+// Paths in flight per lane on a CPU device, by default. PoCL, 2 lanes, depth 5 (envtrace bench
+// --paths P, OpenCL / native): bunny_grace 0.96 at 131,072 (its 512 x 512 film over two lanes),
+// 1.00 at 65,536 and 32,768; matpreview 1.00 / 1.02 / 1.01 and textures 0.98 / 0.97 / 0.96 at
+// 65,536 / 32,768 / 16,384 (more launches); tools/bench/README.md.
 constexpr int kCpuWave = 65536;
 
 int default_cl_lanes(const ClRuntime& rt) {
@@ -126,9 +126,11 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
             std::max(nl, (pixels_ / kCpuWave + (pixels_ % kCpuWave ? 1 : 0) + nl - 1) / nl * nl);
     const int share = pixels_ / waves + (pixels_ % waves ? 1 : 0);
     paths_ = std::max(1, std::min(paths > 0 ? paths : share, std::min(cap, pixels_)));
+    // No lane without a wave of its own (a --paths of half the film or more).
+    const int lanes_used = std::min(nl, pixels_ / paths_ + (pixels_ % paths_ ? 1 : 0));
     const uint64_t n = static_cast<uint64_t>(paths_), px = static_cast<uint64_t>(pixels_);
-    for (int l = 0; l < nl; ++l) {
-        const std::string lane = nl > 1 ? " (lane " + std::to_string(l) + ")" : "";
+    for (int l = 0; l < lanes_used; ++l) {
+        const std::string lane = lanes_used > 1 ? " (lane " + std::to_string(l) + ")" : "";
 #define ET_PATH_SIZE(type, name) buffers.push_back({#name + lane, sizeof(type) * n});
         ETK_PATH_FIELDS(ET_PATH_SIZE)
 #undef ET_PATH_SIZE
@@ -159,7 +161,7 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * px);
         ETK_FILM_FIELDS(ET_FILM)
 #undef ET_FILM
-        for (int l = 0; l < nl; ++l)
+        for (int l = 0; l < lanes_used; ++l)
             lanes_.push_back(
                 std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_));
         clear_film(true);

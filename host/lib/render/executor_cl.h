@@ -43,9 +43,9 @@ inline bool prefers_light_batches_on(const DeviceLimits& limits) {
 class ClLane : public StageExecutor {
   public:
     // shared: every kernel argument that is not the lane's own (by ETK_ARG_*; the lane's own
-    // entries are ignored); n: paths in flight.
+    // entries are ignored); local: the work-group size per stage.
     ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
-           size_t zero_local, const std::vector<cl::Buffer>& shared, int n);
+           size_t zero_local, const std::vector<cl::Buffer>& shared, int paths);
 
     void bind_queues(bool swapped) override;
     void reset_counters() override;
@@ -66,8 +66,8 @@ class ClLane : public StageExecutor {
 
     cl::CommandQueue queue_;
     std::vector<cl::Kernel> kernels_; // by ETK_STAGE_*: a lane's own (arguments are per kernel)
-    const std::vector<size_t>& local_;
-    cl::Kernel zero_; // zero_words
+    std::vector<size_t> local_;       // work-group size per kernel
+    cl::Kernel zero_;                 // zero_words
     size_t zero_local_;
     std::vector<cl::Buffer> args_; // by ETK_ARG_* (buffers only)
     cl::Buffer queue_a_, queue_b_; // bound to ray_in / ray_out
@@ -78,6 +78,9 @@ class ClLane : public StageExecutor {
 // The lanes of a CPU device (PoCL): two, so that while one lane's host thread waits on a counter
 // read or launches its next stage, the other's kernels keep the device's threads busy -- what
 // the native back end's lanes do by never synchronising. One on any other device, and on Oclgrind.
+// The lanes write disjoint pixels of one film buffer from their queues at once: well defined on a
+// device that works in host memory, which OpenCL 1.2 does not promise elsewhere (a GPU with two
+// lanes would want a film per lane, or sub-buffers).
 int default_cl_lanes(const ClRuntime& rt);
 
 class ClDevice : public WavefrontDevice {
