@@ -13,21 +13,10 @@
 
 namespace {
 
-// A closed room lit through one open side by a constant sky (the visibility strategy learns
-// the opening), a sphere in it.
-et::Scene room() {
-    et::Scene s =
-        ett::base_scene(23, 17, et::make_envmap("sky", ett::constant_image(32, 16, 1.0f), {}));
-    s.materials.push_back(ett::diffuse(0.7f));
-    const float h = 1.0f;
-    ett::add_square(s.triangles, glm::vec3(0, 0, 0), glm::vec3(0, 1, 0), h, 0);  // floor
-    ett::add_square(s.triangles, glm::vec3(0, 2, 0), glm::vec3(0, -1, 0), h, 0); // ceiling
-    ett::add_square(s.triangles, glm::vec3(-1, 1, 0), glm::vec3(1, 0, 0), h, 0);
-    ett::add_square(s.triangles, glm::vec3(1, 1, 0), glm::vec3(-1, 0, 0), h, 0);
-    ett::add_square(s.triangles, glm::vec3(0, 1, 1), glm::vec3(0, 0, -1), h, 0); // back
-    s.camera.eye = {0.0f, 1.0f, 0.9f};
-    s.camera.target = {0.0f, 0.8f, -1.0f};
-    s.camera.fov_deg = 80.0f;
+// The side-lit room (render_util.h; the visibility strategy learns the opening), on OpenCL.
+et::Scene lane_scene(et::Strategy strategy) {
+    et::Scene s = ett::side_lit_room(23, 17);
+    s.settings.strategy = strategy;
     s.settings.backend = et::Backend::opencl;
     s.settings.max_depth = 3;
     s.settings.seed = 7;
@@ -62,8 +51,7 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
 TEST(ClLanes, SameBitsWithAnyLaneCountAndWaveSize) {
     for (et::Strategy strategy : {et::Strategy::mis, et::Strategy::visibility}) {
         SCOPED_TRACE(et::name_of(strategy));
-        et::Scene s = room();
-        s.settings.strategy = strategy;
+        const et::Scene s = lane_scene(strategy);
         // Past the visibility strategy's 64 learning passes: the learned tables are used too.
         const int spp = strategy == et::Strategy::visibility ? 68 : 6;
         const LaneRun one = render(s, 1, 0, spp);
@@ -99,8 +87,7 @@ TEST(ClLanes, TwoLanesOnACpuDevice) {
     et::ClRuntime rt(0);
     ASSERT_TRUE(rt.limits().cpu) << "the suite's OpenCL device is PoCL's CPU device";
     EXPECT_EQ(et::default_cl_lanes(rt), 2);
-    et::Scene s = room();
-    s.settings.strategy = et::Strategy::mis;
+    et::Scene s = lane_scene(et::Strategy::mis);
     s.width = 400; // 160,000 pixels: 4 waves of 40,000, two per lane
     s.height = 400;
     const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);

@@ -9,21 +9,9 @@
 
 namespace {
 
-// A closed 2 x 2 x 2 room lit through one open side by a constant sky: the tables move the light
-// samples towards the opening.
+// The side-lit room (render_util.h): the tables move the light samples towards the opening.
 et::Scene room() {
-    et::Scene s =
-        ett::base_scene(24, 16, et::make_envmap("sky", ett::constant_image(32, 16, 1.0f), {}));
-    s.materials.push_back(ett::diffuse(0.7f));
-    const float h = 1.0f;
-    ett::add_square(s.triangles, glm::vec3(0, 0, 0), glm::vec3(0, 1, 0), h, 0);  // floor
-    ett::add_square(s.triangles, glm::vec3(0, 2, 0), glm::vec3(0, -1, 0), h, 0); // ceiling
-    ett::add_square(s.triangles, glm::vec3(-1, 1, 0), glm::vec3(1, 0, 0), h, 0);
-    ett::add_square(s.triangles, glm::vec3(1, 1, 0), glm::vec3(-1, 0, 0), h, 0);
-    ett::add_square(s.triangles, glm::vec3(0, 1, 1), glm::vec3(0, 0, -1), h, 0); // back
-    s.camera.eye = {0.0f, 1.0f, 0.9f};
-    s.camera.target = {0.0f, 0.8f, -1.0f};
-    s.camera.fov_deg = 80.0f;
+    et::Scene s = ett::side_lit_room(24, 16);
     s.settings.strategy = et::Strategy::visibility;
     s.settings.backend = et::Backend::cpu;
     s.settings.max_depth = 2;

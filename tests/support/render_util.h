@@ -74,6 +74,24 @@ inline et::Scene base_scene(int w, int h, et::EnvMap env) {
     return s;
 }
 
+// A closed 2 x 2 x 2 room of diffuse walls (albedo 0.7) lit through one open side by a constant
+// sky, the camera inside looking at the opening's side: what the visibility strategy learns (its
+// tables move the light samples towards the opening). Settings are the caller's.
+inline et::Scene side_lit_room(int w, int h) {
+    et::Scene s = base_scene(w, h, et::make_envmap("sky", constant_image(32, 16, 1.0f), {}));
+    s.materials.push_back(diffuse(0.7f));
+    const float half = 1.0f;
+    add_square(s.triangles, glm::vec3(0, 0, 0), glm::vec3(0, 1, 0), half, 0);  // floor
+    add_square(s.triangles, glm::vec3(0, 2, 0), glm::vec3(0, -1, 0), half, 0); // ceiling
+    add_square(s.triangles, glm::vec3(-1, 1, 0), glm::vec3(1, 0, 0), half, 0);
+    add_square(s.triangles, glm::vec3(1, 1, 0), glm::vec3(-1, 0, 0), half, 0);
+    add_square(s.triangles, glm::vec3(0, 1, 1), glm::vec3(0, 0, -1), half, 0); // back
+    s.camera.eye = {0.0f, 1.0f, 0.9f};
+    s.camera.target = {0.0f, 0.8f, -1.0f};
+    s.camera.fov_deg = 80.0f;
+    return s;
+}
+
 struct RenderResult {
     std::vector<float> mean; // RGB per pixel
     std::vector<double> var; // sample variance of one pass, per pixel and channel
