@@ -99,6 +99,12 @@ TEST(ClLanes, TwoLanesOnACpuDevice) {
     et::ClDevice whole(std::make_unique<et::ClRuntime>(0), ds, 160000);
     EXPECT_EQ(whole.lanes(), 1);
     EXPECT_EQ(whole.wave_size(), 160000);
+    // A film of one pixel: one wave of one path, one lane.
+    s.width = s.height = 1;
+    const et::DeviceScene tiny = et::prepare_device_scene(s, s.settings);
+    et::ClDevice one(std::make_unique<et::ClRuntime>(0), tiny, 0);
+    EXPECT_EQ(one.lanes(), 1);
+    EXPECT_EQ(one.wave_size(), 1);
 }
 
 } // namespace

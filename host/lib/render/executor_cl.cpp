@@ -33,6 +33,11 @@ cl::Buffer upload(cl::Context& ctx, const std::vector<T>& v, bool host_unified) 
                       const_cast<void*>(data));
 }
 
+// a / b rounded up, for positive a and b (no overflow near INT_MAX, unlike (a + b - 1) / b).
+int ceil_div(int a, int b) {
+    return a / b + (a % b ? 1 : 0);
+}
+
 } // namespace
 
 std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt) {
@@ -100,7 +105,7 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     ClRuntime& rt = *rt_;
     const cl::Device& dev = rt.device().device;
     const DeviceLimits& lim = rt.limits();
-    const int nl = std::max(1, std::min(lanes > 0 ? lanes : default_cl_lanes(rt), pixels_));
+    const int nl = std::max(1, lanes > 0 ? lanes : default_cl_lanes(rt));
     // Every buffer with its size, checked against the device before anything is allocated. The
     // fixed ones (scene, film) first; the lanes' paths in flight get a share of what is left.
     std::vector<BufferRequest> buffers;
@@ -120,14 +125,12 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
          std::min(free_mem, lim.global_mem / 4) / (kBytesPerPath * uint64_t(nl))}));
     // The film shared out among the lanes in waves of equal size, as many per lane; on a CPU
     // device waves of at most kCpuWave paths (their path state stays in cache).
-    int waves = nl;
-    if (lim.cpu)
-        waves =
-            std::max(nl, (pixels_ / kCpuWave + (pixels_ % kCpuWave ? 1 : 0) + nl - 1) / nl * nl);
-    const int share = pixels_ / waves + (pixels_ % waves ? 1 : 0);
+    const int waves_per_lane = lim.cpu ? std::max(1, ceil_div(ceil_div(pixels_, kCpuWave), nl)) : 1;
+    const int share = ceil_div(pixels_, waves_per_lane * nl);
     paths_ = std::max(1, std::min(paths > 0 ? paths : share, std::min(cap, pixels_)));
-    // No lane without a wave of its own (a --paths of half the film or more).
-    const int lanes_used = std::min(nl, pixels_ / paths_ + (pixels_ % paths_ ? 1 : 0));
+    // No lane without a wave of its own (a film of fewer pixels than lanes, a --paths of half
+    // the film or more).
+    const int lanes_used = std::max(1, std::min(nl, ceil_div(pixels_, paths_)));
     const uint64_t n = static_cast<uint64_t>(paths_), px = static_cast<uint64_t>(pixels_);
     for (int l = 0; l < lanes_used; ++l) {
         const std::string lane = lanes_used > 1 ? " (lane " + std::to_string(l) + ")" : "";
