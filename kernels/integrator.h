@@ -524,7 +524,8 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     float4 rad = P.radiance[slot];
     if (etk_bsdf_is_dielectric(m) && wz < 0.0f)
         rad.w *= m.eta * m.eta;
-    if (depth + 1 >= p.rr_depth) {
+    // Russian roulette past the path's first rr_depth surfaces (this vertex is surface depth + 1).
+    if (depth >= p.rr_depth) {
         float survive = fmin(0.95f, etk_max3(beta) * rr_scale * rad.w);
         if (!(rr.y < survive))
             return;

@@ -64,7 +64,8 @@ typedef struct {
     // generate stage ran 3x slower for it, issue 12). No int's bits in a float lane.
     float eye[4], forward[4], right[4], up[4];
     int width, height;
-    int max_depth, rr_depth;
+    int max_depth;
+    int rr_depth; // Russian roulette ends paths only past this many surfaces (integrator.h)
     int strategy, heuristic;
     int sampler;
     uint seed;

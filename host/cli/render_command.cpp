@@ -64,7 +64,7 @@ struct RenderArgs {
     // options whose every value means something, and those that only apply to some renders.
     bool light_samples_given = false, bsdf_samples_given = false, sis_samples_given = false;
     bool output_given = false, stats_given = false, device_given = false, paths_given = false;
-    int spp = 0, max_depth = 0, paths = -1, threads = 0;
+    int spp = 0, max_depth = 0, rr_depth = -1, paths = -1, threads = 0;
     long long seed = -1;
     double time_limit = -1.0;
     double checkpoint = -1.0;  // --checkpoint: seconds between saved states (< 0: none)
@@ -113,6 +113,8 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.spp = a.spp;
     if (a.max_depth > 0)
         st.max_depth = a.max_depth;
+    if (a.rr_depth >= 0)
+        st.rr_depth = a.rr_depth;
     if (!a.strategy.empty())
         st.strategy = parse_strategy(a.strategy, cli);
     if (!a.heuristic.empty())
@@ -197,6 +199,7 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
     j["resumed_from_spp"] = resumed_from;
     j["interrupted"] = sig ? signal_name(sig) : "no";
     j["max_depth"] = st.max_depth;
+    j["rr_depth"] = st.rr_depth;
     j["strategy"] = name_of(st.strategy);
     if (st.strategy == Strategy::lights)
         j["lights"] = {{"file", st.lights}, {"count", light_set.lights.size()}};
@@ -572,6 +575,7 @@ void run(const RenderArgs& a, Globals& g) {
                 {"envtrace:bsdf_sampling", name_of(resolved_bsdf_sampling(st))},
                 {"envtrace:seed", std::to_string(st.seed)},
                 {"envtrace:max_depth", std::to_string(st.max_depth)},
+                {"envtrace:rr_depth", std::to_string(st.rr_depth)},
                 {"envtrace:render_seconds", std::to_string(render_s)},
                 {"envtrace:backend", renderer.name()},
                 {"envtrace:lights", st.lights},
@@ -661,6 +665,10 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--max-depth", a->max_depth,
                     "Bounces (1: direct lighting only, the paper's setting)")
         ->check(CLI::Range(1, 1000));
+    cmd->add_option("--rr-depth", a->rr_depth,
+                    "Russian roulette ends paths only past this many surfaces (default 5; 0: "
+                    "from the first)")
+        ->check(CLI::Range(0, 1000));
     cmd->add_option("--strategy", a->strategy,
                     "light | bsdf | mis (the paper's) | compensated (MIS with a compensated light "
                     "distribution) | adaptive (compensated, light/BSDF shares learned per "

@@ -383,6 +383,8 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
         {"render", R"({"spp": "64"})", "render.spp"},
         {"render", R"({"strategy": 5})", "render.strategy"},
         {"render", R"({"sampler": "halton"})", "render.sampler"},
+        {"render", R"({"rr_depth": -1})", "render.rr_depth"},
+        {"render", R"({"rr_depth": 2.5})", "render.rr_depth"},
         {"film", R"({"width": 31.7})", "film.width"},
         {"camera", R"({"eye": [0, "1", 4]})", "camera.eye[1]"},
         {"camera", R"({"fov": true})", "camera.fov"},
@@ -430,6 +432,15 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
                                                                   1e-9,0,-1e-9,1.0000001]}}])";
         write_file(dir + "/s.json", q.text(dir));
         EXPECT_NO_THROW(et::load_scene(dir + "/s.json"));
+    }
+    // The roulette's depth is read, and 5 when not given.
+    {
+        Part q;
+        write_file(dir + "/s.json", q.text(dir));
+        EXPECT_EQ(et::load_scene(dir + "/s.json").settings.rr_depth, 5);
+        q.render = R"({"rr_depth": 0})";
+        write_file(dir + "/s.json", q.text(dir));
+        EXPECT_EQ(et::load_scene(dir + "/s.json").settings.rr_depth, 0);
     }
     // Integers written as floats are the same integers (documented): 2.0 spp renders.
     Part p;

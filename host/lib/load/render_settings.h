@@ -82,7 +82,13 @@ struct RenderSettings {
     BsdfSampling bsdf_sampling = BsdfSampling::automatic;
     uint32_t seed = 1;
     double time_limit = 0.0; // seconds; 0: none
-    int rr_depth = 3;
+    // Russian roulette may end a path only past its first rr_depth surfaces (integrator.h): the
+    // continuations of surfaces 1 .. rr_depth always go on. 5, as Mitsuba's default: in rooms lit
+    // indirectly the second to fifth bounces carry much of the light, and cutting them by the
+    // path's throughput cost more variance than the saved rays were worth (docs/results.md,
+    // "Russian roulette"). The build before cut from the continuation of the third surface on
+    // (rr_depth 2 here).
+    int rr_depth = 5;
     int paths = 0; // OpenCL paths in flight per lane; 0: the film over the lanes (ClDevice)
     // Adaptive strategy: expected light samples of the two at a vertex, in [0, kMaxLightShare];
     // negative: learned per material bin from the first passes (render/light_share.h).

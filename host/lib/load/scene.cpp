@@ -264,10 +264,11 @@ Scene load_scene(const std::string& path) {
         const JsonReader rr = r.at("render");
         rr.warn_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
                                  "time_limit", "paths", "bsdf_sampling", "light_share",
-                                 "light_samples", "bsdf_samples"});
+                                 "light_samples", "bsdf_samples", "rr_depth"});
         auto& st = scene.settings;
         st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
         st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
+        st.rr_depth = read_int(s, "rr_depth", st.rr_depth, 0, 1000, rr);
         if (s.contains("strategy"))
             st.strategy = parse_strategy(rr.string(s, "strategy", ""), rr.at("strategy").where());
         if (s.contains("heuristic"))
