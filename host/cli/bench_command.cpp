@@ -258,6 +258,7 @@ void run(const BenchArgs& a, const Globals& g) {
         j["width"] = ds.width();
         j["height"] = ds.height();
         j["max_depth"] = st.max_depth;
+        j["rr_depth"] = st.rr_depth;
         j["strategy"] = name_of(st.strategy);
         j["sampler"] = name_of(st.sampler);
         j["triangles"] = ds.triangle_count;

@@ -217,6 +217,24 @@ TEST(RenderCommand, TinyTimeLimitStillRendersASample) {
     EXPECT_GT(sum, 0.0);
 }
 
+// The roulette's depth: the scene's unless --rr-depth gives one (0 included), in the image's
+// metadata and the stats; a negative one is refused.
+TEST(RenderCommand, RouletteDepthFromSceneOrCommandLine) {
+    const std::string dir = ett::scratch_dir("render_rr_depth");
+    const std::string scene = write_scene(dir);
+    const std::string out = dir + "/out.exr";
+    expect_exit(ett::run_envtrace(args(scene, out, {"--spp", "1"}), dir), 0);
+    EXPECT_EQ(metadata(out, "rr_depth"), "5");
+    expect_exit(
+        ett::run_envtrace(
+            args(scene, out, {"--spp", "1", "--rr-depth", "0", "--stats", dir + "/stats.json"}),
+            dir),
+        0);
+    EXPECT_EQ(metadata(out, "rr_depth"), "0");
+    EXPECT_NE(read_file(dir + "/stats.json").find("\"rr_depth\": 0"), std::string::npos);
+    expect_exit(ett::run_envtrace(args(scene, out, {"--spp", "1", "--rr-depth", "-1"}), dir), 1);
+}
+
 // A film the machine cannot hold is refused up front, naming its size, with nothing written
 // (it grew to 17 GB over 40 s before "out of memory", or met the OOM killer). Skipped on a
 // machine that could hold a 16384 x 16384 film (about 56 GB).

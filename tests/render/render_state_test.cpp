@@ -130,6 +130,7 @@ TEST(RenderState, KeyFollowsWhatSamplesDependOn) {
     // map's texels, the back end.
     EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) { st.seed += 1; }));
     EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) { st.max_depth = 2; }));
+    EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) { st.rr_depth = 2; }));
     EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) {
                   st.strategy = et::Strategy::bsdf;
               }));

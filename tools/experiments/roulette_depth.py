@@ -1,16 +1,18 @@
 #!/usr/bin/python3
 """Where Russian roulette should start (render.rr_depth, kernels/integrator.h): for each scene,
 strategy and roulette depth, two renders of equal spp with two seeds give the relative variance
-per pixel (mean over the image of (a - b)^2 / (m^2 + (0.01 mean m)^2) / 2, m the two renders'
-mean) and their mean wall time; efficiency is 1 / (variance x time), reported relative to the
-first depth. Equal spp rather than equal time: the two seeds' difference needs no reference.
+per pixel (mean over the image of (a - b)^2 / (m^2 + (0.01 mean m)^2) / 2, a and b the two
+renders' luminance (the mean of the channels), m their mean) and their mean render time (the
+stats' render_seconds: no loading or writing); efficiency is 1 / (variance x time), reported
+relative to the first depth. Equal spp rather than equal time: the two seeds' difference needs
+no reference.
 
     tools/experiments/roulette_depth.py [--depths 2 4 5 1000] [--strategies mis visibility]
 
 writes docs/figures/roulette/roulette.{md,csv}."""
+import math
 import os
 import sys
-import time
 
 import common
 from efficiency import file_scene
@@ -51,18 +53,23 @@ def main():
                 images, seconds = [], []
                 for seed in (1, 2):
                     img = os.path.join(work, f"{os.path.basename(name)}-{strategy}-{rr}-{seed}.pfm")
-                    t = time.time()
-                    common.render(scene, img, ["--strategy", strategy, "--seed", str(seed), "--spp",
-                                               str(spp), "--rr-depth", str(rr)] + depth)
-                    seconds.append(time.time() - t)
+                    stats = common.render(scene, img, ["--strategy", strategy, "--seed", str(seed),
+                                                       "--spp", str(spp), "--rr-depth", str(rr)] +
+                                          depth)
+                    seconds.append(stats["render_seconds"])
                     images.append(common.read_pfm(img))
                 v, t = relative_variance(*images), sum(seconds) / 2
-                base = base or v * t
-                rows.append([name, strategy, rr, f"{v:.5g}", f"{t:.2f}", f"{base / (v * t):.2f}"])
+                cost = v * t
+                if base is None:
+                    base = cost
+                gain = base / cost if cost > 0 and math.isfinite(base) else float("nan")
+                rows.append([name, strategy, rr, f"{v:.5g}", f"{t:.3g}", f"{gain:.2f}"])
                 print(" ".join(str(x) for x in rows[-1]), flush=True)
     header = ["scene", "strategy", "rr_depth", "relative variance", "seconds", "efficiency"]
     common.write_csv(os.path.join(out, "roulette.csv"), header, rows)
     with open(os.path.join(out, "roulette.md"), "w") as f:
+        f.write("Command: `tools/experiments/roulette_depth.py " + " ".join(sys.argv[1:]) +
+                "` (two seeds at equal spp; efficiency relative to the first rr_depth)\n\n")
         f.write("| " + " | ".join(header) + " |\n|" + "---|" * len(header) + "\n")
         for r in rows:
             f.write("| " + " | ".join(str(x) for x in r) + " |\n")

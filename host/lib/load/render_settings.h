@@ -83,7 +83,8 @@ struct RenderSettings {
     uint32_t seed = 1;
     double time_limit = 0.0; // seconds; 0: none
     // Russian roulette may end a path only past its first rr_depth surfaces (integrator.h): the
-    // continuations of surfaces 1 .. rr_depth always go on. 5, as Mitsuba's default: in rooms lit
+    // continuations of surfaces 1 .. rr_depth always go on. 5, one past Mitsuba 3's default (its
+    // rr_depth 5 cuts from the fifth surface's continuation, this one's 4): in rooms lit
     // indirectly the second to fifth bounces carry much of the light, and cutting them by the
     // path's throughput cost more variance than the saved rays were worth (docs/results.md,
     // "Russian roulette"). The build before cut from the continuation of the third surface on
