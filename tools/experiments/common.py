@@ -115,6 +115,15 @@ def pyplot():
     return plt
 
 
+def relative_variance(a, b):
+    """The two-seed estimate of the per-pixel relative variance of one render, from two renders a
+    and b of equal spp and different seeds (arrays of equal shape: channels, or one luminance
+    channel): mean((a - b)^2 / 2 / (m^2 + (0.01 mean m)^2)), m = (a + b) / 2; the 1% of the mean
+    keeps black pixels from dividing by zero."""
+    m = 0.5 * (a + b)
+    return float(((a - b) ** 2 / 2 / (m ** 2 + (0.01 * m.mean()) ** 2)).mean())
+
+
 def read_pfm(path):
     """A PFM image as float64 (h, w, channels), top row first (PFM stores the bottom row first)."""
     import numpy as np

@@ -19,11 +19,6 @@ import common
 import efficiency
 
 
-def relative_variance(a, b):
-    m = 0.5 * (a + b)
-    return float(((a - b) ** 2 / 2 / (m ** 2 + (0.01 * m.mean()) ** 2)).mean())
-
-
 def main():
     p = common.parser(__doc__.splitlines()[0])
     p.add_argument("--spp", type=int, default=128)
@@ -54,7 +49,7 @@ def main():
                                                        "--strategy", "mis"] + extra)
                     imgs.append(common.read_pfm(out))
                     spp_s = stats["seconds_per_spp"]
-                res[name] = (relative_variance(*imgs), spp_s)
+                res[name] = (common.relative_variance(*imgs), spp_s)
             left = res["split"][0] / res["mis"][0] if res["mis"][0] > 0 else float("nan")
             name = f"{m}-d{depth}"
             print(f"{name:14s} mis {res['mis'][0]:.3g}  split {res['split'][0]:.3g}  "
