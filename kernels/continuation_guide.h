@@ -13,7 +13,7 @@
 // region by inverting the cell's CDF as the light sample's regions are (etk_guide_pick_region),
 // then uniformly in the region's solid angle.
 //
-// Secondary sources as points. The regions are 22.5 degrees wide and fixed to the cell, while the
+// Secondary sources as points. The regions are 11.25 degrees wide and fixed to the cell, while the
 // sunlit patch on a floor is a place: from across a cell it moves through several regions. So the
 // guide's share is itself a mixture, (1 - q) p_guide + q p_spot, where p_spot is a second
 // scene-wide table of the scene box's cells with portal_guide.h's layout and density (a cell, a

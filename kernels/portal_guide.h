@@ -1,7 +1,7 @@
 // Learned portals (the visibility strategy; issue 11). In a room lit through windows the light
 // that reaches a point comes through a few openings, and from across the room a window is a
 // small solid angle that no fixed set of direction regions resolves (visibility_guide.h's are
-// 22.5 degrees wide, coarser than a window seen from across the room, and their cells are
+// 11.25 degrees wide, a window seen from across the room crosses several, and their cells are
 // 1/8 of the room wide, so the window's direction moves inside one). Where the light gets in is
 // a property of the scene, not of the receiving point: every unoccluded shadow ray leaves the
 // scene's (slightly enlarged) bounding box through the opening it passed. So the box's six faces

@@ -45,10 +45,14 @@
 #include "path_state.h"
 #include "piecewise_constant.h"
 
-#define ETK_GUIDE_ROWS 8
-#define ETK_GUIDE_COLS 16
+// 16 x 32 regions of 11.25 degrees: at 320 x 240 and larger films the cells have the records
+// to fill them (8 x 16 left 13% more variance in window_room, 6% in skylight_room; 12 x 24
+// half-way: docs/results.md, issue 11). Two sub-bands per column band keep the sub-bands of a
+// 1024-wide map 16 columns wide, as four were with 16 column bands.
+#define ETK_GUIDE_ROWS 16
+#define ETK_GUIDE_COLS 32
 #define ETK_GUIDE_REGIONS (ETK_GUIDE_ROWS * ETK_GUIDE_COLS)
-#define ETK_GUIDE_SPLITS 4
+#define ETK_GUIDE_SPLITS 2
 #define ETK_GUIDE_SUBBANDS (ETK_GUIDE_COLS * ETK_GUIDE_SPLITS)
 #define ETK_GUIDE_CELL_FLOATS (ETK_GUIDE_REGIONS + 2)
 #define ETK_GUIDE_LIGHT_COUNT (ETK_GUIDE_REGIONS + 1) // within a slot's ETK_GUIDE_CELL_FLOATS

@@ -234,7 +234,8 @@ TEST_P(ContinuationMixture, SamplesMatchTheirDensity) {
         // atan2(x, -z) / pi) / 2).
         const etk::float3 d = g.wi_world;
         const double lon = 0.5 * (1.0 + std::atan2(double(d.x), -double(d.z)) / M_PI);
-        const int band = std::min(ETK_GUIDE_ROWS - 1, static_cast<int>((1.0 - d.y) * 4.0));
+        const int band =
+            std::min(ETK_GUIDE_ROWS - 1, static_cast<int>((1.0 - d.y) * 0.5 * ETK_GUIDE_ROWS));
         const int col = std::min(ETK_GUIDE_COLS - 1, static_cast<int>(lon * ETK_GUIDE_COLS));
         const double cos_n = etk::dot(d, n);
         const double o[3] = {0.3, 0.2, -0.1}, dd[3] = {d.x, d.y, d.z};

@@ -319,7 +319,11 @@ TEST(VisibilityGuideTables, PriorIsTheMap) {
     for (int r = 0; r < 32; ++r)
         for (int c = 0; c < 64; ++c) {
             const etk::float2 uv = etk::make_float2((c + 0.5f) / 64.0f, (r + 0.5f) / 32.0f);
-            EXPECT_NEAR(etk::etk_guide_factor(f.S, f.p, 0, uv), 1.0, 1e-4);
+            // Q(R) is a difference of two float CDF entries (each within 2^-24 of its double):
+            // relative to the region's mass M_R that is up to 1.2e-7 / M_R; twice that, plus
+            // float rounding of the factor itself.
+            const double M = f.regions[etk::etk_guide_region(f.p.env, uv)];
+            EXPECT_NEAR(etk::etk_guide_factor(f.S, f.p, 0, uv), 1.0, 1e-6 + 2.4e-7 / M);
         }
 }
 
@@ -568,6 +572,43 @@ TEST(VisibilityGuideTables, LightSampleCountPerCell) {
     EXPECT_EQ(cache.fewer_light_samples(), (std::map<float, uint64_t>{{0.125f, 1u}}));
     v.p.guide_ready = 0; // before the first tables: every vertex takes its light sample
     EXPECT_EQ(etk::etk_guide_light_count(v.S, v.p, 0), 1.0f);
+}
+
+// The continuation guide learns the diffuse integrand, incident radiance x cosine: two regions
+// whose records bring back the same luminance(L_in) / p, drawn at BSDF densities cos / pi of 0.9
+// and 0.3 (the cell's share is still 0, so a record's density is its BSDF's), take learned
+// probabilities 3 : 1 -- radiance alone would make them equal.
+TEST(VisibilityGuideTables, ContinuationGuideFollowsRadianceTimesCosine) {
+    Fixture f;
+    make(f, 64, 32, 5u);
+    et::VisibilityOptions o;
+    o.slots = 4;
+    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.0f, 1.0f, 1.0f};
+    et::VisibilityCache cache(o, f.regions, 1.0, et::guide_portal_box(lo, hi));
+    const etk::float3 d1 = etk::normalize(etk::make_float3(0.2f, 0.9f, 0.1f));
+    const etk::float3 d2 = etk::normalize(etk::make_float3(-0.6f, 0.3f, -0.5f));
+    const int R1 = etk::etk_cguide_region(d1), R2 = etk::etk_cguide_region(d2);
+    ASSERT_NE(R1, R2);
+    const int slot = 1, n = 100;
+    std::vector<int> keys;
+    std::vector<float> values, rays;
+    for (int i = 0; i < 2 * n; ++i) {
+        const bool first = i < n;
+        const etk::float3 d = first ? d1 : d2;
+        keys.push_back(slot * K + (first ? R1 : R2));
+        values.push_back(2.0f);
+        const float r[8] = {0.5f, 0.5f, 0.5f, 0.0f,
+                            d.x,  d.y,  d.z,  static_cast<float>((first ? 0.9 : 0.3) / M_PI)};
+        rays.insert(rays.end(), r, r + 8);
+    }
+    cache.add_continuations(keys.data(), values.data(), rays.data(), static_cast<int>(keys.size()));
+    KernelView v(cache.tables(), o.slots, true);
+    const float* cdf = etk::etk_cguide_cdf(v.S, v.p, slot);
+    // P(R) = own S(R) / sum S + (1 - own) / K, own = 2n / (2n + n0).
+    const double own = 2.0 * n / (2.0 * n + o.prior), prior = (1.0 - own) / K;
+    EXPECT_NEAR(cdf[R1 + 1] - cdf[R1] - prior, own * 0.75, 1e-5);
+    EXPECT_NEAR(cdf[R2 + 1] - cdf[R2] - prior, own * 0.25, 1e-5);
+    EXPECT_NEAR(cdf[ETK_GUIDE_DIR_SHARE], o.continuation_share * own, 1e-6);
 }
 
 // A cell chooses its portal share from the records since the last update: min_records - 1 before

@@ -14,7 +14,10 @@
 namespace et {
 
 struct VisibilityOptions {
-    int slots = 1 << 14; // hash-grid cells (a power of two)
+    // Hash-grid cells (a power of two): 2^13 x 2 x 514 floats = 32 MiB of tables on the device
+    // (window_room's variance 0.00887 with 2^13, 0.00875 with 2^14 at twice the memory, 0.00915
+    // with 2^12: docs/results.md, issue 11).
+    int slots = 1 << 13;
     int resolution = 8;  // cells along the scene's longest side (few records per cell
                          // otherwise: measured in docs/results.md, issue 11)
     float alpha = 0.25f; // the map's defensive share of every light sample

@@ -167,14 +167,12 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
             continue;
         ++records;
         const double v = record_value(values[i]) * inv_scale_; // relative to the map's power
-        const int s = add_region(dir_, key, v);
+        const int s = key / K;
         const float* r = rays + 8 * static_cast<size_t>(i);
         const etk::float3 o = etk::make_float3(r[0], r[1], r[2]);
         const etk::float3 d = etk::make_float3(r[4], r[5], r[6]);
         float t;
         const int exit = etk::etk_portal_exit(spot, o, d, &t);
-        if (exit >= 0 && exit < ETK_PORTAL_CELLS)
-            cells.add(exit, fixed_point(v));
         // The densities the record was drawn with: the cell's guide, the spot table, the BSDF's.
         const float* dir = last_.data() + etk::etk_guide_dir_offset(opt_.slots, s);
         const float c = dir[ETK_GUIDE_DIR_SHARE];
@@ -186,6 +184,13 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
         const double pb =
             c < 1.0f ? std::max(0.0, (prec - etk::etk_cguide_mix(c, q, pg, ps, 0.0f)) / (1.0 - c))
                      : 0.0;
+        // What the tables learn: luminance(L_in) cos / p = pi p_b v (p_b = cos / pi at a diffuse
+        // vertex, the only kind that is guided), so that both tables follow the integrand's
+        // incident radiance x cosine rather than the radiance alone.
+        const double g = std::isfinite(pb) ? M_PI * pb * v : 0.0;
+        add_region(dir_, key, g);
+        if (exit >= 0 && exit < ETK_PORTAL_CELLS)
+            cells.add(exit, fixed_point(g));
         if (!(v > 0.0) || !(pb > 0.0) || !std::isfinite(prec * ps * pg))
             continue;
         // The continuation's estimate at a diffuse vertex, f cos L / p = albedo p_bsdf v (p_bsdf =

@@ -24,8 +24,11 @@
 // regions + the equal-area region of its direction, value luminance(L_in) / p of the direction,
 // with L_in the radiance the rest of the path brought back along it (the path's radiance at its
 // end less its radiance after the vertex, divided by the throughput after the vertex; MIS-weighted
-// as the path counted it, so sky the light sample already covers weighs less). Radiance, not
-// radiance x cos: the mixture's BSDF half brings the cosine. Per cell,
+// as the path counted it, so sky the light sample already covers weighs less). The sums take
+// luminance(L_in) cos / p = pi p_b v (p_b = cos / pi, recovered from the record's density as for
+// the secondary-source moments below): the guide follows the diffuse integrand, incident radiance
+// x cosine, not the radiance alone (radiance alone, before 2026-11-27, left 13% / 4% / 17% more
+// variance in window_room / skylight_room / the Cornell box: docs/results.md, issue 11). Per cell,
 // P(R) = n / (n + n0) S(R) / sum S + n0 / (n + n0) / K (uniform where it knows little) and the
 // guided share c = continuation_share x n / (n + n0), 0 where the cell saw no light come back.
 //
@@ -42,11 +45,12 @@
 // window takes b > 0. The sums are fixed point, so the choice is order-independent too.
 //
 // Secondary sources (kernels/continuation_guide.h): every continuation record also names the
-// cell of the box its ray leaves by (from its origin and direction); its value is summed there, a
-// second scene-wide table of the same layout: where the indirect light comes from (the sunlit
-// patch on a floor). Each hash-grid cell's share q of its guided continuations drawn from it is
-// chosen among options.spot_shares the same way, by the least second moment of the continuation
-// over the cell's records since the last update:
+// cell of the box its ray leaves by (from its origin and direction); its value (the same
+// luminance(L_in) cos / p, so a patch weighs by the light it sends to where it is seen from) is
+// summed there, a second scene-wide table of the same layout: where the indirect light comes from
+// (the sunlit patch on a floor). Each hash-grid cell's share q of its guided continuations drawn
+// from it is chosen among options.spot_shares the same way, by the least second moment of the
+// continuation over the cell's records since the last update:
 //   M(q) = sum v^2 p_rec p_b^2 / p_q,   p_q = c' ((1 - q) p_guide + q p_spot) + (1 - c') p_b,
 // v = luminance(L_in) / p_rec, the integrand f cos L_in being proportional to p_b luminance(L_in)
 // at a diffuse vertex (p_b = cos / pi), p_b recovered from the record's density and the tables it
