@@ -233,7 +233,8 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
         nlohmann::json counts = nlohmann::json::object();
         for (const auto& [n, cells] : s.guide_light_counts)
             counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
-        j["visibility"] = {{"learning_passes_extra", s.learning_passes},
+        j["visibility"] = {{"learning_passes", ds.guide_options.learning_passes},
+                           {"learning_passes_extra", s.learning_passes},
                            {"learning_seconds", s.guide_learning_seconds},
                            {"update_seconds", s.guide_update_seconds},
                            {"records", s.guide_records},

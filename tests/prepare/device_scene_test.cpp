@@ -12,6 +12,7 @@
 #include <cmath>
 #include <vector>
 #include <fstream>
+#include <tuple>
 
 namespace {
 
@@ -59,3 +60,30 @@ TEST(DeviceScene, FloatVectorsHoldNoIntBits) {
 }
 
 } // namespace
+
+// The visibility strategy's learning passes follow the film: enough passes to learn from about
+// learning_paths camera paths, 16 .. 64 of them (prepare/visibility_tables.h).
+TEST(DeviceScene, VisibilityLearningPassesFollowTheFilm) {
+    const et::VisibilityOptions o;
+    EXPECT_EQ(et::guide_learning_passes(o, 1), 64);
+    EXPECT_EQ(et::guide_learning_passes(o, 160 * 120), 64);
+    EXPECT_EQ(et::guide_learning_passes(o, 320 * 240), 32);
+    EXPECT_EQ(et::guide_learning_passes(o, 640 * 480), 16);
+    EXPECT_EQ(et::guide_learning_passes(o, int64_t(1) << 40), 16);
+    et::VisibilityOptions few = o;
+    few.min_learning_passes = few.max_learning_passes = 8;
+    EXPECT_EQ(et::guide_learning_passes(few, 1), 8);
+    const std::string dir = ett::scratch_dir("device-scene-learning");
+    for (const auto& [w, h, passes] :
+         {std::make_tuple(320, 240, 32), std::make_tuple(64, 48, 64)}) {
+        std::ofstream(dir + "/s.json")
+            << R"({"camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
+  "film": {"width": )"
+            << w << R"(, "height": )" << h << R"(},
+  "environment": {"sky": {"resolution": [64, 32]}},
+  "shapes": [{"type": "sphere"}], "render": {"strategy": "visibility", "max_depth": 3}})";
+        const et::Scene s = et::load_scene(dir + "/s.json");
+        const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+        EXPECT_EQ(ds.guide_options.learning_passes, passes) << w << " x " << h;
+    }
+}

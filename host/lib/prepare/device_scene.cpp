@@ -199,6 +199,8 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
         p.guide_origin[k] = lo[k];
     p.guide_inv_cell = static_cast<float>(opt.resolution) / longest;
     p.guide_slots = opt.slots;
+    d.guide_options.learning_passes =
+        guide_learning_passes(opt, static_cast<int64_t>(scene.width) * scene.height);
     // Shadow rays carry their record's key as a float value (integrator.h): exact below 2^24.
     if (static_cast<int64_t>(opt.slots) * ETK_GUIDE_REGIONS > (int64_t(1) << 24))
         throw Error("visibility options: " + std::to_string(opt.slots) +

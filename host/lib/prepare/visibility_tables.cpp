@@ -78,6 +78,14 @@ void write_guide_cdf(const std::vector<double>& prob, float* cdf) {
     cdf[K] = 1.0f;
 }
 
+int guide_learning_passes(const VisibilityOptions& options, int64_t pixels) {
+    int passes = std::max(1, options.min_learning_passes);
+    while (passes < options.max_learning_passes &&
+           static_cast<double>(passes) * static_cast<double>(pixels) < options.learning_paths)
+        passes *= 2;
+    return std::min(passes, std::max(1, options.max_learning_passes));
+}
+
 size_t guide_cells_size(int slots, bool continuation) {
     return static_cast<size_t>(slots) *
                (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0)) +

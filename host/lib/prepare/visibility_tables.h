@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace et {
@@ -21,9 +22,15 @@ struct VisibilityOptions {
     int resolution = 8;  // cells along the scene's longest side (few records per cell
                          // otherwise: measured in docs/results.md, issue 11)
     float alpha = 0.25f; // the map's defensive share of every light sample
-    // Samples 0 .. 63 record shadow rays and continuations (16: 1.78x -> 64: 2.17x MIS's
-    // efficiency on the interiors; docs/results.md, issue 11).
+    // Samples 0 .. L-1 record shadow rays and continuations, L = learning_passes; preparation
+    // sets it for the film (guide_learning_passes): as many passes as learn from about
+    // learning_paths camera paths, within [min_learning_passes, max_learning_passes]. The tables
+    // saturate: at 320 x 240 (76,800 paths a pass) 16, 32 and 64 passes leave window_room's
+    // variance within 3% while each learning pass costs ~1.3 steady ones; at 80 x 60, 16 passes
+    // gave 1.78x MIS's efficiency and 64 2.17x (docs/results.md, issue 11).
     int learning_passes = 64;
+    int min_learning_passes = 16, max_learning_passes = 64;
+    double learning_paths = 2.0e6;
     double prior = 32.0; // n0: records a cell needs before its own sums weigh half
     // Records a cell needs of a kind before it makes its own choices below (its portal share, its
     // secondary-source share, its light-sample count); until then it keeps the default.
@@ -62,6 +69,11 @@ std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, in
 
 // The map's power (luminance over the sphere), the unit the learning's fixed point is relative to.
 double guide_map_power(const std::vector<float>& rgb, int w, int h);
+
+// The learning passes of a film of `pixels` pixels: the first of min_learning_passes, twice that,
+// four times ... whose passes trace at least options.learning_paths camera paths, at most
+// max_learning_passes (320 x 240: 32; 160 x 120 and smaller: 64; 640 x 480 and larger: 16).
+int guide_learning_passes(const VisibilityOptions& options, int64_t pixels);
 
 // Floats of the cells' tables (EtkScene.guide_cells): the light sample's, then the continuation
 // guide's if it is on (kernels/visibility_guide.h), the portal table, and with the continuation
