@@ -186,7 +186,9 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
                      : 0.0;
         // What the tables learn: luminance(L_in) cos / p = pi p_b v (p_b = cos / pi at a diffuse
         // vertex, the only kind that is guided), so that both tables follow the integrand's
-        // incident radiance x cosine rather than the radiance alone.
+        // incident radiance x cosine rather than the radiance alone. A glossy vertex's record,
+        // drawn from its lobe alone (p_rec = its p_b, but recovered here with the cell's share c),
+        // weighs at most pi luminance(L_in) / (1 - c): bounded, as its radiance alone weighed.
         const double g = std::isfinite(pb) ? M_PI * pb * v : 0.0;
         add_region(dir_, key, g);
         if (exit >= 0 && exit < ETK_PORTAL_CELLS)
