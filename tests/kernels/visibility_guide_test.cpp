@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <random>
 #include <utility>
 #include <vector>
@@ -521,15 +522,26 @@ TEST(VisibilityGuideTables, LightSampleCountFollowsTheModel) {
     EXPECT_EQ(et::light_sample_count(0.0, 0.0, 0.25, n, 4), 1.0); // no light at all: a tie too
 }
 
+// Options of four slots, and a cache of them over a 64 x 32 map (f) in the unit cube's box.
+et::VisibilityOptions four_slots(bool continuation = true) {
+    et::VisibilityOptions o;
+    o.slots = 4;
+    o.continuation = continuation;
+    return o;
+}
+std::unique_ptr<et::VisibilityCache> small_cache(Fixture& f, const et::VisibilityOptions& o) {
+    make(f, 64, 32, 5u);
+    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.0f, 1.0f, 1.0f};
+    return std::make_unique<et::VisibilityCache>(o, f.regions, 1.0, et::guide_portal_box(lo, hi));
+}
+
 // Each cell's light-sample count in the tables the kernels read (etk_guide_light_count): the
 // model's choice where both kinds of records are plentiful, 1 elsewhere.
 TEST(VisibilityGuideTables, LightSampleCountPerCell) {
     Fixture f;
-    make(f, 64, 32, 5u);
-    et::VisibilityOptions o;
-    o.slots = 4;
-    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.0f, 1.0f, 1.0f};
-    et::VisibilityCache cache(o, f.regions, 1.0, et::guide_portal_box(lo, hi));
+    const et::VisibilityOptions o = four_slots();
+    const std::unique_ptr<et::VisibilityCache> owned = small_cache(f, o);
+    et::VisibilityCache& cache = *owned;
     // Slot 0: every shadow ray blocked, light comes back along the continuations. Slot 1: bright
     // unblocked light samples, dim continuations. Slot 2: blocked, but too few light records.
     // Slot 3: no records.
@@ -580,11 +592,9 @@ TEST(VisibilityGuideTables, LightSampleCountPerCell) {
 // probabilities 3 : 1 -- radiance alone would make them equal.
 TEST(VisibilityGuideTables, ContinuationGuideFollowsRadianceTimesCosine) {
     Fixture f;
-    make(f, 64, 32, 5u);
-    et::VisibilityOptions o;
-    o.slots = 4;
-    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.0f, 1.0f, 1.0f};
-    et::VisibilityCache cache(o, f.regions, 1.0, et::guide_portal_box(lo, hi));
+    const et::VisibilityOptions o = four_slots();
+    const std::unique_ptr<et::VisibilityCache> owned = small_cache(f, o);
+    et::VisibilityCache& cache = *owned;
     const etk::float3 d1 = etk::normalize(etk::make_float3(0.2f, 0.9f, 0.1f));
     const etk::float3 d2 = etk::normalize(etk::make_float3(-0.6f, 0.3f, -0.5f));
     const int R1 = etk::etk_cguide_region(d1), R2 = etk::etk_cguide_region(d2);
@@ -615,12 +625,9 @@ TEST(VisibilityGuideTables, ContinuationGuideFollowsRadianceTimesCosine) {
 // it and one after are too few (the share stays 0), min_records after the next are enough.
 TEST(VisibilityGuideTables, SharesCountTheRecordsSinceTheLastUpdate) {
     Fixture f;
-    make(f, 64, 32, 5u);
-    et::VisibilityOptions o;
-    o.slots = 4;
-    o.continuation = false;
-    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.0f, 1.0f, 1.0f};
-    et::VisibilityCache cache(o, f.regions, 1.0, et::guide_portal_box(lo, hi));
+    const et::VisibilityOptions o = four_slots(false);
+    const std::unique_ptr<et::VisibilityCache> owned = small_cache(f, o);
+    et::VisibilityCache& cache = *owned;
     // Unblocked records of slot 0 whose direction the portal table draws 100 times more often
     // than the cell's mixture: the largest portal share has the least second moment.
     auto records = [&](int n) {
