@@ -21,7 +21,11 @@ struct VisibilityOptions {
     int slots = 1 << 13;
     int resolution = 8;  // cells along the scene's longest side (few records per cell
                          // otherwise: measured in docs/results.md, issue 11)
-    float alpha = 0.25f; // the map's defensive share of every light sample
+    // The map's defensive share of every light sample (light samples weigh at most 1 / alpha
+    // times the map's own). 0.25 until 2026-11-27; with 16 x 32 regions 0.1 leaves 7-8% less
+    // variance in window_room (320 x 240 and 160 x 120), skylight_room and the Cornell box, 4% on
+    // bunny_grace, the same at 80 x 60 (docs/results.md, issue 11).
+    float alpha = 0.1f;
     // Samples 0 .. L-1 record shadow rays and continuations, L = learning_passes; preparation
     // sets it for the film (guide_learning_passes): as many passes as learn from about
     // learning_paths camera paths, within [min_learning_passes, max_learning_passes]. The tables
