@@ -278,6 +278,43 @@ ETK_FN void etk_env_radiance_batch(ETK_GLOBAL const float* texels, EtkEnvMap env
     }
 }
 
+// A batch of light samples as the sample_lights stage stores them (integrator.h): direction,
+// density, radiance and cell of each, from the sample values (xu, xv). Also drawn by
+// kernels/envmap_sample.cl, so a test can compare a device's batch with its one-by-one samples.
+// Interleaved natively and on CPU devices (ETK_CPU_DEVICE), where the batch exists for their
+// caches; one sample after another on other OpenCL devices: on an NVIDIA H200 (driver
+// 580.159.04) the interleaved steps inside the wavefront program drew wrong samples -- images
+// 10% dark, different from run to run -- though the same functions pass in a small kernel
+// (EnvmapSampling tests) and the sample_lights stage drawing one by one gives the shade stage's
+// own bits (README, "A GPU"). A GPU hides the latency with other work-items anyway.
+ETK_CL_INLINE_FN void etk_env_light_batch(ETK_GLOBAL const float* dist,
+                                          ETK_GLOBAL const float* texels, EtkEnvMap env,
+                                          const float* xu, const float* xv, float* dx, float* dy,
+                                          float* dz, float* pdf, float* Lr, float* Lg, float* Lb,
+                                          int* row, int* col) {
+#if defined(ETK_OPENCL_C) && !defined(ETK_CPU_DEVICE)
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
+        EtkEnvSample e = etk_env_sample(dist, env, make_float2(xu[k], xv[k]));
+        float3 L = etk_env_radiance_uv(texels, env, e.uv);
+        dx[k] = e.dir.x;
+        dy[k] = e.dir.y;
+        dz[k] = e.dir.z;
+        pdf[k] = e.pdf;
+        Lr[k] = L.x;
+        Lg[k] = L.y;
+        Lb[k] = L.z;
+        row[k] = e.row;
+        col[k] = e.col;
+    }
+#else
+    // Arrays of scalars (etk_env_sample_batch_uv): the loops vectorise on PoCL too.
+    float u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pdf_uv[ETK_LIGHT_BATCH];
+    etk_env_sample_batch_uv(dist, env, xu, xv, u, v, pdf_uv, row, col);
+    etk_env_sample_batch_dir(env, u, v, pdf_uv, dx, dy, dz, pdf);
+    etk_env_radiance_batch(texels, env, u, v, Lr, Lg, Lb);
+#endif
+}
+
 ETK_END
 
 #endif

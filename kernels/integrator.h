@@ -280,14 +280,11 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
         xu[k] = xi.x;
         xv[k] = xi.y;
     }
-    // Arrays of scalars (etk_env_sample_batch_uv): the loops vectorise on PoCL too.
-    float u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pdf_uv[ETK_LIGHT_BATCH];
     float dx[ETK_LIGHT_BATCH], dy[ETK_LIGHT_BATCH], dz[ETK_LIGHT_BATCH], pdf[ETK_LIGHT_BATCH];
     float Lr[ETK_LIGHT_BATCH], Lg[ETK_LIGHT_BATCH], Lb[ETK_LIGHT_BATCH];
     int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH];
-    etk_env_sample_batch_uv(etk_light_dist(S, p), p.env, xu, xv, u, v, pdf_uv, row, col);
-    etk_env_sample_batch_dir(p.env, u, v, pdf_uv, dx, dy, dz, pdf);
-    etk_env_radiance_batch(S.env_texels, p.env, u, v, Lr, Lg, Lb);
+    etk_env_light_batch(etk_light_dist(S, p), S.env_texels, p.env, xu, xv, dx, dy, dz, pdf, Lr, Lg,
+                        Lb, row, col);
     for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) {
         int slot = Q.shade[first + k];
         P.light_dir[slot] = make_float4(dx[k], dy[k], dz[k], pdf[k]);

@@ -1,6 +1,8 @@
 // The OpenCL sampling kernel (EnvSamplerCL on PoCL) against the host reference built from the
 // same shared headers (sample_env_host), on identical uniforms: same cells, same directions,
-// densities and radiance up to the device's float rounding.
+// densities and radiance up to the device's float rounding. And the device's batches of light
+// samples (the sample_lights stage's etk_env_light_batch) against its own samples one by one: the
+// same bits, field by field, so that --light-batch never changes an image on any device.
 #include "render/env_sampling.h"
 #include "kernels/piecewise_constant.h"
 #include "test_data.h"
@@ -8,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 namespace {
@@ -81,6 +84,36 @@ void compare_kernel_and_host(const std::string& name, const et::EnvMap& env) {
     EXPECT_EQ(radiance_off, 0u) << "radiance channels differing by more than 1e-5 relative";
     std::printf("%s: %zu of %zu radiance channels differ by more than 1e-5 relative\n",
                 name.c_str(), radiance_off, 3 * dev.size());
+
+    const auto batched = cl.sample_uniforms_batched(uniforms);
+    ASSERT_EQ(batched.size(), dev.size());
+    static const char* const kField[] = {"dir.x", "dir.y", "dir.z", "pdf", "L.r",
+                                         "L.g",   "L.b",   "pad",   "row", "col"};
+    int differ[10] = {}, shown = 0;
+    for (size_t i = 0; i < dev.size(); ++i) {
+        const auto &a = batched[i], &b = dev[i];
+        for (int f = 0; f < 10; ++f) {
+            const bool same = f < 8 ? std::memcmp(&a.dir[0] + f, &b.dir[0] + f, 4) == 0
+                                    : (f == 8 ? a.row == b.row : a.col == b.col);
+            if (!same && ++differ[f] && shown < 5) {
+                ++shown;
+                ADD_FAILURE() << "uniform (" << uniforms[2 * i] << ", " << uniforms[2 * i + 1]
+                              << "): batched " << kField[f] << " "
+                              << (f < 8 ? double((&a.dir[0])[f]) : double(f == 8 ? a.row : a.col))
+                              << ", one by one "
+                              << (f < 8 ? double((&b.dir[0])[f]) : double(f == 8 ? b.row : b.col));
+            }
+        }
+    }
+    for (int f = 0; f < 10; ++f)
+        EXPECT_EQ(differ[f], 0) << kField[f] << ": batched samples differing from one-by-one ones";
+    // For the record (README, "A GPU"): how many of the device's values are not the host's bits
+    // (allowed above within rounding; the renders compare whole images).
+    size_t not_host = 0;
+    for (size_t i = 0; i < dev.size(); ++i)
+        not_host += std::memcmp(&dev[i], &host[i], sizeof(host[i])) != 0;
+    std::printf("%s: %zu of %zu device samples differ from the host's in some bit\n", name.c_str(),
+                not_host, dev.size());
 }
 
 TEST(EnvmapSampling, KernelMatchesHostSyntheticBlock) {

@@ -7,7 +7,8 @@
 #   tools/gpu/check_opencl_device.sh ENVTRACE TEST_BIN_DIR|- OUT_DIR [PLATFORM]
 #
 # PLATFORM (default NVIDIA) is matched against the OpenCL platform names (ENVTRACE_CL_PLATFORM).
-# Environment: SCENES, SPP (64), BATCH_SCENES and BATCH_SPP (256: --light-batch on against off),
+# Environment: SCENES, SPP (64), STRATEGIES (the scene's own; e.g. "mis visibility" renders each
+# scene with each), BATCH_SCENES and BATCH_SPP (256: --light-batch on against off),
 # BENCH_SCENES choose the work (each set but empty: none); TEST_JOBS (6) test binaries run at
 # once, each for at most TEST_TIMEOUT seconds (600); PYTHON names a python3 with numpy.
 # ENVTRACE_DATA must name the data folder (maps and meshes). Writes OUT_DIR/summary.txt (and a
@@ -60,10 +61,10 @@ if [ "$tests" != "-" ]; then
 fi
 
 # Renders: each scene at depth 1 and 5 on the GPU, on PoCL and natively, same seed and spp.
-render() { # name scene depth backend platform seed
+render() { # name scene depth backend platform seed [strategy]
     local o=$out/img/$1.pfm
     ENVTRACE_CL_PLATFORM=$5 "$exe" render "$2" --spp "${SPP:-64}" --max-depth "$3" --backend "$4" \
-        --seed "$6" -o "$o" --stats "$out/img/$1.json" >"$out/img/$1.log" 2>&1 ||
+        --seed "$6" ${7:+--strategy "$7"} -o "$o" --stats "$out/img/$1.json" >"$out/img/$1.log" 2>&1 ||
         say "FAILED: render $1 ($(tail -1 "$out/img/$1.log"))"
 }
 stat() { # json key
@@ -71,12 +72,14 @@ stat() { # json key
 }
 say "== renders: $platform / PoCL ($has_pocl) / native, ${SPP:-64} spp"
 for s in ${SCENES-default cornell_box bunny_grace bunny_esplanade bunny_overpass ogre matpreview glass mesh_formats interiors/window_room interiors/skylight_room}; do
+  for st in ${STRATEGIES:-scene}; do
+    [ "$st" = scene ] && st=
     for d in 1 5; do
-        n=$(echo "$s" | tr / _)_d$d
-        render "$n.gpu" "$root/scenes/$s.json" $d opencl "$platform" 1
-        render "$n.cpu" "$root/scenes/$s.json" $d cpu "" 1
-        render "$n.cpu2" "$root/scenes/$s.json" $d cpu "" 2
-        [ $has_pocl = 1 ] && render "$n.pocl" "$root/scenes/$s.json" $d opencl portable 1
+        n=$(echo "$s" | tr / _)${st:+_$st}_d$d
+        render "$n.gpu" "$root/scenes/$s.json" $d opencl "$platform" 1 $st
+        render "$n.cpu" "$root/scenes/$s.json" $d cpu "" 1 $st
+        render "$n.cpu2" "$root/scenes/$s.json" $d cpu "" 2 $st
+        [ $has_pocl = 1 ] && render "$n.pocl" "$root/scenes/$s.json" $d opencl portable 1 $st
         line="$n: gpu $(stat "$out/img/$n.gpu.json" mrays_per_second) Mrays/s build $(stat "$out/img/$n.gpu.json" program_build_seconds) s (cached $(stat "$out/img/$n.gpu.json" program_from_cache)); cpu $(stat "$out/img/$n.cpu.json" mrays_per_second) Mrays/s"
         [ $has_pocl = 1 ] && line="$line; pocl $(stat "$out/img/$n.pocl.json" mrays_per_second) Mrays/s"
         say "$line"
@@ -84,6 +87,7 @@ for s in ${SCENES-default cornell_box bunny_grace bunny_esplanade bunny_overpass
         [ $has_pocl = 1 ] && say "   gpu vs pocl: $("$py" "$here/compare_backends.py" $d "$out/img/$n.pocl.pfm" "$out/img/$n.gpu.pfm" "$out/img/$n.cpu.pfm" "$out/img/$n.cpu2.pfm" 2>&1)"
         [ $has_pocl = 1 ] && say "   pocl vs cpu: $("$py" "$here/compare_backends.py" $d "$out/img/$n.cpu.pfm" "$out/img/$n.pocl.pfm" "$out/img/$n.cpu.pfm" "$out/img/$n.cpu2.pfm" 2>&1)"
     done
+  done
 done
 
 # Light samples in batches (--light-batch on) against one at a time (off) on this device:

@@ -2,6 +2,7 @@
 #include "util/parallel.h"
 
 #include "util/error.h"
+#include "kernels/envmap.h"
 #include "kernels/sampler.h"
 
 #include <algorithm>
@@ -33,19 +34,21 @@ EnvSamplerCL::EnvSamplerCL(ClRuntime& rt, const EnvMap& env, ProgramBuildInfo* b
                              env.image.rgb.size() * sizeof(float),
                              const_cast<float*>(env.image.rgb.data()));
         uniforms_kernel_ = cl::Kernel(program_, "envmap_sample_uniforms");
+        batched_kernel_ = cl::Kernel(program_, "envmap_sample_uniforms_batched");
         sequence_kernel_ = cl::Kernel(program_, "envmap_sample_sequence");
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot set up the sampling kernels: ") + e.what() + ": " +
                     cl_error_name(e.err()));
     }
-    for (cl::Kernel* k : {&uniforms_kernel_, &sequence_kernel_}) {
+    for (cl::Kernel* k : {&uniforms_kernel_, &batched_kernel_, &sequence_kernel_}) {
         k->setArg(0, dist_);
         k->setArg(1, texels_);
         k->setArg(2, sizeof(desc_), &desc_);
     }
 }
 
-std::vector<EnvSampleRecord> EnvSamplerCL::run(cl::Kernel& k, int n, int out_arg) {
+// n samples from `items` work-items.
+std::vector<EnvSampleRecord> EnvSamplerCL::run(cl::Kernel& k, int n, int items, int out_arg) {
     std::vector<EnvSampleRecord> result(n);
     if (n == 0)
         return result;
@@ -56,7 +59,7 @@ std::vector<EnvSampleRecord> EnvSamplerCL::run(cl::Kernel& k, int n, int out_arg
         k.setArg(out_arg + 1, cells);
         const size_t local = choose_local_size(k, rt_.device().device, rt_.limits());
         rt_.queue().enqueueNDRangeKernel(
-            k, cl::NullRange, cl::NDRange((n + local - 1) / local * local), cl::NDRange(local));
+            k, cl::NullRange, cl::NDRange((items + local - 1) / local * local), cl::NDRange(local));
         std::vector<float> o(8 * static_cast<size_t>(n));
         std::vector<int> c(2 * static_cast<size_t>(n));
         rt_.queue().enqueueReadBuffer(out, CL_FALSE, 0, o.size() * sizeof(float), o.data());
@@ -80,7 +83,18 @@ std::vector<EnvSampleRecord> EnvSamplerCL::sample_uniforms(const std::vector<flo
                  uniforms.empty() ? nullptr : const_cast<float*>(uniforms.data()));
     uniforms_kernel_.setArg(3, u);
     uniforms_kernel_.setArg(4, n);
-    return run(uniforms_kernel_, n, 5);
+    return run(uniforms_kernel_, n, n, 5);
+}
+
+std::vector<EnvSampleRecord>
+EnvSamplerCL::sample_uniforms_batched(const std::vector<float>& uniforms) {
+    const int n = static_cast<int>(uniforms.size() / 2);
+    cl::Buffer u(rt_.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                 std::max<size_t>(1, uniforms.size()) * sizeof(float),
+                 uniforms.empty() ? nullptr : const_cast<float*>(uniforms.data()));
+    batched_kernel_.setArg(3, u);
+    batched_kernel_.setArg(4, n);
+    return run(batched_kernel_, n, (n + ETK_LIGHT_BATCH - 1) / ETK_LIGHT_BATCH, 5);
 }
 
 std::vector<EnvSampleRecord> EnvSamplerCL::sample_sequence(int sampler, uint32_t seed,
@@ -90,7 +104,7 @@ std::vector<EnvSampleRecord> EnvSamplerCL::sample_sequence(int sampler, uint32_t
     sequence_kernel_.setArg(5, stream);
     sequence_kernel_.setArg(6, first);
     sequence_kernel_.setArg(7, n);
-    return run(sequence_kernel_, n, 8);
+    return run(sequence_kernel_, n, n, 8);
 }
 
 std::vector<EnvSampleRecord> sample_env_host(const EnvMap& env,

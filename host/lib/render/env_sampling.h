@@ -22,15 +22,17 @@ class EnvSamplerCL {
     EnvSamplerCL(ClRuntime& rt, const EnvMap& env, ProgramBuildInfo* build = nullptr);
 
     std::vector<EnvSampleRecord> sample_uniforms(const std::vector<float>& uniforms);
+    // The same, ETK_LIGHT_BATCH samples per work-item as the sample_lights stage draws them.
+    std::vector<EnvSampleRecord> sample_uniforms_batched(const std::vector<float>& uniforms);
     std::vector<EnvSampleRecord> sample_sequence(int sampler, uint32_t seed, uint32_t stream,
                                                  uint32_t first, int n);
 
   private:
-    std::vector<EnvSampleRecord> run(cl::Kernel& k, int n, int out_arg);
+    std::vector<EnvSampleRecord> run(cl::Kernel& k, int n, int items, int out_arg);
     ClRuntime& rt_;
     etk::EtkEnvMap desc_;
     cl::Buffer dist_, texels_;
-    cl::Kernel uniforms_kernel_, sequence_kernel_;
+    cl::Kernel uniforms_kernel_, batched_kernel_, sequence_kernel_;
     cl::Program program_;
 };
 

@@ -167,6 +167,11 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
         for (int l = 0; l < lanes_used; ++l)
             lanes_.push_back(
                 std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_));
+        uint64_t widest = etk::ETK_Q_COUNT; // zero_words: the counters, the film's fields
+#define ET_FILM_WORDS(type, name) widest = std::max<uint64_t>(widest, sizeof(type) / 4 * px);
+        ETK_FILM_FIELDS(ET_FILM_WORDS)
+#undef ET_FILM_WORDS
+        lanes_[0]->prime_kernels(paths_, widest);
         clear_film(true);
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot set up the OpenCL renderer (") + e.what() +
@@ -192,6 +197,34 @@ void ClLane::zero_words(const cl::Buffer& buffer, uint64_t words) {
     queue_.enqueueNDRangeKernel(zero_, cl::NullRange,
                                 cl::NDRange((words + zero_local_ - 1) / zero_local_ * zero_local_),
                                 cl::NDRange(zero_local_));
+}
+
+// PoCL 5.0's CPU driver keeps a loaded work-group function per kernel, work-group size and
+// grid width: a launch reuses the first one whose width is at least its own, else loads
+// another. Its release looks the function up again by kernel and work-group size alone, so
+// with two of them for one kernel and launches in flight from two queues (the lanes), a
+// completed launch can release the other's and the next release fails an assertion
+// (pocl_release_dlhandle_cache, lib/CL/devices/common.c): measured, 15 of 16 renders with two
+// lanes aborted. One launch of each kernel at its widest range before any other makes that
+// function the only one, found first by every later launch. On other devices: a few empty
+// launches per renderer.
+void ClLane::prime_kernels(int paths, uint64_t words) {
+    bind_queues(false);
+    const etk::EtkParams params{};
+    for (size_t s = 0; s < kernels_.size(); ++s) {
+        kernels_[s].setArg(etk::ETK_ARG_params, sizeof(params), &params);
+        kernels_[s].setArg(etk::ETK_ARG_n, 0); // no work-item does anything
+        const size_t local = local_[s];
+        queue_.enqueueNDRangeKernel(kernels_[s], cl::NullRange,
+                                    cl::NDRange((paths + local - 1) / local * local),
+                                    cl::NDRange(local));
+    }
+    zero_.setArg(0, args_[etk::ETK_ARG_counters]);
+    zero_.setArg(1, 0);
+    queue_.enqueueNDRangeKernel(zero_, cl::NullRange,
+                                cl::NDRange((words + zero_local_ - 1) / zero_local_ * zero_local_),
+                                cl::NDRange(zero_local_));
+    queue_.finish();
 }
 
 void ClLane::finish() {

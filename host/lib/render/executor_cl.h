@@ -56,6 +56,9 @@ class ClLane : public StageExecutor {
     void launch(int stage, int n, const etk::EtkParams& params) override;
 
     void zero_words(const cl::Buffer& buffer, uint64_t words);
+    // Launches every kernel once, doing nothing, over the widest range it will ever be given:
+    // `paths` work-items for the stages, `words` for zero_words (kernel_priming below).
+    void prime_kernels(int paths, uint64_t words);
     void finish();
     cl::CommandQueue& queue() { return queue_; }
     size_t pending_events() const { return pending_.size(); }
