@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <random>
 
@@ -87,21 +88,25 @@ void compare_kernel_and_host(const std::string& name, const et::EnvMap& env) {
 
     const auto batched = cl.sample_uniforms_batched(uniforms);
     ASSERT_EQ(batched.size(), dev.size());
+    static_assert(sizeof(et::EnvSampleRecord) == 10 * 4, "eight floats and two ints");
     static const char* const kField[] = {"dir.x", "dir.y", "dir.z", "pdf", "L.r",
                                          "L.g",   "L.b",   "pad",   "row", "col"};
     int differ[10] = {}, shown = 0;
     for (size_t i = 0; i < dev.size(); ++i) {
-        const auto &a = batched[i], &b = dev[i];
+        // The record's eight floats (dir, pdf, radiance, pad) and two ints, as raw bits.
+        uint32_t a[10], b[10];
+        std::memcpy(a, &batched[i], sizeof(a));
+        std::memcpy(b, &dev[i], sizeof(b));
         for (int f = 0; f < 10; ++f) {
-            const bool same = f < 8 ? std::memcmp(&a.dir[0] + f, &b.dir[0] + f, 4) == 0
-                                    : (f == 8 ? a.row == b.row : a.col == b.col);
-            if (!same && ++differ[f] && shown < 5) {
+            if (a[f] != b[f] && ++differ[f] && shown < 5) {
                 ++shown;
+                float fa, fb;
+                std::memcpy(&fa, &a[f], 4);
+                std::memcpy(&fb, &b[f], 4);
                 ADD_FAILURE() << "uniform (" << uniforms[2 * i] << ", " << uniforms[2 * i + 1]
                               << "): batched " << kField[f] << " "
-                              << (f < 8 ? double((&a.dir[0])[f]) : double(f == 8 ? a.row : a.col))
-                              << ", one by one "
-                              << (f < 8 ? double((&b.dir[0])[f]) : double(f == 8 ? b.row : b.col));
+                              << (f < 8 ? double(fa) : double(int32_t(a[f]))) << ", one by one "
+                              << (f < 8 ? double(fb) : double(int32_t(b[f])));
             }
         }
     }

@@ -76,25 +76,25 @@ std::vector<EnvSampleRecord> EnvSamplerCL::run(cl::Kernel& k, int n, int items, 
     return result;
 }
 
-std::vector<EnvSampleRecord> EnvSamplerCL::sample_uniforms(const std::vector<float>& uniforms) {
+// The uniforms' samples, `per_item` of them per work-item.
+std::vector<EnvSampleRecord>
+EnvSamplerCL::run_uniforms(cl::Kernel& k, const std::vector<float>& uniforms, int per_item) {
     const int n = static_cast<int>(uniforms.size() / 2);
     cl::Buffer u(rt_.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
                  std::max<size_t>(1, uniforms.size()) * sizeof(float),
                  uniforms.empty() ? nullptr : const_cast<float*>(uniforms.data()));
-    uniforms_kernel_.setArg(3, u);
-    uniforms_kernel_.setArg(4, n);
-    return run(uniforms_kernel_, n, n, 5);
+    k.setArg(3, u);
+    k.setArg(4, n);
+    return run(k, n, (n + per_item - 1) / per_item, 5);
+}
+
+std::vector<EnvSampleRecord> EnvSamplerCL::sample_uniforms(const std::vector<float>& uniforms) {
+    return run_uniforms(uniforms_kernel_, uniforms, 1);
 }
 
 std::vector<EnvSampleRecord>
 EnvSamplerCL::sample_uniforms_batched(const std::vector<float>& uniforms) {
-    const int n = static_cast<int>(uniforms.size() / 2);
-    cl::Buffer u(rt_.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                 std::max<size_t>(1, uniforms.size()) * sizeof(float),
-                 uniforms.empty() ? nullptr : const_cast<float*>(uniforms.data()));
-    batched_kernel_.setArg(3, u);
-    batched_kernel_.setArg(4, n);
-    return run(batched_kernel_, n, (n + ETK_LIGHT_BATCH - 1) / ETK_LIGHT_BATCH, 5);
+    return run_uniforms(batched_kernel_, uniforms, ETK_LIGHT_BATCH);
 }
 
 std::vector<EnvSampleRecord> EnvSamplerCL::sample_sequence(int sampler, uint32_t seed,

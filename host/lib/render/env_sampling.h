@@ -29,6 +29,8 @@ class EnvSamplerCL {
 
   private:
     std::vector<EnvSampleRecord> run(cl::Kernel& k, int n, int items, int out_arg);
+    std::vector<EnvSampleRecord> run_uniforms(cl::Kernel& k, const std::vector<float>& uniforms,
+                                              int per_item);
     ClRuntime& rt_;
     etk::EtkEnvMap desc_;
     cl::Buffer dist_, texels_;

@@ -57,7 +57,7 @@ class ClLane : public StageExecutor {
 
     void zero_words(const cl::Buffer& buffer, uint64_t words);
     // Launches every kernel once, doing nothing, over the widest range it will ever be given:
-    // `paths` work-items for the stages, `words` for zero_words (kernel_priming below).
+    // `paths` work-items for the stages, `words` for zero_words (why: executor_cl.cpp).
     void prime_kernels(int paths, uint64_t words);
     void finish();
     cl::CommandQueue& queue() { return queue_; }
