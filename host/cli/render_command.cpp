@@ -208,6 +208,7 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                     {"precompute_seconds", sis.seconds},
                     {"level_samples", sis.level_samples}};
     j["sampler"] = name_of(st.sampler);
+    j["mis_heuristic"] = name_of(resolved_heuristic(st));
     j["bsdf_sampling"] = name_of(resolved_bsdf_sampling(st));
     j["light_batch"] = renderer.batches_light_samples();
     j["light_samples"] = st.light_samples; // per vertex (mis splitting; 1: the paper's)
@@ -571,7 +572,7 @@ void run(const RenderArgs& a, Globals& g) {
                 {"envtrace:interrupted", sig ? signal_name(sig) : "no"},
                 {"envtrace:resumed_from_spp", std::to_string(resumed_from)},
                 {"envtrace:strategy", name_of(st.strategy)},
-                {"envtrace:mis_heuristic", name_of(st.heuristic)},
+                {"envtrace:mis_heuristic", name_of(resolved_heuristic(st))},
                 {"envtrace:sampler", name_of(st.sampler)},
                 {"envtrace:bsdf_sampling", name_of(resolved_bsdf_sampling(st))},
                 {"envtrace:seed", std::to_string(st.seed)},
@@ -687,7 +688,8 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "default 1)");
     cmd->add_option("--lights", a->lights,
                     "Render with this directional light set ('envtrace lights'), natively");
-    cmd->add_option("--mis-heuristic", a->heuristic, "balance | power")
+    cmd->add_option("--mis-heuristic", a->heuristic,
+                    "auto | balance | power (auto: balance for visibility, else power)")
         ->check(CLI::IsMember(heuristic_names()));
     cmd->add_option("--sampler", a->sampler, "sobol | random")
         ->check(CLI::IsMember(sampler_names()));

@@ -38,6 +38,26 @@ TEST(RenderSettings, ValuesAreTheKernelCodes) {
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
     EXPECT_EQ(static_cast<int>(et::parse_sampler("sobol", "t")), ETK_SAMPLER_SOBOL);
     EXPECT_EQ(static_cast<int>(et::parse_heuristic("power", "t")), ETK_HEURISTIC_POWER);
+    EXPECT_EQ(static_cast<int>(et::parse_heuristic("balance", "t")), ETK_HEURISTIC_BALANCE);
+}
+
+TEST(RenderSettings, AutomaticHeuristicIsPowerButForTheVisibilityStrategy) {
+    // The paper's estimator (mis) keeps the power heuristic; the visibility strategy weighs its
+    // learned samples by the balance heuristic; a heuristic given is kept for every strategy.
+    et::RenderSettings st;
+    EXPECT_EQ(st.heuristic, et::MisHeuristic::automatic);
+    for (const auto& n : et::strategy_names()) {
+        st.strategy = et::parse_strategy(n, "t");
+        EXPECT_EQ(et::resolved_heuristic(st), st.strategy == et::Strategy::visibility
+                                                  ? et::MisHeuristic::balance
+                                                  : et::MisHeuristic::power)
+            << n;
+    }
+    st.heuristic = et::MisHeuristic::power;
+    EXPECT_EQ(et::resolved_heuristic(st), et::MisHeuristic::power);
+    st.strategy = et::Strategy::mis;
+    st.heuristic = et::MisHeuristic::balance;
+    EXPECT_EQ(et::resolved_heuristic(st), et::MisHeuristic::balance);
 }
 
 TEST(RenderSettings, LightShares) {

@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -125,6 +126,44 @@ TEST(OpenClRuntime, DivisionAndSqrtRoundAsOnTheHost) {
     EXPECT_EQ(r_off, 0u) << "square roots differing from the host's, of " << n;
 }
 
+// The lines of a build log that warn about the source, in any case (NVIDIA writes "Warning:"),
+// less one line NVIDIA's drivers since 550 write for every kernel of a program, "Warning:
+// Function NAME is a kernel, so overriding noinline attribute. The function may be inlined when
+// called." -- about the driver's own attribute, with or without any noinline in the source (the
+// H200 wrote it for wavefront.cl, whose GPU build has none; pyFAI, John the Ripper and others
+// report it with the same words, and no change to their sources silenced it).
+static std::string source_warnings(const std::string& log) {
+    std::istringstream in(log);
+    std::string line, found;
+    while (std::getline(in, line)) {
+        std::string lower = line;
+        std::transform(lower.begin(), lower.end(), lower.begin(),
+                       [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        if (lower.find("warning") == std::string::npos)
+            continue;
+        static const std::regex nvidia(
+            "^warning: function \\w+ is a kernel, so overriding noinline attribute\\.?"
+            "( the function may be inlined when called\\.)?\\s*$");
+        if (!std::regex_match(lower, nvidia))
+            found += line + "\n";
+    }
+    return found;
+}
+
+TEST(OpenClRuntime, BuildWarningsAreTheSourcesAlone) {
+    EXPECT_EQ(source_warnings(""), "");
+    EXPECT_EQ(source_warnings("Warning: Function shade_hits is a kernel, so overriding noinline "
+                              "attribute. The function may be inlined when called.\n"),
+              "");
+    EXPECT_EQ(source_warnings("Warning: Function generate is a kernel, so overriding noinline "
+                              "attribute\r\n"),
+              "");
+    const std::string pocl = "<source>:3:9: warning: 'dot' macro redefined [-Wmacro-redefined]";
+    EXPECT_EQ(source_warnings("ok\n" + pocl + "\n"), pocl + "\n");
+    const std::string nv = "Warning: Function shade_hits is a kernel, and something else.";
+    EXPECT_EQ(source_warnings(nv), nv + "\n");
+}
+
 TEST(OpenClRuntime, EveryProgramBuildsWithoutWarnings) {
     // The device compiler's own headers may define what the kernels define (PoCL's made 'dot' and
     // 'length' macros, and every build warned); its log of a clean build holds no warning.
@@ -136,11 +175,7 @@ TEST(OpenClRuntime, EveryProgramBuildsWithoutWarnings) {
         et::ProgramBuildInfo info;
         ett::runtime().build(name, "", &info);
         ASSERT_FALSE(info.from_cache) << name;
-        // Any case: NVIDIA's driver writes "Warning:".
-        std::string lower = info.log;
-        std::transform(lower.begin(), lower.end(), lower.begin(),
-                       [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-        EXPECT_EQ(lower.find("warning"), std::string::npos) << name << ":\n" << info.log;
+        EXPECT_EQ(source_warnings(info.log), "") << name << ":\n" << info.log;
         ++programs;
     }
     EXPECT_GE(programs, 5);

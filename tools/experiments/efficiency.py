@@ -9,10 +9,10 @@ The suite: five maps (a tiny intense sun: royal_esplanade_1k, spot1Lux; few smal
 grace; broad light: pedestrian_overpass_1k, venice_sunset_1k), each lighting one scene of five
 spheres in a row on a diffuse ground -- diffuse, plastic (GGX alpha 0.3), metal alpha 0.2, metal
 alpha 0.05, mirror -- at path depth 1 and 5. Strategies are --strategy names with options:
-`mis+vndf` (--bsdf-sampling vndf), `compensated+ndf`, `compensated+x0.5` (the distribution built
-on luminance^0.5, the paper's tone-mapped future-work item), `mis+l4+b2` (splitting: 4 light and
-2 BSDF samples per vertex). Every sphere has its own band of image columns, so
-one render measures every material.
+`mis+vndf` (--bsdf-sampling vndf), `visibility+power` (--mis-heuristic power), `compensated+ndf`,
+`compensated+x0.5` (the distribution built on luminance^0.5, the paper's tone-mapped future-work
+item), `mis+l4+b2` (splitting: 4 light and 2 BSDF samples per vertex). Every sphere has its own
+band of image columns, so one render measures every material.
 
 For each scene, strategy, wall-clock budget and seed: a render with --time-limit BUDGET (the
 native back end, PFM output), its MSE per material band and over the image against the
@@ -128,13 +128,15 @@ def render(scene, out, strategy, budget, seed, extra):
 
 def strategy_args(strategy):
     """A strategy of the table: a --strategy name, optionally with +options: ndf or vndf (GGX
-    sampling), xE (the map's distribution built on luminance^E, E < 1: tone-mapped), lN / bN (N
-    light / BSDF samples per vertex)."""
+    sampling), balance or power (the MIS heuristic), xE (the map's distribution built on
+    luminance^E, E < 1: tone-mapped), lN / bN (N light / BSDF samples per vertex)."""
     parts = strategy.split("+")
     a, exponent = ["--strategy", parts[0]], None
     for opt in parts[1:]:
         if opt in ("ndf", "vndf"):
             a += ["--bsdf-sampling", opt]
+        elif opt in ("balance", "power"):
+            a += ["--mis-heuristic", opt]
         elif opt.startswith("x"):
             exponent = float(opt[1:])
         elif opt[:1] in ("l", "b") and opt[1:].isdigit():

@@ -18,7 +18,8 @@ constexpr Named<Strategy> kStrategies[] = {
     {Strategy::sis, "sis"},           {Strategy::compensated, "compensated"},
     {Strategy::adaptive, "adaptive"}, {Strategy::visibility, "visibility"},
     {Strategy::lights, "lights"}};
-constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::balance, "balance"},
+constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::automatic, "auto"},
+                                               {MisHeuristic::balance, "balance"},
                                                {MisHeuristic::power, "power"}};
 constexpr Named<SamplerKind> kSamplers[] = {{SamplerKind::sobol, "sobol"},
                                             {SamplerKind::random, "random"}};
@@ -97,6 +98,11 @@ BsdfSampling resolved_bsdf_sampling(const RenderSettings& st) {
     return st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive
                ? BsdfSampling::vndf
                : BsdfSampling::ndf;
+}
+MisHeuristic resolved_heuristic(const RenderSettings& st) {
+    if (st.heuristic != MisHeuristic::automatic)
+        return st.heuristic;
+    return st.strategy == Strategy::visibility ? MisHeuristic::balance : MisHeuristic::power;
 }
 
 int check_split_count(int n, const std::string& what) {

@@ -235,7 +235,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     p.max_depth = st.max_depth;
     p.rr_depth = st.rr_depth;
     p.strategy = static_cast<int>(st.strategy);
-    p.heuristic = static_cast<int>(st.heuristic);
+    p.heuristic = static_cast<int>(resolved_heuristic(st));
     p.sampler = static_cast<int>(st.sampler);
     p.seed = st.seed;
     p.bsdf_sampling = static_cast<int>(resolved_bsdf_sampling(st));
