@@ -28,7 +28,7 @@ enum class Strategy : int {
 enum class BsdfSampling : int { automatic = -1, ndf = 0, vndf = 1 };
 // The MIS weights (kernels/integrator.h): automatic picks power, Veach's and the project's choice
 // for the paper's estimator, and balance for the visibility strategy, whose learned light and
-// continuation samples it weighs better (2-6% less variance on every shipped scene but one:
+// continuation samples it weighs better (2-8% less variance on every shipped scene but one:
 // docs/results.md, issue 11).
 enum class MisHeuristic : int {
     automatic = -1,
