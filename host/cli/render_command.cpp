@@ -689,7 +689,8 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--lights", a->lights,
                     "Render with this directional light set ('envtrace lights'), natively");
     cmd->add_option("--mis-heuristic", a->heuristic,
-                    "auto | balance | power (auto: balance for visibility, else power)")
+                    "auto | balance | power (auto: power for mis, the paper's estimator; balance "
+                    "for compensated, adaptive, visibility)")
         ->check(CLI::IsMember(heuristic_names()));
     cmd->add_option("--sampler", a->sampler, "sobol | random")
         ->check(CLI::IsMember(sampler_names()));

@@ -102,7 +102,10 @@ BsdfSampling resolved_bsdf_sampling(const RenderSettings& st) {
 MisHeuristic resolved_heuristic(const RenderSettings& st) {
     if (st.heuristic != MisHeuristic::automatic)
         return st.heuristic;
-    return st.strategy == Strategy::visibility ? MisHeuristic::balance : MisHeuristic::power;
+    const bool beyond_the_paper = st.strategy == Strategy::compensated ||
+                                  st.strategy == Strategy::adaptive ||
+                                  st.strategy == Strategy::visibility;
+    return beyond_the_paper ? MisHeuristic::balance : MisHeuristic::power;
 }
 
 int check_split_count(int n, const std::string& what) {

@@ -26,10 +26,12 @@ enum class Strategy : int {
 // adaptive strategies and ndf, the paper's, for the others, so that `mis` stays the paper's
 // estimator.
 enum class BsdfSampling : int { automatic = -1, ndf = 0, vndf = 1 };
-// The MIS weights (kernels/integrator.h): automatic picks power, Veach's and the project's choice
-// for the paper's estimator, and balance for the visibility strategy, whose learned light and
-// continuation samples it weighs better (2-8% less variance on every shipped scene but one:
-// docs/results.md, issue 11).
+// The MIS weights (kernels/integrator.h): automatic picks power for mis, the project's choice
+// for the paper's estimator, which every efficiency figure is relative to, and balance for the
+// strategies beyond it -- compensated, adaptive, visibility -- whose variance at equal samples
+// it lowers (visibility: 8 of 9 shipped scenes; compensated and adaptive: 19 of issue 10's 20
+// scene pairs lower or equal: docs/results.md, "The balance heuristic"). The others weigh
+// nothing: power, unused.
 enum class MisHeuristic : int {
     automatic = -1,
     balance = ETK_HEURISTIC_BALANCE,
