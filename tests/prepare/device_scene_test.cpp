@@ -87,3 +87,30 @@ TEST(DeviceScene, VisibilityLearningPassesFollowTheFilm) {
         EXPECT_EQ(ds.guide_options.learning_passes, passes) << w << " x " << h;
     }
 }
+
+// The kernels take the heuristic resolved for the strategy (load/render_settings.h), never auto's
+// -1, which etk_mis_weight would read as balance: the paper's estimator would lose its power
+// heuristic without any image test noticing.
+TEST(DeviceScene, KernelsTakeTheResolvedHeuristic) {
+    const std::string dir = ett::scratch_dir("device-scene-heuristic");
+    std::ofstream(dir + "/s.json") << R"({"camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0]},
+  "film": {"width": 16, "height": 12}, "environment": {"sky": {"resolution": [64, 32]}},
+  "shapes": [{"type": "sphere"}]})";
+    et::Scene s = et::load_scene(dir + "/s.json");
+    const struct {
+        et::Strategy strategy;
+        et::MisHeuristic given;
+        int expected;
+    } cases[] = {{et::Strategy::mis, et::MisHeuristic::automatic, ETK_HEURISTIC_POWER},
+                 {et::Strategy::visibility, et::MisHeuristic::automatic, ETK_HEURISTIC_BALANCE},
+                 {et::Strategy::compensated, et::MisHeuristic::automatic, ETK_HEURISTIC_BALANCE},
+                 {et::Strategy::mis, et::MisHeuristic::balance, ETK_HEURISTIC_BALANCE},
+                 {et::Strategy::visibility, et::MisHeuristic::power, ETK_HEURISTIC_POWER}};
+    for (const auto& c : cases) {
+        et::RenderSettings st = s.settings;
+        st.strategy = c.strategy;
+        st.heuristic = c.given;
+        EXPECT_EQ(et::prepare_device_scene(s, st).params.heuristic, c.expected)
+            << et::name_of(c.strategy) << " " << et::name_of(c.given);
+    }
+}
