@@ -55,9 +55,10 @@ namespace {
 struct RenderArgs {
     std::string scene, output, stats_file, strategy, heuristic, sampler, backend = "opencl";
     std::string bsdf_sampling;
-    std::string light_batch; // --light-batch: auto, on, off
-    std::string light_share; // --light-share: "auto" or a number
-    std::string lights;      // --lights: render with this directional light set
+    std::string light_batch;   // --light-batch: auto, on, off
+    std::string guide_verdict; // --guide-verdict: on, off
+    std::string light_share;   // --light-share: "auto" or a number
+    std::string lights;        // --lights: render with this directional light set
     int sis_samples = 64;
     int light_samples = 0, bsdf_samples = 0; // --light-samples, --bsdf-samples
     // Which options the command line gave (set by the callback from CLI11's counts): for
@@ -125,6 +126,8 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.bsdf_sampling = parse_bsdf_sampling(a.bsdf_sampling, cli);
     if (!a.light_batch.empty())
         st.light_batch = parse_light_batch(a.light_batch, cli);
+    if (!a.guide_verdict.empty())
+        st.guide_verdict = a.guide_verdict == "on";
     if (!a.light_share.empty())
         st.light_share = parse_light_share(a.light_share, cli + ": --light-share");
     if (a.light_samples_given)
@@ -178,6 +181,11 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
 }
 
 // The state file of a render to `exr_name`: "out.exr" -> "out.envtrace-state".
+// The visibility strategy's verdict (render/guide_verdict.h), as the stats and the EXR name it.
+const char* verdict_name(int verdict) {
+    return verdict < 0 ? "none" : verdict ? "tables" : "mis";
+}
+
 std::string default_state_path(const std::string& exr_name) {
     return fs::path(exr_name).replace_extension(".envtrace-state").string();
 }
@@ -242,7 +250,12 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
                            {"continuation_records", s.guide_continuation_records},
                            {"host_bytes", s.guide_host_bytes},
                            {"device_bytes", s.guide_device_bytes},
-                           {"cells_with_fewer_light_samples", counts}};
+                           {"cells_with_fewer_light_samples", counts},
+                           {"verdict", verdict_name(s.guide_verdict)},
+                           {"verdict_passes", ds.guide_options.verdict_passes},
+                           {"verdict_seconds", s.guide_verdict_seconds},
+                           {"verdict_mis_error", s.guide_verdict_mis_error},
+                           {"verdict_tables_error", s.guide_verdict_tables_error}};
     }
     j["render_seconds"] = render_s;
     j["seconds_per_spp"] = render_s / std::max(1, rendered);
@@ -575,6 +588,7 @@ void run(const RenderArgs& a, Globals& g) {
                 {"envtrace:mis_heuristic", name_of(resolved_heuristic(st))},
                 {"envtrace:sampler", name_of(st.sampler)},
                 {"envtrace:bsdf_sampling", name_of(resolved_bsdf_sampling(st))},
+                {"envtrace:visibility_verdict", verdict_name(renderer.stats().guide_verdict)},
                 {"envtrace:seed", std::to_string(st.seed)},
                 {"envtrace:max_depth", std::to_string(st.max_depth)},
                 {"envtrace:rr_depth", std::to_string(st.rr_depth)},
@@ -703,6 +717,11 @@ void add_render_command(CLI::App& app, Globals& g) {
                         " to a work-item in their own stage: auto (on natively and on OpenCL CPU "
                         "devices, off on GPUs) | on | off; the same image")
         ->check(CLI::IsMember(light_batch_names()));
+    cmd->add_option("--guide-verdict", a->guide_verdict,
+                    "Visibility strategy: after learning, measure its tables against MIS on "
+                    "the image and keep the one cheaper per error (on, the default) | off (the "
+                    "tables throughout)")
+        ->check(CLI::IsMember({"on", "off"}));
     cmd->add_option("--light-share", a->light_share,
                     "Adaptive strategy: expected light samples of the two at a vertex, 0 .. "
                     "1.875, or auto (learned per material from the first passes)");

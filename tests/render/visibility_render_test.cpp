@@ -2,7 +2,8 @@
 // visibility_cache.h): its tables depend on the seed alone, so the image is the same bits on any
 // thread count (the continuation guide's too), and a render that starts past the learning passes (a
 // resume, a farm task, an MPI rank) re-learns the same tables and continues exactly where the
-// uninterrupted render was.
+// uninterrupted render was. Its verdict (render/guide_verdict.h) keeps the tables in a room lit
+// through an opening; under an open sky it renders the paper's MIS from then on, bit for bit.
 #include "render_util.h"
 
 #include <gtest/gtest.h>
@@ -22,6 +23,7 @@ et::Scene room() {
 struct Result {
     std::vector<float> mean;
     uint64_t records = 0, continuation_records = 0;
+    int verdict = -1;
 };
 
 // Samples [from, to) on `threads` threads, resuming `resume` if given.
@@ -29,24 +31,83 @@ Result render(const et::Scene& s, int threads, int from, int to,
               const et::FilmSums* resume = nullptr) {
     const ett::SampleRun run = ett::render_samples(s, threads, from, to, resume);
     const et::RenderStats& st = run.renderer->stats();
-    return {run.renderer->sums().mean(), st.guide_records, st.guide_continuation_records};
+    return {run.renderer->sums().mean(), st.guide_records, st.guide_continuation_records,
+            st.guide_verdict};
 }
 
 TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
     const et::Scene s = room();
-    const int spp = 70; // past the 64 learning passes
+    const int spp = 76; // past the 64 learning passes and the verdict's 8
     const Result one = render(s, 1, 0, spp), two = render(s, 2, 0, spp);
     EXPECT_GT(one.records, 0u) << "nothing was learned: the test would not see the tables";
     EXPECT_EQ(one.records, two.records);
     // Depth 2: the first bounce's diffuse vertices record (and guide) their continuations.
     EXPECT_GT(one.continuation_records, 0u) << "the continuation guide learned nothing";
     EXPECT_EQ(one.continuation_records, two.continuation_records);
+    EXPECT_NE(one.verdict, -1) << "no verdict: the test would not see it";
+    EXPECT_EQ(one.verdict, two.verdict);
     EXPECT_TRUE(one.mean == two.mean) << "the image depends on the thread count";
-    // The first 7 samples, then a new renderer resumes their film at sample 7: it renders the
-    // learning passes on a scratch film (recording the same outcomes), and the rest is the same.
-    const et::FilmSums part = ett::render_samples(s, 2, 0, 7).renderer->sums();
-    const Result resumed = render(s, 2, 7, spp, &part);
-    EXPECT_TRUE(one.mean == resumed.mean) << "a resumed render differs from the uninterrupted one";
+    // The first samples, then a new renderer resumes their film: it renders the learning passes
+    // and the verdict's on a scratch film (recording the same outcomes, measuring the same
+    // errors), and the rest is the same -- resumed while learning, inside the verdict's passes
+    // and past them.
+    for (int at : {7, 68, 73}) {
+        const et::FilmSums part = ett::render_samples(s, 2, 0, at).renderer->sums();
+        const Result resumed = render(s, 2, at, spp, &part);
+        EXPECT_EQ(resumed.verdict, one.verdict) << "resumed at " << at;
+        EXPECT_TRUE(one.mean == resumed.mean)
+            << "a render resumed at " << at << " differs from the uninterrupted one";
+    }
+}
+
+// Samples [from, to) of `s` under `strategy`, natively.
+std::vector<float> samples(et::Scene s, et::Strategy strategy, int from, int to,
+                           int* verdict = nullptr) {
+    s.settings.strategy = strategy;
+    const ett::SampleRun run = ett::render_samples(s, 2, from, to);
+    if (verdict)
+        *verdict = run.renderer->stats().guide_verdict;
+    return run.renderer->sums().mean();
+}
+
+TEST(VisibilityRender, VerdictKeepsTheTablesInARoomLitThroughAnOpening) {
+    // The room at depth 1, its walls lit only through the opening: MIS's map samples go
+    // everywhere, the tables' towards the opening.
+    et::Scene s = room();
+    s.settings.max_depth = 1;
+    int verdict = -1;
+    const std::vector<float> vis = samples(s, et::Strategy::visibility, 72, 76, &verdict);
+    EXPECT_EQ(verdict, 1) << "the tables did not stay where they pay";
+    s.settings.heuristic = et::MisHeuristic::balance;
+    EXPECT_FALSE(vis == samples(s, et::Strategy::mis, 72, 76)) << "the tables rendered MIS";
+}
+
+TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
+    // A diffuse floor under a constant sky, seen from above: nothing blocks the map, the tables
+    // learn the map itself and cost more for nothing, so MIS wins the verdict; the passes after
+    // it are MIS's own (the strategy's balance heuristic), bit for bit, batched map samples and
+    // all.
+    et::Scene s =
+        ett::base_scene(32, 24, et::make_envmap("sky", ett::constant_image(32, 16, 1.0f), {}));
+    s.materials.push_back(ett::diffuse(0.5f));
+    ett::add_square(s.triangles, glm::vec3(0, 0, 0), glm::vec3(0, 1, 0), 4.0f, 0);
+    s.camera.eye = {0.0f, 3.0f, 0.1f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.fov_deg = 60.0f;
+    s.settings.backend = et::Backend::cpu;
+    s.settings.max_depth = 1;
+    s.settings.seed = 3;
+    int verdict = -1;
+    const std::vector<float> vis = samples(s, et::Strategy::visibility, 72, 80, &verdict);
+    EXPECT_EQ(verdict, 0) << "the tables stayed under an open sky";
+    s.settings.heuristic = et::MisHeuristic::balance;
+    EXPECT_TRUE(vis == samples(s, et::Strategy::mis, 72, 80))
+        << "the passes after a verdict for MIS are not MIS's";
+    // Without the verdict the tables render them.
+    s.settings.guide_verdict = false;
+    s.settings.heuristic = et::MisHeuristic::automatic;
+    EXPECT_FALSE(samples(s, et::Strategy::visibility, 72, 80, &verdict) == vis);
+    EXPECT_EQ(verdict, -1);
 }
 
 } // namespace

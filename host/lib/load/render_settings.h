@@ -119,6 +119,9 @@ struct RenderSettings {
     // Draw the light samples of the strategies that allow it in the sample_lights stage, in
     // batches (kernels/integrator.h); off, the shade stage draws each: the same image.
     LightBatch light_batch = LightBatch::automatic;
+    // The visibility strategy's verdict (render/guide_verdict.h): after learning, measure its
+    // tables against the paper's MIS on this image and keep the cheaper-per-error one.
+    bool guide_verdict = true;
 };
 
 } // namespace et

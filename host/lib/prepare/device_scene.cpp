@@ -207,6 +207,9 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
                     " slots are more than the shadow rays' keys can name");
     // Depth 1 has no continuation to guide (the last bounce's is not guided: integrator.h).
     p.guide_continuation = opt.continuation && scene.settings.max_depth > 1 ? 1 : 0;
+    if (!scene.settings.guide_verdict)
+        d.guide_options.verdict_passes = 0;
+    p.guide_verdict = d.guide_options.verdict_passes;
     d.guide_regions = guide_region_tables(d.env_dist, p.env.dist_w, p.env.dist_h);
     d.guide_cells = guide_prior_cells(d.guide_regions, opt.slots, p.guide_continuation != 0,
                                       guide_portal_box(&lo[0], &hi[0]));

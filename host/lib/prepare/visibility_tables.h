@@ -19,8 +19,8 @@ struct VisibilityOptions {
     // (window_room's variance 0.00887 with 2^13, 0.00875 with 2^14 at twice the memory, 0.00915
     // with 2^12: docs/results.md, issue 11).
     int slots = 1 << 13;
-    int resolution = 8;  // cells along the scene's longest side (few records per cell
-                         // otherwise: measured in docs/results.md, issue 11)
+    int resolution = 8; // cells along the scene's longest side (few records per cell
+                        // otherwise: measured in docs/results.md, issue 11)
     // The map's defensive share of every light sample (light samples weigh at most 1 / alpha
     // times the map's own). 0.25 until 2026-11-27; with 16 x 32 regions 0.1 leaves 7-8% less
     // variance in window_room (320 x 240 and 160 x 120), skylight_room and the Cornell box, 4% on
@@ -66,6 +66,15 @@ struct VisibilityOptions {
     // rays took 20-25% of the time off).
     std::array<double, 4> light_counts{{1.0, 0.5, 0.25, 0.125}};
     double light_cost = 0.5;
+    // The verdict (render/guide_verdict.h): the verdict_passes passes after the learning passes
+    // (even) and as many passes of MIS, each in two blocks; the tables stay if MIS's error
+    // is at least verdict_cost times theirs -- the tables' time per sample over MIS's: 1.25
+    // where only the light sample is guided (depth 1), 1.5 with the continuation guide, as
+    // measured on issue 10's suite (256 spp, native: 1.19-1.37 and 1.45-1.63 with the learning
+    // passes, which cost ~1.3 steady ones; docs/results.md, "The visibility strategy's
+    // verdict"). 0 passes: no verdict, the tables throughout.
+    int verdict_passes = 8;
+    double verdict_cost_direct = 1.25, verdict_cost_paths = 1.5;
 };
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).

@@ -44,8 +44,11 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
     std::copy(scene.params.light_share, scene.params.light_share + ETK_SHARE_BINS, shares_.begin());
     std::copy(scene.params.bin_flags, scene.params.bin_flags + ETK_SHARE_BINS, flags_.begin());
     choices_.fill(-1);
-    light_batch_ = scene.params.light_batch != 0 && (scene.settings.light_batch == LightBatch::on ||
-                                                     device_->prefers_light_batches());
+    const bool batches_wanted =
+        scene.settings.light_batch == LightBatch::on ||
+        (scene.settings.light_batch == LightBatch::automatic && device_->prefers_light_batches());
+    light_batch_ = scene.params.light_batch != 0 && batches_wanted;
+    mis_light_batch_ = etk::etk_batches_light_samples(ETK_STRATEGY_MIS) && batches_wanted;
     learning_ = scene.settings.strategy == Strategy::adaptive && scene.settings.light_share < 0.0f;
     options_.last_bounce = scene.settings.max_depth <= 1;
     guide_ = scene.settings.strategy == Strategy::visibility;
@@ -66,7 +69,50 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
 }
 
 int Renderer::learning_pass_count() const {
-    return learning_ ? options_.learning_passes : guide_ ? guide_options_.learning_passes : 0;
+    return learning_ ? options_.learning_passes
+           : guide_  ? guide_options_.learning_passes + guide_options_.verdict_passes
+                     : 0;
+}
+
+void Renderer::set_guide_pass(etk::EtkParams& p, uint32_t sample_index) const {
+    const int64_t k = int64_t(sample_index) - guide_options_.learning_passes;
+    // The verdict's measuring passes (sample indices of their own) and, after a verdict for it,
+    // every pass: the paper's estimator, with the strategy's MIS heuristic and GGX sampling.
+    const bool mis =
+        sample_index >= kVerdictMisBase || (k >= guide_options_.verdict_passes && guide_dropped_);
+    if (mis) {
+        p.strategy = ETK_STRATEGY_MIS;
+        p.light_batch = mis_light_batch_ ? 1 : 0;
+        p.guide_ready = 0;
+    }
+    p.guide_learn = p.guide_learn && k < 0 ? 1 : 0;
+}
+
+void Renderer::give_verdict() {
+    const int v = guide_options_.verdict_passes;
+    for (int k = 0; k < v; ++k) {
+        etk::EtkParams p = scene_.params;
+        p.sample_index = kVerdictMisBase + static_cast<uint32_t>(k);
+        set_guide_pass(p, p.sample_index);
+        device_->clear_film(sums_.has_aovs());
+        const RayCounts c = run_pass(*device_, p, nullptr, nullptr);
+        device_->download_film(film_, sums_.has_aovs());
+        verdict_->add(0, k, &film_.film_sum[0].x);
+        count(c);
+    }
+    guide_dropped_ = !verdict_->tables_win();
+    stats_.guide_verdict = guide_dropped_ ? 0 : 1;
+    stats_.guide_verdict_mis_error = verdict_->mis_error();
+    stats_.guide_verdict_tables_error = verdict_->tables_error();
+    verdict_.reset();
+}
+
+void Renderer::count(const RayCounts& c) {
+    stats_.camera_rays += c.camera;
+    stats_.continuation_rays += c.continuation;
+    stats_.shadow_rays += c.shadow;
+    stats_.nonfinite_samples += c.nonfinite;
+    stats_.shaded_hits += c.shaded;
 }
 
 void Renderer::render_sample(uint32_t sample_index) {
@@ -94,6 +140,8 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     p.learn = learning_ && sample_index < static_cast<uint32_t>(options_.learning_passes);
     p.guide_ready = guide_ready_ ? 1 : 0;
     p.guide_learn = guide_ && learn ? 1 : 0;
+    if (guide_)
+        set_guide_pass(p, sample_index);
     Timer pass_timer;
     LightShareLearner* learner = nullptr;
     if (learn && learning_) {
@@ -110,7 +158,21 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     device_->download_film(film_, sums_.has_aovs());
     if (keep)
         sums_.add_pass(film_, scene_.settings.threads); // the render's cores, idle now
-    if (learn && guide_) {
+    const int64_t verdict_pass = int64_t(sample_index) - guide_options_.learning_passes;
+    if (learn && guide_ && verdict_pass >= 0) {
+        // The verdict's passes of the tables (guide_verdict.h), then MIS's, then the choice.
+        if (!verdict_)
+            verdict_ = std::make_unique<GuideVerdict>(
+                film_.width(), film_.height(), guide_options_.verdict_passes,
+                scene_.params.guide_continuation ? guide_options_.verdict_cost_paths
+                                                 : guide_options_.verdict_cost_direct);
+        verdict_->add(1, static_cast<int>(verdict_pass), &film_.film_sum[0].x);
+        if (verdict_pass + 1 == guide_options_.verdict_passes) {
+            Timer t;
+            give_verdict();
+            stats_.guide_verdict_seconds += t.seconds();
+        }
+    } else if (learn && guide_) {
         // The tables for the passes that follow: rebuilt after passes 1, 2, 4, ... L.
         if (VisibilityCache::update_after(next_learning_pass_, guide_options_.learning_passes)) {
             Timer t;
@@ -138,11 +200,7 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     }
     if (learn)
         ++next_learning_pass_;
-    stats_.camera_rays += c.camera;
-    stats_.continuation_rays += c.continuation;
-    stats_.shadow_rays += c.shadow;
-    stats_.nonfinite_samples += c.nonfinite;
-    stats_.shaded_hits += c.shaded;
+    count(c);
 }
 
 void Renderer::resume(const FilmSums& sums) {

@@ -9,6 +9,7 @@
 #include "prepare/device_scene.h"
 #include "render/film.h"
 #include "render/film_sums.h"
+#include "render/guide_verdict.h"
 #include "render/light_share.h"
 #include "render/schedule.h"
 #include "render/visibility_cache.h"
@@ -38,6 +39,11 @@ struct RenderStats {
     uint64_t guide_host_bytes = 0, guide_device_bytes = 0;
     // The learned tables' cells that take fewer light samples (etk_guide_light_count), per count.
     std::map<float, uint64_t> guide_light_counts;
+    // Its verdict (guide_verdict.h): 1 the tables stay, 0 MIS from then on, -1 not (yet) given;
+    // the two techniques' measured errors per sample.
+    int guide_verdict = -1;
+    double guide_verdict_mis_error = 0.0, guide_verdict_tables_error = 0.0;
+    double guide_verdict_seconds = 0.0; // its MIS passes (rendered to measure, not kept)
     // Time per stage (seconds): device time from profiling events for OpenCL, thread time natively.
     std::vector<std::pair<std::string, double>> stage_seconds;
     uint64_t rays() const { return camera_rays + continuation_rays + shadow_rays; }
@@ -90,7 +96,19 @@ class Renderer {
     bool guide_ready_ = false; // its tables hold something learned
     VisibilityOptions guide_options_;
     std::unique_ptr<VisibilityCache> cache_;
+    std::unique_ptr<GuideVerdict> verdict_;
+    bool guide_dropped_ = false;   // the verdict chose MIS: the passes after it render MIS
+    bool mis_light_batch_ = false; // the sample_lights stage for those passes
     int learning_pass_count() const;
+    // The parameters of pass `sample_index` of the visibility strategy: its tables', or MIS's
+    // for the verdict's measuring passes and after a verdict for MIS.
+    void set_guide_pass(etk::EtkParams& p, uint32_t sample_index) const;
+    // After the verdict's passes of the tables: its passes of MIS (sample indices
+    // kVerdictMisBase + k, never kept: the image is the same whichever technique wins them), and
+    // the choice.
+    void give_verdict();
+    void count(const RayCounts& c);
+    static constexpr uint32_t kVerdictMisBase = 0x80000000u;
 };
 
 // The renderer for scene.settings (back end, device, paths in flight, threads). `build`

@@ -1,0 +1,62 @@
+// The visibility strategy's verdict: whether its learned tables pay for what they cost.
+//
+// The tables cost time at every vertex (the cell's hash, the guided sample and its densities,
+// the continuation guide: 1.2-1.7x MIS's time per sample, docs/results.md) and save variance only
+// where the map's light is blocked in ways the map's own distribution cannot see -- rooms lit
+// through openings, not a row of spheres under the open sky (issue 10's suite: 0.6-0.85x MIS's
+// efficiency at equal spp x time).
+//
+// Which of the two a scene is, is measured, not modelled: the `passes` passes after the learning
+// passes (part of the image, as any) and as many passes of the paper's MIS, rendered only to
+// measure (sample indices of their own, renderer.h: the image is the same bits whichever wins),
+// each in two blocks of passes / 2 consecutive samples. Per pixel and technique, half the squared
+// difference of its two blocks' means estimates the error of a block-sized estimate, relative to
+// the squared mean of the pixel's 5 x 5 neighbourhood (plus 1% of the image's mean, so black
+// pixels do not divide by zero, as tools/experiments' relative MSE); the mean over the image of
+// each technique's value, every pixel's capped at the 99.9% quantile (a firefly in one block
+// must not decide), is its error. The tables stay when MIS's error is at least `cost` times theirs
+// (the time they cost per sample); otherwise the passes that follow render the paper's MIS, with
+// its batched map samples. MIS's passes are not kept: in a room lit through a window, 8 of them
+// among 300 passes of the tables would add 20% to the image's variance.
+//
+// Blocks of consecutive samples, not the samples' variance: the Sobol' points stratify each
+// block, and the map's smooth warp keeps more of that stratification than the learned tables'
+// piecewise one (issue 10's suite, 128 spp: the per-sample variance favoured the tables up to
+// 1.7x where the two-seed variance of the images favoured MIS -- as the adaptive strategy found,
+// docs/results.md). Comparing the same pixels rendered both ways measures the estimators on this
+// image: a model of the second moments (the learned shares' way) leaves out the MIS weights, the
+// stratification and the continuation's indirect light.
+//
+// The verdict depends on the passes' film values alone: the seed's, on every thread count and
+// wave size, and on a process that starts past them (it renders them first, renderer.cpp).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace et {
+
+class GuideVerdict {
+  public:
+    GuideVerdict(int width, int height, int passes, double cost);
+    // Adds the film of pass k (0 .. passes - 1, in order) of technique t (0: MIS, 1: the
+    // tables): film_sum per pixel, RGB and w the samples it holds.
+    void add(int t, int k, const float* film_sum_rgba);
+    // After the last pass: the verdict and the two errors it compared.
+    bool tables_win() const;
+    double mis_error() const { return error_[0]; }
+    double tables_error() const { return error_[1]; }
+
+  private:
+    void decide();
+    size_t pixels_;
+    int width_, passes_, added_[2] = {0, 0};
+    double cost_;
+    // Per technique t and block b (index 2 t + b), per pixel: the block's luminance sum, samples.
+    std::vector<double> sum_[4];
+    std::vector<uint32_t> n_[4];
+    double error_[2] = {0.0, 0.0};
+    bool decided_ = false;
+};
+
+} // namespace et
