@@ -710,7 +710,7 @@ void add_render_command(CLI::App& app, Globals& g) {
         ->check(CLI::IsMember(sampler_names()));
     cmd->add_option("--bsdf-sampling", a->bsdf_sampling,
                     "GGX lobes: vndf (visible normals) | ndf (the paper's) | auto (vndf for "
-                    "compensated and adaptive, ndf otherwise)")
+                    "compensated, adaptive and visibility, ndf otherwise)")
         ->check(CLI::IsMember(bsdf_sampling_names()));
     cmd->add_option("--light-batch", a->light_batch,
                     "Draw light samples " + std::to_string(ETK_LIGHT_BATCH) +

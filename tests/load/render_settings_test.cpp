@@ -28,12 +28,16 @@ TEST(RenderSettings, ValuesAreTheKernelCodes) {
     EXPECT_EQ(static_cast<int>(et::parse_strategy("compensated", "t")), ETK_STRATEGY_COMPENSATED);
     EXPECT_EQ(static_cast<int>(et::parse_strategy("adaptive", "t")), ETK_STRATEGY_ADAPTIVE);
     EXPECT_EQ(static_cast<int>(et::parse_strategy("visibility", "t")), ETK_STRATEGY_VISIBILITY);
-    // auto: visible normals for the compensated strategy, the paper's sampling for mis.
+    // auto: visible normals for the strategies beyond the paper, the paper's sampling for mis.
     et::RenderSettings st;
     st.strategy = et::Strategy::mis;
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
+    for (et::Strategy s :
+         {et::Strategy::compensated, et::Strategy::adaptive, et::Strategy::visibility}) {
+        st.strategy = s;
+        EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf) << et::name_of(s);
+    }
     st.strategy = et::Strategy::compensated;
-    EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf);
     st.bsdf_sampling = et::BsdfSampling::ndf;
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
     EXPECT_EQ(static_cast<int>(et::parse_sampler("sobol", "t")), ETK_SAMPLER_SOBOL);

@@ -37,7 +37,7 @@ Result render(const et::Scene& s, int threads, int from, int to,
 
 TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
     const et::Scene s = room();
-    const int spp = 76; // past the 64 learning passes and the verdict's 8
+    const int spp = 70; // past the 64 learning passes (the verdict's are 16 .. 23)
     const Result one = render(s, 1, 0, spp), two = render(s, 2, 0, spp);
     EXPECT_GT(one.records, 0u) << "nothing was learned: the test would not see the tables";
     EXPECT_EQ(one.records, two.records);
@@ -51,7 +51,7 @@ TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
     // and the verdict's on a scratch film (recording the same outcomes, measuring the same
     // errors), and the rest is the same -- resumed while learning, inside the verdict's passes
     // and past them.
-    for (int at : {7, 68, 73}) {
+    for (int at : {7, 20, 30, 68}) {
         const et::FilmSums part = ett::render_samples(s, 2, 0, at).renderer->sums();
         const Result resumed = render(s, 2, at, spp, &part);
         EXPECT_EQ(resumed.verdict, one.verdict) << "resumed at " << at;
@@ -74,6 +74,8 @@ TEST(VisibilityRender, VerdictKeepsTheTablesInARoomLitThroughAnOpening) {
     // The room at depth 1, its walls lit only through the opening: MIS's map samples go
     // everywhere, the tables' towards the opening.
     et::Scene s = room();
+    s.width = 64; // enough paths for 16 passes to teach the tables (the verdict's start)
+    s.height = 48;
     s.settings.max_depth = 1;
     int verdict = -1;
     const std::vector<float> vis = samples(s, et::Strategy::visibility, 72, 76, &verdict);
@@ -100,6 +102,20 @@ TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
     int verdict = -1;
     const std::vector<float> vis = samples(s, et::Strategy::visibility, 72, 80, &verdict);
     EXPECT_EQ(verdict, 0) << "the tables stayed under an open sky";
+    // The verdict ends the learning: a render resumed inside its passes or past them (which
+    // renders them first) continues exactly where the uninterrupted one was.
+    const std::vector<float> whole = samples(s, et::Strategy::visibility, 0, 40);
+    s.settings.strategy = et::Strategy::visibility;
+    const uint64_t learned = render(s, 2, 0, 24).records; // through the verdict's passes
+    EXPECT_GT(learned, render(s, 2, 0, 16).records) << "the verdict's passes did not learn";
+    EXPECT_EQ(render(s, 2, 0, 40).records, learned) << "the learning went on past the verdict";
+    for (int at : {20, 30}) {
+        s.settings.strategy = et::Strategy::visibility;
+        const et::FilmSums part = ett::render_samples(s, 2, 0, at).renderer->sums();
+        const Result resumed = render(s, 2, at, 40, &part);
+        EXPECT_EQ(resumed.verdict, 0) << "resumed at " << at;
+        EXPECT_TRUE(whole == resumed.mean) << "resumed at " << at << ": not the same image";
+    }
     s.settings.heuristic = et::MisHeuristic::balance;
     EXPECT_TRUE(vis == samples(s, et::Strategy::mis, 72, 80))
         << "the passes after a verdict for MIS are not MIS's";

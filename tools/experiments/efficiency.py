@@ -11,7 +11,8 @@ spheres in a row on a diffuse ground -- diffuse, plastic (GGX alpha 0.3), metal 
 alpha 0.05, mirror -- at path depth 1 and 5. Strategies are --strategy names with options:
 `mis+vndf` (--bsdf-sampling vndf), `visibility+power` (--mis-heuristic power), `compensated+ndf`,
 `compensated+x0.5` (the distribution built on luminance^0.5, the paper's tone-mapped future-work
-item), `mis+l4+b2` (splitting: 4 light and 2 BSDF samples per vertex). Every sphere has its own
+item), `mis+l4+b2` (splitting: 4 light and 2 BSDF samples per vertex), `visibility+noverdict`
+(the learned tables throughout, without the verdict that measures them against MIS). Every sphere has its own
 band of image columns, so one render measures every material.
 
 For each scene, strategy, wall-clock budget and seed: a render with --time-limit BUDGET (the
@@ -129,7 +130,8 @@ def render(scene, out, strategy, budget, seed, extra):
 def strategy_args(strategy):
     """A strategy of the table: a --strategy name, optionally with +options: ndf or vndf (GGX
     sampling), balance or power (the MIS heuristic), xE (the map's distribution built on
-    luminance^E, E < 1: tone-mapped), lN / bN (N light / BSDF samples per vertex)."""
+    luminance^E, E < 1: tone-mapped), lN / bN (N light / BSDF samples per vertex), verdict or
+    noverdict (the visibility strategy's verdict on or off)."""
     parts = strategy.split("+")
     a, exponent = ["--strategy", parts[0]], None
     for opt in parts[1:]:
@@ -139,6 +141,8 @@ def strategy_args(strategy):
             a += ["--mis-heuristic", opt]
         elif opt.startswith("x"):
             exponent = float(opt[1:])
+        elif opt in ("verdict", "noverdict"):
+            a += ["--guide-verdict", "on" if opt == "verdict" else "off"]
         elif opt[:1] in ("l", "b") and opt[1:].isdigit():
             a += ["--light-samples" if opt[0] == "l" else "--bsdf-samples", opt[1:]]
         else:

@@ -95,7 +95,8 @@ std::vector<std::string> light_batch_names() {
 BsdfSampling resolved_bsdf_sampling(const RenderSettings& st) {
     if (st.bsdf_sampling != BsdfSampling::automatic)
         return st.bsdf_sampling;
-    return st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive
+    return st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive ||
+                   st.strategy == Strategy::visibility
                ? BsdfSampling::vndf
                : BsdfSampling::ndf;
 }

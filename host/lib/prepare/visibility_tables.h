@@ -66,15 +66,19 @@ struct VisibilityOptions {
     // rays took 20-25% of the time off).
     std::array<double, 4> light_counts{{1.0, 0.5, 0.25, 0.125}};
     double light_cost = 0.5;
-    // The verdict (render/guide_verdict.h): the verdict_passes passes after the learning passes
-    // (even) and as many passes of MIS, each in two blocks; the tables stay if MIS's error
-    // is at least verdict_cost times theirs -- the tables' time per sample over MIS's: 1.25
-    // where only the light sample is guided (depth 1), 1.5 with the continuation guide, as
-    // measured on issue 10's suite (256 spp, native: 1.19-1.37 and 1.45-1.63 with the learning
-    // passes, which cost ~1.3 steady ones; docs/results.md, "The visibility strategy's
-    // verdict"). 0 passes: no verdict, the tables throughout.
+    // The verdict (render/guide_verdict.h): the verdict_passes passes from pass verdict_after
+    // on (the tables learned from that many passes, or from all L where L is fewer; the passes
+    // still learn where they are learning passes) and as many passes of MIS, each in two blocks;
+    // the tables stay -- and learn on to L -- if MIS's error is at least verdict_cost times
+    // theirs, otherwise every later pass renders MIS and the learning ends there (a render under
+    // the open sky saves the learning passes' cost, 2-2.3x a MIS pass's on issue 10's suite).
+    // verdict_cost is the tables' time per sample over MIS's after learning: measured (native,
+    // 400 spp) 1.21-1.30 at depth 1 on issue 10's suite, 1.02-1.05 at depth 5, 1.61 in
+    // window_room (docs/results.md, "The visibility strategy's verdict"). 0 passes: no verdict,
+    // the tables throughout.
     int verdict_passes = 8;
-    double verdict_cost_direct = 1.25, verdict_cost_paths = 1.5;
+    int verdict_after = 16;
+    double verdict_cost = 1.25;
 };
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).

@@ -68,24 +68,32 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
     }
 }
 
+int Renderer::verdict_start() const {
+    return std::min(guide_options_.learning_passes, guide_options_.verdict_after);
+}
+
 int Renderer::learning_pass_count() const {
-    return learning_ ? options_.learning_passes
-           : guide_  ? guide_options_.learning_passes + guide_options_.verdict_passes
-                     : 0;
+    if (learning_)
+        return options_.learning_passes;
+    if (!guide_)
+        return 0;
+    // The passes the tables learn from and the verdict's; a verdict for MIS ends the learning.
+    const int verdict_end =
+        guide_options_.verdict_passes > 0 ? verdict_start() + guide_options_.verdict_passes : 0;
+    return guide_dropped_ ? verdict_end : std::max(guide_options_.learning_passes, verdict_end);
 }
 
 void Renderer::set_guide_pass(etk::EtkParams& p, uint32_t sample_index) const {
-    const int64_t k = int64_t(sample_index) - guide_options_.learning_passes;
     // The verdict's measuring passes (sample indices of their own) and, after a verdict for it,
     // every pass: the paper's estimator, with the strategy's MIS heuristic and GGX sampling.
-    const bool mis =
-        sample_index >= kVerdictMisBase || (k >= guide_options_.verdict_passes && guide_dropped_);
+    const bool mis = sample_index >= kVerdictMisBase || guide_dropped_;
     if (mis) {
         p.strategy = ETK_STRATEGY_MIS;
         p.light_batch = mis_light_batch_ ? 1 : 0;
         p.guide_ready = 0;
     }
-    p.guide_learn = p.guide_learn && k < 0 ? 1 : 0;
+    p.guide_learn =
+        !mis && p.guide_learn && sample_index < uint32_t(guide_options_.learning_passes) ? 1 : 0;
 }
 
 void Renderer::give_verdict() {
@@ -119,12 +127,13 @@ void Renderer::render_sample(uint32_t sample_index) {
     Timer timer;
     // Learning needs samples 0 .. L-1 in order; rendered first, and kept only by the process
     // whose first sample is 0.
-    const int L = learning_pass_count();
-    while (next_learning_pass_ < L && sample_index != static_cast<uint32_t>(next_learning_pass_)) {
+    // (learning_pass_count() shrinks when the visibility strategy's verdict ends its learning.)
+    while (next_learning_pass_ < learning_pass_count() &&
+           sample_index != static_cast<uint32_t>(next_learning_pass_)) {
         run(static_cast<uint32_t>(next_learning_pass_), true, false);
         ++stats_.learning_passes;
     }
-    run(sample_index, next_learning_pass_ < L, true);
+    run(sample_index, next_learning_pass_ < learning_pass_count(), true);
     stats_.samples_per_pixel += 1;
     stats_.seconds += timer.seconds();
 }
@@ -158,21 +167,7 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     device_->download_film(film_, sums_.has_aovs());
     if (keep)
         sums_.add_pass(film_, scene_.settings.threads); // the render's cores, idle now
-    const int64_t verdict_pass = int64_t(sample_index) - guide_options_.learning_passes;
-    if (learn && guide_ && verdict_pass >= 0) {
-        // The verdict's passes of the tables (guide_verdict.h), then MIS's, then the choice.
-        if (!verdict_)
-            verdict_ = std::make_unique<GuideVerdict>(
-                film_.width(), film_.height(), guide_options_.verdict_passes,
-                scene_.params.guide_continuation ? guide_options_.verdict_cost_paths
-                                                 : guide_options_.verdict_cost_direct);
-        verdict_->add(1, static_cast<int>(verdict_pass), &film_.film_sum[0].x);
-        if (verdict_pass + 1 == guide_options_.verdict_passes) {
-            Timer t;
-            give_verdict();
-            stats_.guide_verdict_seconds += t.seconds();
-        }
-    } else if (learn && guide_) {
+    if (learn && guide_ && p.guide_learn) {
         // The tables for the passes that follow: rebuilt after passes 1, 2, 4, ... L.
         if (VisibilityCache::update_after(next_learning_pass_, guide_options_.learning_passes)) {
             Timer t;
@@ -186,6 +181,22 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         stats_.guide_learning_seconds += pass_timer.seconds();
         if (next_learning_pass_ + 1 == guide_options_.learning_passes)
             cache_.reset(); // learned: the sums are no longer needed
+    }
+    const int64_t verdict_pass = int64_t(sample_index) - verdict_start();
+    if (learn && guide_ && verdict_pass >= 0 && verdict_pass < guide_options_.verdict_passes) {
+        // The verdict's passes of the tables (guide_verdict.h), then MIS's, then the choice.
+        if (!verdict_)
+            verdict_ = std::make_unique<GuideVerdict>(film_.width(), film_.height(),
+                                                      guide_options_.verdict_passes,
+                                                      guide_options_.verdict_cost);
+        verdict_->add(1, static_cast<int>(verdict_pass), &film_.film_sum[0].x);
+        if (verdict_pass + 1 == guide_options_.verdict_passes) {
+            Timer t;
+            give_verdict();
+            stats_.guide_verdict_seconds += t.seconds();
+            if (guide_dropped_)
+                cache_.reset(); // no more learning
+        }
     }
     if (learn && learning_) {
         learner->end_pass(film_.film_sum);

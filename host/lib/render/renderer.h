@@ -100,6 +100,7 @@ class Renderer {
     bool guide_dropped_ = false;   // the verdict chose MIS: the passes after it render MIS
     bool mis_light_batch_ = false; // the sample_lights stage for those passes
     int learning_pass_count() const;
+    int verdict_start() const; // the first of the visibility verdict's passes of the tables
     // The parameters of pass `sample_index` of the visibility strategy: its tables', or MIS's
     // for the verdict's measuring passes and after a verdict for MIS.
     void set_guide_pass(etk::EtkParams& p, uint32_t sample_index) const;
