@@ -1,15 +1,16 @@
 // The visibility strategy's verdict: whether its learned tables pay for what they cost.
 //
 // The tables cost time at every vertex (the cell's hash, the guided sample and its densities,
-// the continuation guide: 1.2-1.7x MIS's time per sample, docs/results.md) and save variance only
-// where the map's light is blocked in ways the map's own distribution cannot see -- rooms lit
-// through openings, not a row of spheres under the open sky (issue 10's suite: 0.6-0.85x MIS's
-// efficiency at equal spp x time).
+// the continuation guide: 1.02-1.61x MIS's time per sample after learning, 2-2.3x while learning
+// on issue 10's suite; docs/results.md) and save much variance only where the map's light is
+// blocked in ways the map's own distribution cannot see -- rooms lit through openings, not a row
+// of spheres under the open sky (issue 10's suite: 0.58-1.21x MIS's efficiency at equal spp x
+// time, 0.77x in geometric mean).
 //
-// Which of the two a scene is, is measured, not modelled: the `passes` passes after the learning
-// passes (part of the image, as any) and as many passes of the paper's MIS, rendered only to
-// measure (sample indices of their own, renderer.h: the image is the same bits whichever wins),
-// each in two blocks of passes / 2 consecutive samples. Per pixel and technique, half the squared
+// Which of the two a scene is, is measured, not modelled: `passes` passes of the tables after
+// some learning (VisibilityOptions::verdict_after; part of the image, as any) and as many passes
+// of the paper's MIS, rendered only to measure (sample indices of their own, renderer.h), each in
+// two blocks of passes / 2 consecutive samples. Per pixel and technique, half the squared
 // difference of its two blocks' means estimates the error of a block-sized estimate, relative to
 // the squared mean of the pixel's 5 x 5 neighbourhood (plus 1% of the image's mean, so black
 // pixels do not divide by zero, as tools/experiments' relative MSE); the mean over the image of

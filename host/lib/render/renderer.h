@@ -105,8 +105,8 @@ class Renderer {
     // for the verdict's measuring passes and after a verdict for MIS.
     void set_guide_pass(etk::EtkParams& p, uint32_t sample_index) const;
     // After the verdict's passes of the tables: its passes of MIS (sample indices
-    // kVerdictMisBase + k, never kept: the image is the same whichever technique wins them), and
-    // the choice.
+    // kVerdictMisBase + k, never kept: they measure MIS without adding its variance to the
+    // image), and the choice.
     void give_verdict();
     void count(const RayCounts& c);
     static constexpr uint32_t kVerdictMisBase = 0x80000000u;
