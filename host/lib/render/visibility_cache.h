@@ -97,7 +97,7 @@ class VisibilityCache {
     // The cells' tables from everything recorded so far (guide_cells_size floats): the CDFs of Q,
     // then, with options.continuation, the continuation guide's CDFs and shares.
     // Each update also chooses the cells' portal shares and starts their measure afresh.
-    std::vector<float> tables();
+    const std::vector<float>& tables();
     // Host memory of the sums, bytes.
     uint64_t bytes() const {
         return light_.bytes() + dir_.bytes() + portal_.size() * 8 + moments_.size() * 8 +
@@ -145,7 +145,8 @@ class VisibilityCache {
     // point, in the common unit of light_sample_count).
     std::vector<uint64_t> light_m2_, cont_m2_;
     std::map<float, uint64_t> fewer_;
-    std::vector<float> last_; // the tables the passes since the last update were drawn with
+    // The tables of the last update (tables()): those the passes since were drawn with.
+    std::vector<float> last_;
     double inv_scale_;
     RegionSums light_, dir_; // the light sample's (shadow rays), the continuation guide's
     mutable std::mutex mutex_;
