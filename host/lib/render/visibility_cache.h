@@ -97,6 +97,7 @@ class VisibilityCache {
     // The cells' tables from everything recorded so far (guide_cells_size floats): the CDFs of Q,
     // then, with options.continuation, the continuation guide's CDFs and shares.
     // Each update also chooses the cells' portal shares and starts their measure afresh.
+    // The cache's own buffer, rewritten in place by the next call.
     const std::vector<float>& tables();
     // Host memory of the sums, bytes.
     uint64_t bytes() const {
