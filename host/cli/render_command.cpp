@@ -180,12 +180,12 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     return st;
 }
 
-// The state file of a render to `exr_name`: "out.exr" -> "out.envtrace-state".
 // The visibility strategy's verdict (render/guide_verdict.h), as the stats and the EXR name it.
 const char* verdict_name(int verdict) {
     return verdict < 0 ? "none" : verdict ? "tables" : "mis";
 }
 
+// The state file of a render to `exr_name`: "out.exr" -> "out.envtrace-state".
 std::string default_state_path(const std::string& exr_name) {
     return fs::path(exr_name).replace_extension(".envtrace-state").string();
 }

@@ -92,21 +92,22 @@ LightBatch parse_light_batch(const std::string& s, const std::string& what) {
 std::vector<std::string> light_batch_names() {
     return names_in(kLightBatches);
 }
+namespace {
+// The MIS strategies beyond the paper's estimator: what `auto` gives them, it never gives `mis`.
+bool beyond_the_paper(Strategy s) {
+    return s == Strategy::compensated || s == Strategy::adaptive || s == Strategy::visibility;
+}
+} // namespace
+
 BsdfSampling resolved_bsdf_sampling(const RenderSettings& st) {
     if (st.bsdf_sampling != BsdfSampling::automatic)
         return st.bsdf_sampling;
-    return st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive ||
-                   st.strategy == Strategy::visibility
-               ? BsdfSampling::vndf
-               : BsdfSampling::ndf;
+    return beyond_the_paper(st.strategy) ? BsdfSampling::vndf : BsdfSampling::ndf;
 }
 MisHeuristic resolved_heuristic(const RenderSettings& st) {
     if (st.heuristic != MisHeuristic::automatic)
         return st.heuristic;
-    const bool beyond_the_paper = st.strategy == Strategy::compensated ||
-                                  st.strategy == Strategy::adaptive ||
-                                  st.strategy == Strategy::visibility;
-    return beyond_the_paper ? MisHeuristic::balance : MisHeuristic::power;
+    return beyond_the_paper(st.strategy) ? MisHeuristic::balance : MisHeuristic::power;
 }
 
 int check_split_count(int n, const std::string& what) {
