@@ -12,11 +12,12 @@ alpha 0.05, mirror -- at path depth 1 and 5. Strategies are --strategy names wit
 `mis+vndf` (--bsdf-sampling vndf), `visibility+power` (--mis-heuristic power), `compensated+ndf`,
 `compensated+x0.5` (the distribution built on luminance^0.5, the paper's tone-mapped future-work
 item), `mis+l4+b2` (splitting: 4 light and 2 BSDF samples per vertex), `visibility+noverdict`
-(the learned tables throughout, without the verdict that measures them against MIS). Every sphere has its own
-band of image columns, so one render measures every material.
+(the learned tables throughout, without the verdict that measures them against MIS). Each
+sphere's pixels and the ground's are measured on their own (regions(): masks from the camera), so
+one render measures every material.
 
 For each scene, strategy, wall-clock budget and seed: a render with --time-limit BUDGET (the
-native back end, PFM output), its MSE per material band and over the image against the
+native back end, PFM output), its MSE per material region and over the image against the
 reference, and its render time (render_seconds of --stats: the pass loop, not loading). The
 efficiency of a strategy is 1 / (MSE x time) with MSE averaged over the seeds and time the mean
 time; the table gives it relative to `mis` (the paper's estimator): 2.0 means the strategy reaches
@@ -54,7 +55,7 @@ MAPS = {  # name -> (file, kind)
     "overpass": ("pedestrian_overpass_1k.hdr", "broad"),
     "venice": ("venice_sunset_1k.hdr", "broad"),
 }
-MATERIALS = [  # band name, material
+MATERIALS = [  # region name, material
     ("diffuse", {"type": "diffuse", "albedo": 0.8}),
     ("plastic 0.3", {"type": "plastic", "albedo": 0.6, "specular": 0.04, "roughness": 0.3}),
     ("metal 0.2", {"type": "microfacet", "specular": [0.95, 0.8, 0.6], "roughness": 0.2}),
@@ -106,11 +107,71 @@ def file_scene(path, cache, size):
     return name, out
 
 
-def bands(width):
-    """Column ranges of the material bands: the image split evenly, one sphere in each."""
-    n = len(MATERIALS)
-    edges = [round(width * k / n) for k in range(n + 1)]
-    return [(edges[k], edges[k + 1]) for k in range(n)]
+def regions(width, height):
+    """Boolean pixel masks of the material regions, from the suite's camera and spheres
+    (scene_json): each sphere's pixels (the pixel centre's camera ray hits it first; the
+    tessellated sphere differs from the analytic one by a pixel at most along its outline), then
+    the ground's. The spheres fill the image's middle 60% of columns, so columns split evenly
+    (what this tool measured until 2026-11-27) mixed the ground and two spheres in each band.
+    Returns [(name, mask)] in MATERIALS order, then ("ground", mask); the rest is the map."""
+    s = scene_json("", 1, width, height)
+    cam = s["camera"]
+    eye, target = np.array(cam["eye"], float), np.array(cam["target"], float)
+    f = (target - eye) / np.linalg.norm(target - eye)  # as set_camera (device_scene.cpp)
+    r = np.cross(f, [0.0, 1.0, 0.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    th = math.tan(math.radians(cam["fov"]) / 2)
+    sx = 2 * (np.arange(width) + 0.5) / width - 1
+    sy = 1 - 2 * (np.arange(height) + 0.5) / height
+    d = f + r * th * width / height * sx[None, :, None] + u * th * sy[:, None, None]
+    d /= np.linalg.norm(d, axis=2, keepdims=True)
+    nearest = np.full((height, width), np.inf)
+    owner = np.full((height, width), -1)
+    for k, shape in enumerate(s["shapes"]):
+        if shape["type"] == "sphere":
+            oc = eye - np.array(shape["center"], float)
+            b = (d * oc).sum(axis=2)
+            disc = b * b - (oc @ oc - shape["radius"] ** 2)
+            t = np.where(disc >= 0, -b - np.sqrt(np.maximum(disc, 0)), np.inf)
+        else:  # the ground quad, y = 0, half-size size / 2
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = -eye[1] / d[..., 1]
+            hit = eye + t[..., None] * d
+            inside = (np.abs(hit[..., 0]) <= shape["size"] / 2) & (np.abs(hit[..., 2]) <= shape["size"] / 2)
+            t = np.where((t > 0) & inside, t, np.inf)
+        closer = (t > 0) & (t < nearest)
+        nearest = np.where(closer, t, nearest)
+        owner = np.where(closer, k, owner)
+    out = [(name, owner == k + 1) for k, (name, _) in enumerate(MATERIALS)]
+    return out + [("ground", owner == 0)]
+
+
+def check_regions(work, width=320, height=72):
+    """regions() against the renderer: two 16-spp renders of the suite's scene at depth 1, the
+    ground black in both, the spheres grey in the first and black in the second. A sphere's
+    pixels are then lit in the first and black in the second, the ground's black in both. Each
+    region must agree on at least 90% of its pixels (outline pixels mix; the lowest rim, turned
+    to the black ground, can render black). Exits non-zero otherwise: every per-material figure
+    rests on these masks."""
+    imgs = []
+    for grey in (0.5, 0.0):
+        s = scene_json(MAPS["grace"][0], 1, width, height)
+        for name in s["materials"]:
+            s["materials"][name] = {"type": "diffuse", "albedo": 0.0 if name == "ground" else grey}
+        scene = os.path.join(work, f"regions-{grey:g}.json")
+        with open(scene, "w") as f:
+            json.dump(s, f)
+        out = scene[:-5] + ".pfm"
+        common.render(scene, out, ["--spp", "16", "--max-depth", "1"])
+        imgs.append(common.read_pfm(out).max(axis=2))
+    sphere_like = (imgs[0] > 0) & (imgs[1] == 0)
+    for name, mask in regions(width, height):
+        agree = float((imgs[0][mask] == 0).mean() if name == "ground" else sphere_like[mask].mean())
+        print(f"region {name}: {mask.sum()} pixels, {100 * agree:.1f}% as rendered")
+        if not mask.any() or agree < 0.9:
+            sys.exit(f"efficiency.py: the {name} region does not match the rendered scene "
+                     f"({100 * agree:.1f}% of its pixels)")
 
 
 def render(scene, out, strategy, budget, seed, extra):
@@ -185,12 +246,14 @@ def main():
     cache = os.path.join(out_dir, "ref")
     os.makedirs(cache, exist_ok=True)
     work = common.tmpdir("efficiency")
+    if a.tiny:
+        check_regions(work)
     extra = []  # common.render: the native back end
     if a.size is None and not a.scenes:
         a.size = [320, 72]
     width, height = a.size or (0, 0)
     strategies = a.strategies if "mis" in a.strategies else ["mis"] + a.strategies
-    band_names = [b for b, _ in MATERIALS]
+    band_names = [b for b, _ in MATERIALS] + ["ground"]
 
     rows = []  # one per render
     if a.scenes:
@@ -210,9 +273,10 @@ def main():
             ref, ref_var = reference(scene, tag, ref_seconds, cache, extra)
             ref_max = float(ref.mean(axis=2).max())
             width = ref.shape[1]
-            regions = [(0, width)] + (bands(width) if band_names else [])
+            masks = [np.ones(ref.shape[:2], bool)]
+            masks += [m for _, m in regions(width, ref.shape[0])] if band_names else []
             rel_denom = ref ** 2 + (0.01 * float(ref.mean())) ** 2
-            ref_noise = [float((ref_var / rel_denom)[:, c0:c1].mean()) for c0, c1 in regions]
+            ref_noise = [float((ref_var / rel_denom)[m].mean()) for m in masks]
             for budget in a.budgets:
                 for strategy in strategies:
                     for seed in range(1, a.seeds + 1):
@@ -223,8 +287,7 @@ def main():
                         # eps = (1% of the image mean)^2, so that dark and bright pixels weigh
                         # alike (the measure of Karlik et al. and of most sampling papers).
                         err = (np.nan_to_num(img, nan=0.0, posinf=0.0) - ref) ** 2 / rel_denom
-                        mse = [max(float(err[:, c0:c1].mean()) - n, 0.0)
-                               for (c0, c1), n in zip(regions, ref_noise)]
+                        mse = [max(float(err[m].mean()) - n, 0.0) for m, n in zip(masks, ref_noise)]
                         rows.append({
                             "scene": name, "map": map_key, "depth": depth, "strategy": strategy,
                             "budget": budget, "seed": seed, "seconds": stats["render_seconds"],
@@ -283,7 +346,7 @@ def write_tables(rows, strategies, band_names, a, ref_seconds, out_dir):
         lines.append(f"| {sc} | " + " | ".join(f"{g[(sc, s)]:.2f}" for s in strategies) + f" | {best:.2f} |")
     lines.append("| **geometric mean** | " + " | ".join(
         f"**{geomean([g[(sc, s)] for sc in scenes]):.2f}**" for s in strategies) + " | |")
-    lines += ["", "Per material band (geometric mean over the scenes):", ""]
+    lines += ["", "Per material region (geometric mean over the scenes; each sphere's pixels, and the ground's):", ""]
     lines.append("| material | " + " | ".join(strategies) + " |")
     lines.append("|---" * (len(strategies) + 1) + "|")
     for b in band_names:
