@@ -114,3 +114,34 @@ TEST(DeviceScene, KernelsTakeTheResolvedHeuristic) {
             << et::name_of(c.strategy) << " " << et::name_of(c.given);
     }
 }
+
+// The visibility strategy's set-up reads the render's settings -- the scene file's with the
+// command line over them -- not the scene file's alone: `--guide-verdict off` and `--max-depth`
+// once went unheard there (the verdict still ran; a depth given on the command line did not
+// decide whether the continuation is guided).
+TEST(DeviceScene, VisibilityGuideTakesTheRenderSettings) {
+    const std::string dir = ett::scratch_dir("device-scene-guide-settings");
+    const int passes = et::VisibilityOptions{}.verdict_passes;
+    ASSERT_GT(passes, 0);
+    for (const int file_depth : {1, 3}) {
+        std::ofstream(dir + "/s.json") << R"({"camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0]},
+  "film": {"width": 16, "height": 12}, "environment": {"sky": {"resolution": [64, 32]}},
+  "shapes": [{"type": "sphere"}], "render": {"strategy": "visibility", "max_depth": )"
+                                       << file_depth << "}}";
+        const et::Scene s = et::load_scene(dir + "/s.json");
+        ASSERT_TRUE(s.settings.guide_verdict);
+        for (const int depth : {1, 3})
+            for (const bool verdict : {true, false}) {
+                et::RenderSettings st = s.settings;
+                st.max_depth = depth;
+                st.guide_verdict = verdict;
+                const et::DeviceScene ds = et::prepare_device_scene(s, st);
+                const std::string what = "file depth " + std::to_string(file_depth) + ", depth " +
+                                         std::to_string(depth) + ", verdict " +
+                                         (verdict ? "on" : "off");
+                EXPECT_EQ(ds.params.guide_continuation, depth > 1 ? 1 : 0) << what;
+                EXPECT_EQ(ds.guide_options.verdict_passes, verdict ? passes : 0) << what;
+                EXPECT_EQ(ds.params.guide_verdict, verdict ? passes : 0) << what;
+            }
+    }
+}

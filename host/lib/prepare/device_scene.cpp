@@ -206,8 +206,8 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
         throw Error("visibility options: " + std::to_string(opt.slots) +
                     " slots are more than the shadow rays' keys can name");
     // Depth 1 has no continuation to guide (the last bounce's is not guided: integrator.h).
-    p.guide_continuation = opt.continuation && scene.settings.max_depth > 1 ? 1 : 0;
-    if (!scene.settings.guide_verdict)
+    p.guide_continuation = opt.continuation && d.settings.max_depth > 1 ? 1 : 0;
+    if (!d.settings.guide_verdict)
         d.guide_options.verdict_passes = 0;
     p.guide_verdict = d.guide_options.verdict_passes;
     d.guide_regions = guide_region_tables(d.env_dist, p.env.dist_w, p.env.dist_h);
