@@ -242,20 +242,22 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
         nlohmann::json counts = nlohmann::json::object();
         for (const auto& [n, cells] : s.guide_light_counts)
             counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
-        j["visibility"] = {{"learning_passes", ds.guide_options.learning_passes},
-                           {"learning_passes_extra", s.learning_passes},
-                           {"learning_seconds", s.guide_learning_seconds},
-                           {"update_seconds", s.guide_update_seconds},
-                           {"records", s.guide_records},
-                           {"continuation_records", s.guide_continuation_records},
-                           {"host_bytes", s.guide_host_bytes},
-                           {"device_bytes", s.guide_device_bytes},
-                           {"cells_with_fewer_light_samples", counts},
-                           {"verdict", verdict_name(s.guide_verdict)},
-                           {"verdict_passes", ds.guide_options.verdict_passes},
-                           {"verdict_seconds", s.guide_verdict_seconds},
-                           {"verdict_mis_error", s.guide_verdict_mis_error},
-                           {"verdict_tables_error", s.guide_verdict_tables_error}};
+        j["visibility"] = {
+            {"learning_passes", ds.guide_options.learning_passes},
+            {"learning_passes_extra", s.learning_passes},
+            {"learning_seconds", s.guide_learning_seconds},
+            {"update_seconds", s.guide_update_seconds},
+            {"records", s.guide_records},
+            {"continuation_records", s.guide_continuation_records},
+            {"host_bytes", s.guide_host_bytes},
+            {"device_bytes", s.guide_device_bytes},
+            {"cells_with_fewer_light_samples", counts},
+            {"verdict", verdict_name(s.guide_verdict)},
+            {"verdict_passes", ds.guide_options.verdict_passes},
+            {"verdict_cost", verdict_cost_for(ds.guide_options, ds.params.guide_continuation != 0)},
+            {"verdict_seconds", s.guide_verdict_seconds},
+            {"verdict_mis_error", s.guide_verdict_mis_error},
+            {"verdict_tables_error", s.guide_verdict_tables_error}};
     }
     j["render_seconds"] = render_s;
     j["seconds_per_spp"] = render_s / std::max(1, rendered);

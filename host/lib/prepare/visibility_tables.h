@@ -72,14 +72,22 @@ struct VisibilityOptions {
     // the tables stay -- and learn on to L -- if MIS's error is at least verdict_cost times
     // theirs, otherwise every later pass renders MIS and the learning ends there (a render under
     // the open sky saves the learning passes' cost, 2-2.3x a MIS pass's on issue 10's suite).
-    // verdict_cost is the tables' time per sample over MIS's after learning: measured (native,
-    // 400 spp) 1.21-1.30 at depth 1 on issue 10's suite, 1.02-1.05 at depth 5, 1.61 in
-    // window_room (docs/results.md, "The visibility strategy's verdict"). 0 passes: no verdict,
-    // the tables throughout.
+    // verdict_cost is the tables' time per sample over MIS's after learning, verdict_cost_guided
+    // the same where the continuation is guided too (depth > 1): measured (native, samples
+    // 64 .. 191 of issue 10's suite, 2026-11-27) 1.15-1.29 at depth 1 and 1.30-1.43 at depth 5,
+    // 1.61 in window_room (docs/results.md, "The visibility strategy's verdict" and "The
+    // tables under the open sky"). 0 passes: no verdict, the tables throughout.
     int verdict_passes = 8;
     int verdict_after = 16;
     double verdict_cost = 1.25;
+    double verdict_cost_guided = 1.4;
 };
+
+// The cost the verdict weighs the tables' error by: verdict_cost_guided where the render guides
+// its continuations as well (EtkParams::guide_continuation), verdict_cost otherwise.
+inline double verdict_cost_for(const VisibilityOptions& o, bool continuation_guided) {
+    return continuation_guided ? o.verdict_cost_guided : o.verdict_cost;
+}
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).
 std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, int h);

@@ -186,9 +186,9 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     if (learn && guide_ && verdict_pass >= 0 && verdict_pass < guide_options_.verdict_passes) {
         // The verdict's passes of the tables (guide_verdict.h), then MIS's, then the choice.
         if (!verdict_)
-            verdict_ = std::make_unique<GuideVerdict>(film_.width(), film_.height(),
-                                                      guide_options_.verdict_passes,
-                                                      guide_options_.verdict_cost);
+            verdict_ = std::make_unique<GuideVerdict>(
+                film_.width(), film_.height(), guide_options_.verdict_passes,
+                verdict_cost_for(guide_options_, scene_.params.guide_continuation != 0));
         verdict_->add(1, static_cast<int>(verdict_pass), &film_.film_sum[0].x);
         if (verdict_pass + 1 == guide_options_.verdict_passes) {
             Timer t;
