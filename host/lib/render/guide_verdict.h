@@ -1,7 +1,7 @@
 // The visibility strategy's verdict: whether its learned tables pay for what they cost.
 //
 // The tables cost time at every vertex (the cell's hash, the guided sample and its densities,
-// the continuation guide: 1.02-1.61x MIS's time per sample after learning, 2-2.3x while learning
+// the continuation guide: 1.19-1.61x MIS's time per sample after learning, 2-2.3x while learning
 // on issue 10's suite; docs/results.md) and save much variance only where the map's light is
 // blocked in ways the map's own distribution cannot see -- rooms lit through openings, not a row
 // of spheres under the open sky (issue 10's suite: 0.58-1.21x MIS's efficiency at equal spp x
