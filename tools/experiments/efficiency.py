@@ -253,11 +253,11 @@ def main():
         a.size = [320, 72]
     width, height = a.size or (0, 0)
     strategies = a.strategies if "mis" in a.strategies else ["mis"] + a.strategies
-    band_names = [b for b, _ in MATERIALS] + ["ground"]
+    region_names = [b for b, _ in MATERIALS] + ["ground"]
 
     rows = []  # one per render
     if a.scenes:
-        band_names = []
+        region_names = []
         cases = [file_scene(f, cache, a.size) + (None, None) for f in a.scenes]
     else:
         cases = []
@@ -274,7 +274,7 @@ def main():
             ref_max = float(ref.mean(axis=2).max())
             width = ref.shape[1]
             masks = [np.ones(ref.shape[:2], bool)]
-            masks += [m for _, m in regions(width, ref.shape[0])] if band_names else []
+            masks += [m for _, m in regions(width, ref.shape[0])] if region_names else []
             rel_denom = ref ** 2 + (0.01 * float(ref.mean())) ** 2
             ref_noise = [float((ref_var / rel_denom)[m].mean()) for m in masks]
             for budget in a.budgets:
@@ -294,13 +294,13 @@ def main():
                             "spp": stats["spp"], "nonfinite": stats["nonfinite_samples"] +
                             (0 if finite else 1),
                             "max_ratio": float(img.mean(axis=2).max()) / max(ref_max, 1e-30),
-                            "mse": mse[0], **{f"mse {b}": m for b, m in zip(band_names, mse[1:])},
+                            "mse": mse[0], **{f"mse {b}": m for b, m in zip(region_names, mse[1:])},
                             "ref_noise": ref_noise[0],
                         })
                         print(f"{name} {strategy:>16} {budget:g}s seed {seed}: {stats['spp']} spp "
                               f"{stats['render_seconds']:.2f}s mse {mse[0]:.4g}", flush=True)
     common.write_csv(os.path.join(out_dir, "efficiency.csv"), list(rows[0]), [list(r.values()) for r in rows])
-    write_tables(rows, strategies, band_names, a, ref_seconds, out_dir)
+    write_tables(rows, strategies, region_names, a, ref_seconds, out_dir)
 
 
 def gains(rows, strategies, column):
@@ -328,7 +328,7 @@ def geomean(xs):
     return math.exp(np.mean([math.log(x) for x in xs])) if xs else float("nan")
 
 
-def write_tables(rows, strategies, band_names, a, ref_seconds, out_dir):
+def write_tables(rows, strategies, region_names, a, ref_seconds, out_dir):
     scenes, g = gains(rows, strategies, "mse")
     film = f"{a.size[0]}x{a.size[1]}" if a.size else "each scene's film"
     scenes_arg = f" --scenes {' '.join(a.scenes)}" if a.scenes else ""
@@ -349,7 +349,7 @@ def write_tables(rows, strategies, band_names, a, ref_seconds, out_dir):
     lines += ["", "Per material region (geometric mean over the scenes; each sphere's pixels, and the ground's):", ""]
     lines.append("| material | " + " | ".join(strategies) + " |")
     lines.append("|---" * (len(strategies) + 1) + "|")
-    for b in band_names:
+    for b in region_names:
         _, gb = gains(rows, strategies, f"mse {b}")
         lines.append(f"| {b} | " + " | ".join(f"{geomean([gb[(sc, s)] for sc in scenes]):.2f}"
                                              for s in strategies) + " |")

@@ -73,10 +73,11 @@ struct VisibilityOptions {
     // theirs, otherwise every later pass renders MIS and the learning ends there (a render under
     // the open sky saves the learning passes' cost, 2-2.3x a MIS pass's on issue 10's suite).
     // verdict_cost is the tables' time per sample over MIS's after learning, verdict_cost_guided
-    // the same where the continuation is guided too (depth > 1): measured (native, samples
-    // 64 .. 191 of issue 10's suite, 2026-11-27) 1.15-1.29 at depth 1 and 1.30-1.43 at depth 5,
-    // 1.61 in window_room (docs/results.md, "The visibility strategy's verdict" and "The
-    // tables under the open sky"). 0 passes: no verdict, the tables throughout.
+    // the same where the continuation is guided too (depth > 1): measured (native, issue 10's
+    // suite, samples 64 .. 447 less 64 .. 191, so no learning is in it; 2026-11-27) 1.19-1.26 at
+    // depth 1 and 1.29-1.43 at depth 5, 1.61 in window_room (docs/results.md, "The visibility
+    // strategy's verdict" and "The tables under the open sky"). 0 passes: no verdict, the tables
+    // throughout.
     int verdict_passes = 8;
     int verdict_after = 16;
     double verdict_cost = 1.25;
