@@ -98,9 +98,6 @@ typedef struct {
     // The sample_lights stage has drawn the shade queue's light samples
     // (etk_batches_light_samples).
     int light_batch;
-    // The visibility strategy's verdict passes (host/lib/render/guide_verdict.h; 0: none). No
-    // kernel reads it: it is here so that the render key tells renders with and without apart.
-    int guide_verdict;
 } EtkParams;
 
 // Strategies whose light sample is one etk_env_sample at every vertex: the sample_lights stage can

@@ -141,7 +141,6 @@ TEST(DeviceScene, VisibilityGuideTakesTheRenderSettings) {
                                          (verdict ? "on" : "off");
                 EXPECT_EQ(ds.params.guide_continuation, depth > 1 ? 1 : 0) << what;
                 EXPECT_EQ(ds.guide_options.verdict_passes, verdict ? passes : 0) << what;
-                EXPECT_EQ(ds.params.guide_verdict, verdict ? passes : 0) << what;
                 // A guided continuation costs more time per sample: the verdict weighs it so.
                 EXPECT_EQ(et::verdict_cost_for(ds.guide_options, ds.params.guide_continuation != 0),
                           depth > 1 ? ds.guide_options.verdict_cost_guided

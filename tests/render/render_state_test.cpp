@@ -153,6 +153,17 @@ TEST(RenderState, KeyFollowsWhatSamplesDependOn) {
     EXPECT_NE(base, key_with([](et::Scene&, et::RenderSettings& st) {
                   st.backend = et::Backend::opencl;
               }));
+    // The visibility strategy's verdict, which the host schedules: on or off, and its cost.
+    et::Scene v = s;
+    v.settings.strategy = et::Strategy::visibility;
+    const et::DeviceScene with = et::prepare_device_scene(v, v.settings);
+    et::RenderSettings off = v.settings;
+    off.guide_verdict = false;
+    EXPECT_NE(et::render_key(with), et::render_key(et::prepare_device_scene(v, off)));
+    et::DeviceScene dearer = et::prepare_device_scene(v, v.settings);
+    dearer.guide_options.verdict_cost *= 2.0;
+    dearer.guide_options.verdict_cost_guided *= 2.0;
+    EXPECT_NE(et::render_key(with), et::render_key(dearer));
 }
 
 TEST(RenderState, ForeignStateIsRefused) {

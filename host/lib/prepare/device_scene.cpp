@@ -209,7 +209,6 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
     p.guide_continuation = opt.continuation && d.settings.max_depth > 1 ? 1 : 0;
     if (!d.settings.guide_verdict)
         d.guide_options.verdict_passes = 0;
-    p.guide_verdict = d.guide_options.verdict_passes;
     d.guide_regions = guide_region_tables(d.env_dist, p.env.dist_w, p.env.dist_h);
     d.guide_cells = guide_prior_cells(d.guide_regions, opt.slots, p.guide_continuation != 0,
                                       guide_portal_box(&lo[0], &hi[0]));

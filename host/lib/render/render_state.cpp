@@ -81,6 +81,16 @@ uint64_t render_key(const DeviceScene& scene) {
     p.light_batch = 0; // where the map samples are drawn changes no bit of the film
     p.learn = 0;
     h.add_value(p);
+    // The visibility strategy's schedule, decided on the host: which passes learn, and its
+    // verdict's passes and cost (a verdict on one side of a resume and not on the other, or
+    // weighed otherwise, would switch estimators part-way).
+    if (scene.params.strategy == ETK_STRATEGY_VISIBILITY) {
+        const VisibilityOptions& o = scene.guide_options;
+        h.add_value(static_cast<int32_t>(o.learning_passes));
+        h.add_value(static_cast<int32_t>(o.verdict_passes));
+        h.add_value(static_cast<int32_t>(o.verdict_after));
+        h.add_value(verdict_cost_for(o, scene.params.guide_continuation != 0));
+    }
     return h.digest();
 }
 
