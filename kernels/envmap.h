@@ -17,6 +17,9 @@ typedef struct {
     float scale;        // radiance multiplier
     float rot_cos, rot_sin;
     int has_light; // 0 for an all-black map: sampling returns density 0
+    // The black mask's blocks across and down (host/lib/prepare/env_black_mask.h); 0: the map has
+    // no black block, and nothing asks.
+    int black_w, black_h;
 } EtkEnvMap;
 
 ETK_FN float3 etk_env_to_world(EtkEnvMap env, float3 d) {
@@ -82,6 +85,20 @@ ETK_CL_INLINE_FN float3 etk_env_radiance_uv(ETK_GLOBAL const float* texels, EtkE
 }
 ETK_FN float3 etk_env_radiance(ETK_GLOBAL const float* texels, EtkEnvMap env, float3 d) {
     return etk_env_radiance_uv(texels, env, etk_env_uv(env, d));
+}
+
+// Whether the radiance at map coordinates uv is zero for certain: the black mask's bit of the
+// ETK_ENV_BLACK_BLOCK-texel block that holds uv, set by the host only where that block and its
+// eight neighbours are all zero, so that the bilinear lookup's four texels (within one texel of
+// uv's) are zero too. 0 where unsure (coordinates out of range included).
+#define ETK_ENV_BLACK_BLOCK 8
+ETK_FN int etk_env_black_uv(ETK_GLOBAL const int* mask, EtkEnvMap env, float2 uv) {
+    if (!(uv.x >= 0.0f && uv.x <= 1.0f && uv.y >= 0.0f && uv.y <= 1.0f))
+        return 0;
+    int bx = min((int)(uv.x * (float)env.tex_w) / ETK_ENV_BLACK_BLOCK, env.black_w - 1);
+    int by = min((int)(uv.y * (float)env.tex_h) / ETK_ENV_BLACK_BLOCK, env.black_h - 1);
+    int bit = by * env.black_w + bx;
+    return (mask[bit >> 5] >> (bit & 31)) & 1;
 }
 
 // Solid-angle density of sampling world direction d (at map coordinates uv).

@@ -251,11 +251,15 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
     int slot = Q.ray_in[i];
     float4 o = P.ray_o[slot], d = P.ray_d[slot];
     EtkHit h;
-    if (!etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), 3.0e38f, 0, &h)) {
+    // A ray from the last vertex ends wherever it hits: whether it hits anything is all that
+    // matters, which any-hit traversal answers sooner (the same triangle tests, so the same
+    // answer).
+    int ends = (int)o.w >= p.max_depth;
+    if (!etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), 3.0e38f, ends, &h)) {
         etk_escaped(S, P, p, slot);
         return;
     }
-    if ((int)o.w >= p.max_depth)
+    if (ends)
         return; // the path ends here: no more bounces allowed
     P.hit[slot] = make_float4(h.t, as_float((uint)h.prim), h.b1, h.b2);
     out->slot[ETK_Q_SHADE] = slot;
@@ -514,6 +518,14 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     }
     if (!etk_same_side(wz, dot(wi_world, ng)))
         return; // across the geometric surface from its shading side: would leak light
+    // The last bounce's continuation can only bring back the map's light (no surface emits):
+    // where the map is black for certain in its direction it would bring nothing, and is not
+    // traced -- most of them under a map whose light is a few texels (a studio's lamps,
+    // spot1Lux). A small mask rather than the texels: their lookup here would cost about what
+    // the ray saves (cache misses in a large map). The image is the same to the bit.
+    if (last && p.env.black_w > 0 &&
+        etk_env_black_uv(S.env_black, p.env, etk_env_uv(p.env, normalize(wi_world))))
+        return;
     beta = beta * weight;
     // A refraction scales radiance by 1 / eta^2 (dielectric.h), into glass and back out again:
     // Russian roulette weighs the throughput without it (pbrt's etaScale), or paths inside glass

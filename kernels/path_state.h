@@ -19,6 +19,7 @@
     X(float, env_dist)      /* the map's 2D distribution (piecewise_constant.h) */                 \
     X(float, env_dist_comp) /* its MIS-compensated twin (compensated and adaptive strategies) */   \
     X(float, env_texels)    /* the map's RGB texels */                                             \
+    X(int, env_black)       /* bits: the map's blocks that are black for certain (envmap.h) */     \
     X(float4, lights)       /* directional lights / SIS strata: direction, power */                \
     X(int, strata_texels)   /* SIS: texels sorted by stratum */                                    \
     X(int, strata_begin)    /* SIS: stratum k owns strata_texels[begin[k] .. begin[k+1]) */        \

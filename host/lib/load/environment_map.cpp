@@ -71,6 +71,7 @@ etk::EtkEnvMap EnvMap::desc() const {
     d.rot_cos = static_cast<float>(std::cos(a));
     d.rot_sin = static_cast<float>(std::sin(a));
     d.has_light = dist.has_light() && scale > 0.0f ? 1 : 0;
+    d.black_w = d.black_h = 0; // no black mask unless the preparation builds one
     return d;
 }
 

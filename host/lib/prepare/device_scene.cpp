@@ -1,4 +1,5 @@
 #include "prepare/device_scene.h"
+#include "prepare/env_black_mask.h"
 #include "prepare/env_compensation.h"
 
 #include "prepare/bvh_build.h"
@@ -272,6 +273,10 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     if (st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive)
         d.env_dist_comp = compensate_distribution(scene.env.dist).table;
     d.env_dist = std::move(scene.env.dist.table);
+    EnvBlackMask black = env_black_mask(scene.env.image);
+    p.env.black_w = black.width;
+    p.env.black_h = black.height;
+    d.env_black = std::move(black.bits);
     d.env_texels = std::move(scene.env.image.rgb);
     if (st.strategy == Strategy::visibility)
         add_visibility_guide(scene, d);

@@ -18,6 +18,13 @@ constexpr size_t kBytesPerPath = 0 ETK_PATH_FIELDS(ET_FIELD_BYTES) ETK_QUEUES(ET
 #undef ET_FIELD_BYTES
 #undef ET_QUEUE_BYTES
 
+// Every OpenCL 1.2 device takes at least 1024 bytes of kernel arguments
+// (CL_DEVICE_MAX_PARAMETER_SIZE): a stage's buffers (a pointer each, at most 8 bytes), its
+// parameters and n must fit, or a smaller device could not run the stages at all (856 bytes in
+// November 2026).
+static_assert(8 * etk::ETK_ARG_params + sizeof(etk::EtkParams) + sizeof(cl_int) <= 1024,
+              "the stages' kernel arguments exceed OpenCL 1.2's minimum parameter size");
+
 // A read-only buffer over `v`, which the DeviceScene keeps alive for the renderer's lifetime.
 // On a device that shares the host's memory (PoCL on the CPU) CL_MEM_USE_HOST_PTR reads the
 // host vector in place instead of holding a second copy of a map that may be gigabytes; any
