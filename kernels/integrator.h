@@ -75,8 +75,15 @@ ETK_FN uint etk_vertex_pair(int depth) {
 // nothing needs the full distribution in these strategies. A rough dielectric's BSDF sample
 // reaches every direction of either hemisphere where it transmits or reflects anything
 // (dielectric.h), so the compensated distribution serves it over the whole sphere too.
-ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p) {
-    return p.strategy == ETK_STRATEGY_COMPENSATED ? S.env_dist_comp : S.env_dist;
+// The compensated strategy compensates from the path's second vertex on (`depth`: surface
+// interactions before the vertex). At the first, the sampler's points are stratified best, and
+// the full map's smooth warp keeps that stratification where max(0, L - mean L) -- zero over
+// most of the sphere, with an edge wherever L crosses its mean -- breaks it: at equal samples on
+// issue 10's suite at depth 1, compensating the first vertex too has 0.52-0.91x MIS's error, the
+// full distribution there 1.02-1.08x; below it, where the points are padded, the compensated
+// distribution's lower variance per sample wins (depth 5: up to 1.3x; docs/results.md).
+ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p, int depth) {
+    return p.strategy == ETK_STRATEGY_COMPENSATED && depth > 0 ? S.env_dist_comp : S.env_dist;
 }
 
 // Adaptive allocation (ETK_STRATEGY_ADAPTIVE). A vertex draws two samples -- A, traced as the
@@ -149,7 +156,7 @@ ETK_FN float3 etk_split_samples(EtkScene S, EtkParams p, EtkSurface s, EtkMateri
                                 float3 b, float3 ns, int pixel, uint pair, uint* traced) {
     float3 sum = make_float3(0.0f, 0.0f, 0.0f), wo = s.wo, ng = s.ng;
     uint nl = (uint)p.light_samples, nb = (uint)p.bsdf_samples;
-    ETK_GLOBAL const float* dist = etk_light_dist(S, p);
+    ETK_GLOBAL const float* dist = etk_light_dist(S, p, 0); // mis only: the full distribution
     float2 u = etk_dims(p, pixel, pair);
     for (uint j = 1u; j < nl; ++j) {
         EtkEnvSample ls = etk_env_sample(dist, p.env, etk_lattice_point(u, j, nl));
@@ -230,7 +237,8 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
             int guided = p.strategy == ETK_STRATEGY_VISIBILITY, cell = (int)P.beta[slot].w;
             float pl = guided
                            ? etk_guide_light_pdf(S, p, cell, etk_xyz(P.ray_o[slot]), etk_xyz(d), uv)
-                           : etk_env_pdf_uv(etk_light_dist(S, p), p.env, uv);
+                           : etk_env_pdf_uv(etk_light_dist(S, p, (int)P.ray_o[slot].w - 1), p.env,
+                                            uv); // the continuation's vertex
             float lc = guided ? etk_guide_light_count(S, p, cell) : 1.0f;
             w = etk_bsdf_sample_weight(p, lc, d.w, pl); // sample 0 of the vertex's BSDF samples
         } else if (p.strategy != ETK_STRATEGY_BSDF)
@@ -287,8 +295,10 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
     float dx[ETK_LIGHT_BATCH], dy[ETK_LIGHT_BATCH], dz[ETK_LIGHT_BATCH], pdf[ETK_LIGHT_BATCH];
     float Lr[ETK_LIGHT_BATCH], Lg[ETK_LIGHT_BATCH], Lb[ETK_LIGHT_BATCH];
     int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH];
-    etk_env_light_batch(etk_light_dist(S, p), S.env_texels, p.env, xu, xv, dx, dy, dz, pdf, Lr, Lg,
-                        Lb, row, col);
+    // Every path of a shade queue is at the same depth (run_wave shades one bounce at a time).
+    int depth = (int)P.ray_o[Q.shade[min(first, n - 1)]].w;
+    etk_env_light_batch(etk_light_dist(S, p, depth), S.env_texels, p.env, xu, xv, dx, dy, dz, pdf,
+                        Lr, Lg, Lb, row, col);
     for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) {
         int slot = Q.shade[first + k];
         P.light_dir[slot] = make_float4(dx[k], dy[k], dz[k], pdf[k]);
@@ -334,7 +344,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     // first hit's bin.
     float share = 1.0f;
     int flags = 0;
-    ETK_GLOBAL const float* dist = etk_light_dist(S, p);
+    ETK_GLOBAL const float* dist = etk_light_dist(S, p, depth);
     if (adaptive && !delta) {
         int prim = (int)as_uint(P.hit[slot].y);
         share = etk_vertex_config(S, p, prim, pixel, last, &flags);

@@ -688,8 +688,9 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "from the first)")
         ->check(CLI::Range(0, 1000));
     cmd->add_option("--strategy", a->strategy,
-                    "light | bsdf | mis (the paper's) | compensated (MIS with a compensated light "
-                    "distribution) | adaptive (compensated, light/BSDF shares learned per "
+                    "light | bsdf | mis (the paper's) | compensated (MIS, the light distribution "
+                    "compensated below the first vertex) | adaptive (compensated, light/BSDF "
+                    "shares learned per "
                     "material) | visibility (MIS, learns what blocks the map) | uniform | sis "
                     "(structured importance sampling)")
         ->check(CLI::IsMember(strategy_names()));
