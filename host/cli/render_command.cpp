@@ -690,9 +690,8 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--strategy", a->strategy,
                     "light | bsdf | mis (the paper's) | compensated (MIS, the light distribution "
                     "compensated below the first vertex) | adaptive (compensated, light/BSDF "
-                    "shares learned per "
-                    "material) | visibility (MIS, learns what blocks the map) | uniform | sis "
-                    "(structured importance sampling)")
+                    "shares learned per material) | visibility (MIS, learns what blocks the map) "
+                    "| uniform | sis (structured importance sampling)")
         ->check(CLI::IsMember(strategy_names()));
     cmd->add_option("--sis-samples", a->sis_samples,
                     "SIS strata (one shadow ray per sample; --spp a multiple of it)")
