@@ -129,7 +129,8 @@ TEST(OpenClRuntime, DivisionAndSqrtRoundAsOnTheHost) {
 // The lines of a build log that warn about the source, in any case (NVIDIA writes "Warning:"),
 // less one line NVIDIA's drivers since 550 write for every kernel of a program, "Warning:
 // Function NAME is a kernel, so overriding noinline attribute. The function may be inlined when
-// called." -- about the driver's own attribute, with or without any noinline in the source (the
+// called." (as the H200's driver writes it, after an empty location: "(): Warning: ...") -- about
+// the driver's own attribute, with or without any noinline in the source (the
 // H200 wrote it for wavefront.cl, whose GPU build has none; pyFAI, John the Ripper and others
 // report it with the same words, and no change to their sources silenced it).
 static std::string source_warnings(const std::string& log) {
@@ -141,9 +142,9 @@ static std::string source_warnings(const std::string& log) {
                        [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
         if (lower.find("warning") == std::string::npos)
             continue;
-        static const std::regex nvidia(
-            "^warning: function \\w+ is a kernel, so overriding noinline attribute\\.?"
-            "( the function may be inlined when called\\.)?\\s*$");
+        static const std::regex nvidia("^(\\([^)]*\\):\\s*)?warning: function \\w+ is a kernel, so "
+                                       "overriding noinline attribute\\.?"
+                                       "( the function may be inlined when called\\.)?\\s*$");
         if (!std::regex_match(lower, nvidia))
             found += line + "\n";
     }
@@ -158,10 +159,15 @@ TEST(OpenClRuntime, BuildWarningsAreTheSourcesAlone) {
     EXPECT_EQ(source_warnings("Warning: Function generate is a kernel, so overriding noinline "
                               "attribute\r\n"),
               "");
+    EXPECT_EQ(source_warnings("(): Warning: Function bvh_trace is a kernel, so overriding noinline "
+                              "attribute. The function may be inlined when called.\n"),
+              "");
     const std::string pocl = "<source>:3:9: warning: 'dot' macro redefined [-Wmacro-redefined]";
     EXPECT_EQ(source_warnings("ok\n" + pocl + "\n"), pocl + "\n");
     const std::string nv = "Warning: Function shade_hits is a kernel, and something else.";
     EXPECT_EQ(source_warnings(nv), nv + "\n");
+    const std::string located = "(5): Warning: variable x is unused";
+    EXPECT_EQ(source_warnings(located), located + "\n");
 }
 
 TEST(OpenClRuntime, EveryProgramBuildsWithoutWarnings) {

@@ -253,11 +253,22 @@ size_t ClDevice::pending_events() const {
 
 void ClLane::collect_events() {
     // Profiling times of the finished launches; the events are released here, so a render holds
-    // at most one bounce's worth of them.
-    for (auto& [stage, ev] : pending_)
-        seconds_[stage] += (ev.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
-                            ev.getProfilingInfo<CL_PROFILING_COMMAND_START>()) *
-                           1e-9;
+    // at most one bounce's worth of them. A blocking command after them on the in-order queue has
+    // finished their work, but not necessarily marked their events complete: NVIDIA's driver,
+    // with two lanes, answered CL_PROFILING_INFO_NOT_AVAILABLE then. So each is waited for first
+    // (at once when complete), and a time still not available is left out of the stage's
+    // seconds rather than ending the render.
+    for (auto& [stage, ev] : pending_) {
+        cl_event e = ev();
+        cl_ulong start = 0, end = 0;
+        if (clWaitForEvents(1, &e) == CL_SUCCESS &&
+            clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr) ==
+                CL_SUCCESS &&
+            clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_END, sizeof end, &end, nullptr) ==
+                CL_SUCCESS &&
+            end >= start)
+            seconds_[stage] += (end - start) * 1e-9;
+    }
     pending_.clear();
 }
 
