@@ -687,11 +687,12 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "Russian roulette ends paths only past this many surfaces (default 5; 0: "
                     "from the first)")
         ->check(CLI::Range(0, 1000));
-    cmd->add_option("--strategy", a->strategy,
-                    "light | bsdf | mis (the paper's) | compensated (MIS, the light distribution "
-                    "compensated below the first vertex) | adaptive (compensated, light/BSDF "
-                    "shares learned per material) | visibility (MIS, learns what blocks the map) "
-                    "| uniform | sis (structured importance sampling)")
+    cmd->add_option(
+           "--strategy", a->strategy,
+           "light | bsdf | mis (the paper's) | compensated (the default: MIS, the light "
+           "distribution compensated below the first vertex) | adaptive (compensated, light/BSDF "
+           "shares learned per material) | visibility (MIS, learns what blocks the map) "
+           "| uniform | sis (structured importance sampling)")
         ->check(CLI::IsMember(strategy_names()));
     cmd->add_option("--sis-samples", a->sis_samples,
                     "SIS strata (one shadow ray per sample; --spp a multiple of it)")

@@ -80,7 +80,7 @@ def scene_json(name, camera, sky, spp=64):
         "film": {"width": 160, "height": 120},
         "environment": {"sky": sky},
         "shapes": [{"type": "mesh", "file": f"{name}.obj"}],
-        "render": {"spp": spp, "max_depth": 5, "strategy": "mis", "sampler": "sobol", "seed": 1},
+        "render": {"spp": spp, "max_depth": 5, "strategy": "visibility", "sampler": "sobol", "seed": 1},
         "output": f"{name}.exr",
     }
 

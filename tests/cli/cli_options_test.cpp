@@ -93,7 +93,11 @@ TEST(CliOptions, EveryGivenSplitCountIsChecked) {
             expect_error(ett::run_envtrace(render(scene, out, {opt, v}), dir),
                          "must be a power of two from 1 to 64");
         }
-    expect_ok(ett::run_envtrace(render(scene, out, {"--light-samples", "2"}), dir));
+    expect_ok(
+        ett::run_envtrace(render(scene, out, {"--strategy", "mis", "--light-samples", "2"}), dir));
+    // The default strategy, compensated, takes one sample of each: the error says what splits.
+    expect_error(ett::run_envtrace(render(scene, out, {"--light-samples", "2"}), dir),
+                 "name the strategy mis to split");
 }
 
 TEST(CliOptions, OptionsThatWouldBeDroppedAreRefusedOrWarned) {

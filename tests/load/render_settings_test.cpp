@@ -78,6 +78,15 @@ TEST(RenderSettings, LightShares) {
     }
 }
 
+// The default estimator goes beyond the paper's (docs/results.md, "The default strategy"): MIS
+// compensation below the first vertex, with visible-normal GGX sampling and the balance heuristic.
+TEST(RenderSettings, DefaultIsCompensated) {
+    const et::RenderSettings st;
+    EXPECT_EQ(st.strategy, et::Strategy::compensated);
+    EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf);
+    EXPECT_EQ(et::resolved_heuristic(st), et::MisHeuristic::balance);
+}
+
 TEST(RenderSettings, SplitCounts) {
     for (int n : {1, 2, 4, 64})
         EXPECT_EQ(et::check_split_count(n, "t"), n);
@@ -94,6 +103,9 @@ TEST(RenderSettings, SplitCounts) {
     // names both.
     et::RenderSettings st;
     st.light_samples = 4;
+    EXPECT_THROW(et::check_split(st), et::Error)
+        << "the default strategy, compensated, took a split";
+    st.strategy = et::Strategy::mis;
     et::check_split(st);
     st.strategy = et::Strategy::compensated;
     try {
@@ -103,6 +115,7 @@ TEST(RenderSettings, SplitCounts) {
         const std::string m = e.what();
         EXPECT_NE(m.find("(4, 1)"), std::string::npos) << m;
         EXPECT_NE(m.find("'compensated'"), std::string::npos) << m;
+        EXPECT_NE(m.find("name the strategy mis"), std::string::npos) << m;
     }
     st.light_samples = 1;
     et::check_split(st);

@@ -124,7 +124,7 @@ void check_split(const RenderSettings& st) {
         throw Error(std::string("light and BSDF samples per vertex (") +
                     std::to_string(st.light_samples) + ", " + std::to_string(st.bsdf_samples) +
                     ") split the mis strategy's samples; strategy '" + name_of(st.strategy) +
-                    "' takes one of each");
+                    "' takes one of each (name the strategy mis to split)");
 }
 
 float parse_light_share(const std::string& s, const std::string& what) {
