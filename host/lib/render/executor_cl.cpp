@@ -254,10 +254,10 @@ size_t ClDevice::pending_events() const {
 void ClLane::collect_events() {
     // Profiling times of the finished launches; the events are released here, so a render holds
     // at most one bounce's worth of them. A blocking command after them on the in-order queue has
-    // finished their work, but not necessarily marked their events complete: NVIDIA's driver,
-    // with two lanes, answered CL_PROFILING_INFO_NOT_AVAILABLE then. So each is waited for first
-    // (at once when complete), and a time still not available is left out of the stage's
-    // seconds rather than ending the render.
+    // finished their work, but not necessarily marked their events complete: NVIDIA's driver
+    // (the H200, tests/render/executor_cl_test.cpp) answered CL_PROFILING_INFO_NOT_AVAILABLE then.
+    // So each is waited for first (at once when complete), and a time still not available is left
+    // out of the stage's seconds rather than ending the render.
     for (auto& [stage, ev] : pending_) {
         cl_event e = ev();
         cl_ulong start = 0, end = 0;
