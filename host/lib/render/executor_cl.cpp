@@ -244,6 +244,12 @@ void ClDevice::finish() {
         l->finish();
 }
 
+// A CPU device's lanes keep the host's cores busy; a GPU's lane waits while the host adds the
+// visibility strategy's records, so every hardware thread adds them (schedule.cpp).
+int ClDevice::host_threads() const {
+    return rt_->limits().cpu ? 1 : thread_count(0);
+}
+
 size_t ClDevice::pending_events() const {
     size_t n = 0;
     for (const auto& l : lanes_)

@@ -4,9 +4,12 @@
 #include "kernels/continuation_guide.h"
 #include "render/visibility_cache.h"
 #include "util/error.h"
+#include "util/parallel.h"
+#include "util/timer.h"
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -33,59 +36,93 @@ void WavefrontDevice::upload_guide(const std::vector<float>&) {
 
 namespace {
 
+// Records (or paths) below this many per thread are handled on one: a thread's start costs more.
+constexpr int kMinRecordsPerThread = 16384;
+
+// The threads that n records are handled on, of `threads` at most.
+int slices_for(int n, int threads) {
+    return std::max(1, std::min(threads, n / kMinRecordsPerThread));
+}
+
+// f(k, first, count) for the t slices of n items, on t threads (the calling thread's alone for
+// t = 1). VisibilityCache adds in integers, atomically: the tables are the same bits however the
+// records are sliced.
+template <typename F> void in_slices(int n, int t, F&& f) {
+    if (t <= 1) {
+        f(0, 0, n);
+        return;
+    }
+    run_on_threads(t, [&](int k) {
+        const int a = static_cast<int>(int64_t(n) * k / t);
+        f(k, a, static_cast<int>(int64_t(n) * (k + 1) / t) - a);
+    });
+}
+
 // The continuation guide's records of one wave (visibility_cache.h): each bounce, the paths that
 // pushed a continuation from a non-delta vertex note its cell, region, 1 / pdf, the throughput
 // after the vertex and the radiance so far; at the wave's end the radiance that came back along
-// each continuation is the path's final radiance less that.
+// each continuation is the path's final radiance less that. The paths are scanned, and their
+// records added, in slices on the host threads the device leaves free.
 class ContinuationRecorder {
   public:
-    explicit ContinuationRecorder(int n) : n_(n), o_(4 * n), d_(4 * n), b_(4 * n), r_(4 * n) {
-        vertices_.reserve(2 * static_cast<size_t>(n)); // about two guided vertices per path
+    ContinuationRecorder(int n, int host_threads)
+        : n_(n), o_(4 * n), d_(4 * n), b_(4 * n), r_(4 * n),
+          vertices_(static_cast<size_t>(slices_for(n, host_threads))) {
+        for (auto& v : vertices_) // about two guided vertices per path
+            v.reserve(2 * static_cast<size_t>(n) / vertices_.size());
     }
 
     void after_bounce(StageExecutor& ex, int bounce) {
         ex.read_paths(n_, o_.data(), d_.data(), b_.data(), r_.data());
-        for (int s = 0; s < n_; ++s) {
-            const float* o = &o_[4 * s];
-            const float* d = &d_[4 * s];
-            const float* b = &b_[4 * s];
-            if (static_cast<int>(o[3]) != bounce + 1 || !(d[3] > 0.0f))
-                continue; // no continuation from this bounce's vertex, or a delta one
-            Vertex v;
-            v.slot = s;
-            v.key = static_cast<int>(b[3]) * ETK_GUIDE_REGIONS +
-                    etk::etk_cguide_region(etk::make_float3(d[0], d[1], d[2]));
-            v.inv_pdf = 1.0f / d[3];
-            for (int k = 0; k < 3; ++k) {
-                v.beta[k] = b[k];
-                v.radiance[k] = r_[4 * s + k];
-                v.ray[k] = o[k];
-                v.ray[4 + k] = d[k];
+        in_slices(n_, static_cast<int>(vertices_.size()), [&](int k, int first, int count) {
+            for (int s = first; s < first + count; ++s) {
+                const float* o = &o_[4 * s];
+                const float* d = &d_[4 * s];
+                const float* b = &b_[4 * s];
+                if (static_cast<int>(o[3]) != bounce + 1 || !(d[3] > 0.0f))
+                    continue; // no continuation from this bounce's vertex, or a delta one
+                Vertex v;
+                v.slot = s;
+                v.key = static_cast<int>(b[3]) * ETK_GUIDE_REGIONS +
+                        etk::etk_cguide_region(etk::make_float3(d[0], d[1], d[2]));
+                v.inv_pdf = 1.0f / d[3];
+                for (int c = 0; c < 3; ++c) {
+                    v.beta[c] = b[c];
+                    v.radiance[c] = r_[4 * s + c];
+                    v.ray[c] = o[c];
+                    v.ray[4 + c] = d[c];
+                }
+                v.ray[3] = 0.0f;
+                v.ray[7] = d[3];
+                vertices_[k].push_back(v);
             }
-            v.ray[3] = 0.0f;
-            v.ray[7] = d[3];
-            vertices_.push_back(v);
-        }
+        });
     }
 
-    // After the last bounce: the paths' final radiance, and the records.
+    // After the last bounce: the paths' final radiance, and the records, each slice's on its
+    // thread.
     void finish(StageExecutor& ex, VisibilityCache& guide) {
         ex.read_paths(n_, nullptr, nullptr, nullptr, r_.data());
-        std::vector<int> keys;
-        std::vector<float> values, rays;
-        keys.reserve(vertices_.size());
-        values.reserve(vertices_.size());
-        rays.reserve(8 * vertices_.size());
-        for (const Vertex& v : vertices_) {
-            float L[3];
-            for (int k = 0; k < 3; ++k)
-                L[k] = v.beta[k] > 0.0f ? (r_[4 * v.slot + k] - v.radiance[k]) / v.beta[k] : 0.0f;
-            keys.push_back(v.key);
-            values.push_back(etk::etk_luma(etk::make_float3(L[0], L[1], L[2])) * v.inv_pdf);
-            rays.insert(rays.end(), v.ray, v.ray + 8);
-        }
-        guide.add_continuations(keys.data(), values.data(), rays.data(),
-                                static_cast<int>(keys.size()));
+        const int t = static_cast<int>(vertices_.size());
+        in_slices(t, t, [&](int k, int, int) {
+            const std::vector<Vertex>& vs = vertices_[k];
+            std::vector<int> keys;
+            std::vector<float> values, rays;
+            keys.reserve(vs.size());
+            values.reserve(vs.size());
+            rays.reserve(8 * vs.size());
+            for (const Vertex& v : vs) {
+                float L[3];
+                for (int c = 0; c < 3; ++c)
+                    L[c] =
+                        v.beta[c] > 0.0f ? (r_[4 * v.slot + c] - v.radiance[c]) / v.beta[c] : 0.0f;
+                keys.push_back(v.key);
+                values.push_back(etk::etk_luma(etk::make_float3(L[0], L[1], L[2])) * v.inv_pdf);
+                rays.insert(rays.end(), v.ray, v.ray + 8);
+            }
+            guide.add_continuations(keys.data(), values.data(), rays.data(),
+                                    static_cast<int>(keys.size()));
+        });
     }
 
   private:
@@ -96,7 +133,7 @@ class ContinuationRecorder {
     };
     int n_;
     std::vector<float> o_, d_, b_, r_;
-    std::vector<Vertex> vertices_;
+    std::vector<std::vector<Vertex>> vertices_; // per slice of the paths
 };
 
 } // namespace
@@ -107,11 +144,12 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
     shadow += o.shadow;
     shaded += o.shaded;
     nonfinite += o.nonfinite;
+    guide_record_seconds += o.guide_record_seconds;
     return *this;
 }
 
 void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
-              LightShareLearner* learner, VisibilityCache* guide) {
+              LightShareLearner* learner, VisibilityCache* guide, int host_threads) {
     p.first_pixel = first;
     std::vector<int> keys;
     std::vector<float> values;
@@ -125,7 +163,7 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     ex.launch(etk::ETK_STAGE_generate, n, p);
     std::unique_ptr<ContinuationRecorder> recorder;
     if (guide && p.guide_learn && p.guide_continuation)
-        recorder = std::make_unique<ContinuationRecorder>(n);
+        recorder = std::make_unique<ContinuationRecorder>(n, host_threads);
     counts.camera += n;
     int rays = n;
     bool swapped = false;
@@ -146,21 +184,32 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
         ex.launch(etk::ETK_STAGE_trace_shadows, static_cast<int>(c[etk::ETK_Q_SHADOW]), p);
         counts.shadow += c[etk::ETK_Q_SHADOW] + c[etk::ETK_Q_LIGHT_RAYS];
         if (guide && p.guide_learn && c[etk::ETK_Q_SHADOW] > 0) {
+            const Timer t;
             const int m = static_cast<int>(c[etk::ETK_Q_SHADOW]);
             keys.resize(m);
             values.resize(m);
             exits.resize(m);
             parts.resize(2 * static_cast<size_t>(m));
             ex.read_guide(m, keys.data(), values.data(), exits.data(), parts.data());
-            guide->add(keys.data(), values.data(), exits.data(), parts.data(), m);
+            in_slices(m, slices_for(m, host_threads), [&](int, int a, int k) {
+                guide->add(keys.data() + a, values.data() + a, exits.data() + a,
+                           parts.data() + 2 * static_cast<size_t>(a), k);
+            });
+            counts.guide_record_seconds += t.seconds();
         }
-        if (recorder && !etk::etk_last_bounce(p, bounce)) // the last vertex is never guided
+        if (recorder && !etk::etk_last_bounce(p, bounce)) { // the last vertex is never guided
+            const Timer t;
             recorder->after_bounce(ex, bounce);
+            counts.guide_record_seconds += t.seconds();
+        }
         rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
         swapped = !swapped;
     }
-    if (recorder)
+    if (recorder) {
+        const Timer t;
         recorder->finish(ex, *guide);
+        counts.guide_record_seconds += t.seconds();
+    }
     ex.launch(etk::ETK_STAGE_accumulate, n, p);
     ex.read_counters(c); // the last bounce reset them: this is the film's count
     counts.nonfinite += c[etk::ETK_Q_NONFINITE];
@@ -180,7 +229,7 @@ RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
             if (first >= pixels)
                 break;
             run_wave(device.lane(k), params, first, std::min(wave, pixels - first), counts[k],
-                     learner, guide);
+                     learner, guide, device.host_threads());
         }
     });
     device.finish();

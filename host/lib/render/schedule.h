@@ -42,6 +42,9 @@ struct RayCounts {
     uint64_t camera = 0, continuation = 0, shadow = 0;
     uint64_t shaded = 0;    // surface hits shaded (one light sample or light-set sum each)
     uint64_t nonfinite = 0; // samples dropped by the film; anything but 0 is a bug
+    // Visibility strategy: seconds the lanes spent reading the guide's records back and adding
+    // them to its sums (summed over the lanes), the learning passes' host share.
+    double guide_record_seconds = 0.0;
     RayCounts& operator+=(const RayCounts& o);
 };
 
@@ -72,14 +75,21 @@ class WavefrontDevice {
     virtual void upload_guide(const std::vector<float>& cells);
     // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
     virtual bool prefers_light_batches() const { return true; }
+    // Host threads a lane may spend on the visibility strategy's records between its launches:
+    // 1 where the device is the host's own cores (its lanes keep them busy), every hardware
+    // thread where the device is not (a GPU's lane waits on the host while it adds them).
+    virtual int host_threads() const { return 1; }
 };
 
 // One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
 // the film. Adds the rays traced to `counts`.
 // With params.learn, hands the first-hit bins of the wave's pixels to `learner`; with
 // params.guide_learn, every bounce's shadow-ray records to `guide`.
+// host_threads: how many threads add the guide's records (the tables are the same bits with
+// any number: integer sums).
 void run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
-              LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr);
+              LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr,
+              int host_threads = 1);
 
 // One pass: sample params.sample_index of every pixel, in waves of the device's size handed
 // to its lanes as they free up (learner: as run_wave).
