@@ -37,7 +37,7 @@ namespace et::cli {
 namespace {
 
 struct BenchArgs {
-    std::string scene, json_file;
+    std::string scene, json_file, strategy;
     int spp = 0, runs = 5, max_depth = 0, threads = 0, paths = -1;
     double target_seconds = 2.0;
 };
@@ -49,6 +49,10 @@ DeviceScene prepare(const BenchArgs& a, const Globals& g) {
         st.max_depth = a.max_depth;
     if (a.paths >= 0)
         st.paths = a.paths;
+    if (!a.strategy.empty()) {
+        st.strategy = parse_strategy(a.strategy, "command line: --strategy");
+        check_split(st);
+    }
     st.device = g.device;
     st.threads = a.threads;
     if (st.strategy == Strategy::sis) { // a scene may ask for SIS: its strata, as render builds
@@ -303,6 +307,10 @@ void add_bench_command(CLI::App& app, Globals& g) {
         ->check(CLI::Range(1, 1000));
     cmd->add_option("--paths", a->paths, "Paths in flight per lane (OpenCL; 0: the default)")
         ->check(CLI::Range(0, 1 << 26));
+    cmd->add_option("--strategy", a->strategy,
+                    "The scene's strategy otherwise (throughput comparisons across versions name "
+                    "one: tools/bench/render_benchmarks.py runs mis)")
+        ->check(CLI::IsMember(strategy_names()));
     cmd->add_option("--threads", a->threads, "Native back end threads (0: all cores)")
         ->check(CLI::Range(0, 1024));
     cmd->add_option("--target-seconds", a->target_seconds,

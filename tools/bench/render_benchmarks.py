@@ -48,6 +48,9 @@ def main():
                     help="folder for each invocation's JSON and log")
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--depths", default="1,5")
+    # The throughput of one estimator across versions: the paper's, as these results have always
+    # measured, whatever the scenes name (since 2026-11-28 some name visibility, which learns).
+    ap.add_argument("--strategy", default="mis", help="estimator (default mis, the paper's)")
     ap.add_argument("--spp", type=int, default=0, help="spp per run (default: envtrace chooses)")
     args = ap.parse_args()
     if not os.access(args.bin, os.X_OK):
@@ -64,7 +67,7 @@ def main():
             stem = os.path.join(args.raw, f"{name}_d{depth}")
             cmd = [args.bin, "bench", os.path.join(ROOT, scene) if not os.path.isabs(scene)
                    else scene, "--max-depth", str(depth), "--runs", str(args.runs),
-                   "--json", stem + ".json"]
+                   "--json", stem + ".json", "--strategy", args.strategy]
             if args.spp > 0:
                 cmd += ["--spp", str(args.spp)]
             print("+", " ".join(cmd), flush=True)
@@ -79,7 +82,8 @@ def main():
                 j = json.load(f)
             # The environment-sampling share and the program builds: tools/bench/render_probes.
             probe = [os.path.join(os.path.dirname(args.bin), "tools", "bench", "render_probes"),
-                     cmd[2], "--max-depth", str(depth), "--runs", str(args.runs), "--envtrace",
+                     cmd[2], "--max-depth", str(depth), "--runs", str(args.runs),
+                     "--strategy", args.strategy, "--envtrace",
                      args.bin, "--json", stem + "_probes.json"]
             print("+", " ".join(probe), flush=True)
             proc = subprocess.run(probe, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

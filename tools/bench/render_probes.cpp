@@ -11,7 +11,8 @@
 //    POCL_CACHE_DIR.
 // Renders go through the one schedule (host/lib/render). Output: a table, and --json F with the
 // keys tools/bench/render_benchmarks.py reads.
-// Usage: render_probes SCENE [--max-depth D] [--runs R] [--spp N] [--envtrace BIN] [--json F]
+// Usage: render_probes SCENE [--max-depth D] [--runs R] [--spp N] [--strategy S] [--envtrace BIN]
+//                      [--json F]
 #include "kernels/envmap.h"
 #include "load/scene.h"
 #include "opencl/opencl_runtime.h"
@@ -206,7 +207,7 @@ json build_probe(const std::string& exe, const std::string& scene, int depth, co
 } // namespace
 
 int main(int argc, char** argv) try {
-    std::string scene_path, json_file, exe = "build/envtrace";
+    std::string scene_path, json_file, strategy, exe = "build/envtrace";
     int depth = 1, runs = 5, spp = 4;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -225,15 +226,19 @@ int main(int argc, char** argv) try {
             json_file = next();
         else if (a == "--envtrace")
             exe = next();
+        else if (a == "--strategy")
+            strategy = next();
         else
             scene_path = a;
     }
     if (scene_path.empty())
         throw std::runtime_error("usage: render_probes SCENE [--max-depth D] [--runs R] [--spp N] "
-                                 "[--envtrace BIN] [--json F]");
+                                 "[--strategy S] [--envtrace BIN] [--json F]");
     et::Scene scene = et::load_scene(scene_path);
     et::RenderSettings st = scene.settings;
     st.max_depth = depth;
+    if (!strategy.empty()) // the scene's own otherwise
+        st.strategy = et::parse_strategy(strategy, "--strategy");
     et::DeviceScene ds = et::prepare_device_scene(std::move(scene), st);
     const int threads = et::thread_count(0);
 

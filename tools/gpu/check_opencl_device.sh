@@ -90,7 +90,8 @@ for s in ${SCENES-default cornell_box bunny_grace bunny_esplanade bunny_overpass
   done
 done
 
-# Light samples in batches (--light-batch on) against one at a time (off) on this device:
+# Light samples in batches (--light-batch on) against one at a time (off) on this device, with
+# the paper's estimator (the scenes may name the visibility strategy, which has no batches):
 # render seconds and the shade + sample_lights stages' device seconds, alternating; the films
 # must be equal bit for bit. auto picks off on a GPU (RenderSettings::light_batch).
 batch_stat() { # json: render seconds, stage seconds of shade_hits + sample_lights
@@ -101,11 +102,11 @@ for s in ${BATCH_SCENES-bunny_esplanade bunny_grace}; do
     for d in 1 5; do
         line="$s depth $d:"
         ENVTRACE_CL_PLATFORM=$platform "$exe" render "$root/scenes/$s.json" --spp 1 --max-depth $d \
-            --backend opencl -o "$out/batch_warm.pfm" >/dev/null 2>&1 # the program built and cached
+            --strategy mis --backend opencl -o "$out/batch_warm.pfm" >/dev/null 2>&1 # the program built and cached
         for r in 1 2 3; do
             for m in on off; do
                 ENVTRACE_CL_PLATFORM=$platform "$exe" render "$root/scenes/$s.json" --spp "${BATCH_SPP:-256}" \
-                    --max-depth $d --backend opencl --light-batch $m -o "$out/batch_$m.pfm" \
+                    --max-depth $d --strategy mis --backend opencl --light-batch $m -o "$out/batch_$m.pfm" \
                     --stats "$out/batch_$m.json" >/dev/null 2>&1 || line="$line FAILED($m)"
                 line="$line $m $(batch_stat "$out/batch_$m.json")"
             done
@@ -115,10 +116,11 @@ for s in ${BATCH_SCENES-bunny_esplanade bunny_grace}; do
     done
 done
 
-# Throughput against the native back end on all cores, alternating (envtrace bench).
+# Throughput against the native back end on all cores, alternating (envtrace bench), of the
+# paper's estimator whatever the scene names (comparable across versions).
 say "== envtrace bench, $platform against native"
 for s in ${BENCH_SCENES-bunny_grace bunny_esplanade}; do
     for d in 1 5; do
-        say "$s depth $d: $(ENVTRACE_CL_PLATFORM=$platform "$exe" bench "$root/scenes/$s.json" --max-depth $d --runs 3 --target-seconds 1 2>&1 | tail -4 | tr '\n' ' ')"
+        say "$s depth $d: $(ENVTRACE_CL_PLATFORM=$platform "$exe" bench "$root/scenes/$s.json" --strategy mis --max-depth $d --runs 3 --target-seconds 1 2>&1 | tail -4 | tr '\n' ' ')"
     done
 done
