@@ -316,29 +316,35 @@ TEST(CliOptions, CommandLinesThatDoNotParseAreOneErrorLineAndStatusOne) {
     EXPECT_EQ(help.code(), 0) << help.err;
 }
 
+// An 8 x 6 sphere under write_scene's map (written first), with the given render block.
+std::string write_sphere_scene(const std::string& dir, const std::string& name,
+                               const std::string& render) {
+    write_scene(dir);
+    const std::string path = dir + "/" + name;
+    write_file(path, R"({"environment": {"map": ")" + dir + R"(/sky.pfm"},
+        "film": {"width": 8, "height": 6}, "camera": {"eye": [0, 0, 4], "target": [0, 0, 0]},
+        "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}], "render": )" +
+                         render + "}");
+    return path;
+}
+
 TEST(CliOptions, BenchBuildsTheStrataOfAnSisScene) {
     const std::string dir = ett::scratch_dir("cli-opt-bench-sis");
-    write_scene(dir);
-    write_file(dir + "/sis.json", R"({"environment": {"map": ")" + dir + R"(/sky.pfm"},
-        "film": {"width": 8, "height": 6}, "camera": {"eye": [0, 0, 4], "target": [0, 0, 0]},
-        "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}],
-        "render": {"spp": 64, "max_depth": 1, "strategy": "sis"}})");
-    expect_ok(ett::run_envtrace(
-        {"bench", dir + "/sis.json", "--runs", "1", "--spp", "64", "--threads", "1"}, dir, 120));
+    const std::string scene =
+        write_sphere_scene(dir, "sis.json", R"({"spp": 64, "max_depth": 1, "strategy": "sis"})");
+    expect_ok(ett::run_envtrace({"bench", scene, "--runs", "1", "--spp", "64", "--threads", "1"},
+                                dir, 120));
 }
 
 // bench --strategy overrides the scene's (throughput across versions is of one estimator), and
 // an unknown name is refused.
 TEST(CliOptions, BenchTakesAStrategyOverTheScenes) {
     const std::string dir = ett::scratch_dir("cli-opt-bench-strategy");
-    write_scene(dir);
-    write_file(dir + "/vis.json", R"({"environment": {"map": ")" + dir + R"(/sky.pfm"},
-        "film": {"width": 8, "height": 6}, "camera": {"eye": [0, 0, 4], "target": [0, 0, 0]},
-        "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}],
-        "render": {"spp": 4, "max_depth": 1, "strategy": "visibility"}})");
+    const std::string scene = write_sphere_scene(
+        dir, "vis.json", R"({"spp": 4, "max_depth": 1, "strategy": "visibility"})");
     const std::string json = dir + "/bench.json";
-    expect_ok(ett::run_envtrace({"bench", dir + "/vis.json", "--strategy", "mis", "--runs", "1",
-                                 "--spp", "4", "--threads", "1", "--json", json},
+    expect_ok(ett::run_envtrace({"bench", scene, "--strategy", "mis", "--runs", "1", "--spp", "4",
+                                 "--threads", "1", "--json", json},
                                 dir, 120));
     std::ifstream in(json);
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -346,8 +352,7 @@ TEST(CliOptions, BenchTakesAStrategyOverTheScenes) {
     ASSERT_NE(at, std::string::npos) << text;
     const size_t open = text.find('"', text.find(':', at));
     EXPECT_EQ(text.substr(open, 5), "\"mis\"") << text.substr(at, 40);
-    expect_error(ett::run_envtrace({"bench", dir + "/vis.json", "--strategy", "best"}, dir),
-                 "--strategy");
+    expect_error(ett::run_envtrace({"bench", scene, "--strategy", "best"}, dir), "--strategy");
 }
 
 TEST(CliOptions, CompareRefusesAMaskThatSelectsNothing) {
