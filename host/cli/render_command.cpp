@@ -248,6 +248,7 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
             {"learning_seconds", s.guide_learning_seconds},
             {"update_seconds", s.guide_update_seconds},
             {"record_seconds", s.guide_record_seconds},
+            {"record_threads", s.guide_record_threads},
             {"records", s.guide_records},
             {"continuation_records", s.guide_continuation_records},
             {"host_bytes", s.guide_host_bytes},

@@ -262,13 +262,17 @@ void ClLane::collect_events() {
     // at most one bounce's worth of them. A blocking command after them on the in-order queue has
     // finished their work, but not necessarily marked their events complete: NVIDIA's driver
     // (the H200, tests/render/executor_cl_test.cpp) answered CL_PROFILING_INFO_NOT_AVAILABLE then.
-    // So each is waited for first (at once when complete), and a time still not available is left
-    // out of the stage's seconds rather than ending the render.
+    // So they are waited for first (at once when complete), and a time still not available is
+    // left out of the stage's seconds rather than ending the render.
+    std::vector<cl_event> events;
+    for (auto& [stage, ev] : pending_)
+        events.push_back(ev());
+    if (!events.empty())
+        clWaitForEvents(static_cast<cl_uint>(events.size()), events.data()); // errors: below
     for (auto& [stage, ev] : pending_) {
         cl_event e = ev();
         cl_ulong start = 0, end = 0;
-        if (clWaitForEvents(1, &e) == CL_SUCCESS &&
-            clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr) ==
+        if (clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr) ==
                 CL_SUCCESS &&
             clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_END, sizeof end, &end, nullptr) ==
                 CL_SUCCESS &&

@@ -165,6 +165,7 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     device_->clear_film(sums_.has_aovs());
     const RayCounts c = run_pass(*device_, p, learner, p.guide_learn ? cache_.get() : nullptr);
     stats_.guide_record_seconds += c.guide_record_seconds;
+    stats_.guide_record_threads = std::max(stats_.guide_record_threads, c.guide_record_threads);
     device_->download_film(film_, sums_.has_aovs());
     if (keep)
         sums_.add_pass(film_, scene_.settings.threads); // the render's cores, idle now

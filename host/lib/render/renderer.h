@@ -36,6 +36,7 @@ struct RenderStats {
     // structure's memory.
     double guide_learning_seconds = 0.0, guide_update_seconds = 0.0;
     double guide_record_seconds = 0.0; // of the learning passes: records read back and added
+    int guide_record_threads = 0;      // the most host threads they were added on at once
     uint64_t guide_records = 0, guide_continuation_records = 0;
     uint64_t guide_host_bytes = 0, guide_device_bytes = 0;
     // The learned tables' cells that take fewer light samples (etk_guide_light_count), per count.

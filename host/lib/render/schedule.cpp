@@ -72,6 +72,8 @@ class ContinuationRecorder {
             v.reserve(2 * static_cast<size_t>(n) / vertices_.size());
     }
 
+    int slices() const { return static_cast<int>(vertices_.size()); }
+
     void after_bounce(StageExecutor& ex, int bounce) {
         ex.read_paths(n_, o_.data(), d_.data(), b_.data(), r_.data());
         in_slices(n_, static_cast<int>(vertices_.size()), [&](int k, int first, int count) {
@@ -103,8 +105,7 @@ class ContinuationRecorder {
     // thread.
     void finish(StageExecutor& ex, VisibilityCache& guide) {
         ex.read_paths(n_, nullptr, nullptr, nullptr, r_.data());
-        const int t = static_cast<int>(vertices_.size());
-        in_slices(t, t, [&](int k, int, int) {
+        run_on_threads(static_cast<int>(vertices_.size()), [&](int k) {
             const std::vector<Vertex>& vs = vertices_[k];
             std::vector<int> keys;
             std::vector<float> values, rays;
@@ -145,6 +146,7 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
     shaded += o.shaded;
     nonfinite += o.nonfinite;
     guide_record_seconds += o.guide_record_seconds;
+    guide_record_threads = std::max(guide_record_threads, o.guide_record_threads);
     return *this;
 }
 
@@ -162,8 +164,10 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     ex.bind_queues(true); // generate fills queue A
     ex.launch(etk::ETK_STAGE_generate, n, p);
     std::unique_ptr<ContinuationRecorder> recorder;
-    if (guide && p.guide_learn && p.guide_continuation)
+    if (guide && p.guide_learn && p.guide_continuation) {
         recorder = std::make_unique<ContinuationRecorder>(n, host_threads);
+        counts.guide_record_threads = std::max(counts.guide_record_threads, recorder->slices());
+    }
     counts.camera += n;
     int rays = n;
     bool swapped = false;
@@ -191,7 +195,9 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
             exits.resize(m);
             parts.resize(2 * static_cast<size_t>(m));
             ex.read_guide(m, keys.data(), values.data(), exits.data(), parts.data());
-            in_slices(m, slices_for(m, host_threads), [&](int, int a, int k) {
+            const int slices = slices_for(m, host_threads);
+            counts.guide_record_threads = std::max(counts.guide_record_threads, slices);
+            in_slices(m, slices, [&](int, int a, int k) {
                 guide->add(keys.data() + a, values.data() + a, exits.data() + a,
                            parts.data() + 2 * static_cast<size_t>(a), k);
             });

@@ -45,6 +45,7 @@ struct RayCounts {
     // Visibility strategy: seconds the lanes spent reading the guide's records back and adding
     // them to its sums (summed over the lanes), the learning passes' host share.
     double guide_record_seconds = 0.0;
+    int guide_record_threads = 0; // the most host threads one bounce's records were sliced over
     RayCounts& operator+=(const RayCounts& o);
 };
 
