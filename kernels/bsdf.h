@@ -197,6 +197,27 @@ ETK_CL_INLINE_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
     return ps * spec + (1.0f - ps) * diffuse;
 }
 
+// An upper bound of etk_bsdf_pdf(m, wo, wi) over every wi, for this wo; ETK_PDF_UNBOUNDED where
+// there is none to give (NDF-sampled GGX, whose density grows without bound as wo.h -> 0; glass;
+// delta lobes). Diffuse: cos / pi <= 1 / pi. Visible-normal GGX: G1(wo) D(h) / (4 wo.z) with D at
+// most max(alpha^2, 1 / alpha^2) / pi, reached at h = n (alpha < 1), so the bound is tight where
+// n is visible from wo.
+#define ETK_PDF_UNBOUNDED 3.0e38f
+ETK_FN float etk_bsdf_pdf_bound(EtkMaterial m, float3 wo) {
+    if (etk_bsdf_is_dielectric(m) || m.type == ETK_MAT_MIRROR)
+        return ETK_PDF_UNBOUNDED;
+    if (wo.z <= 0.0f)
+        return 0.0f; // nothing reflects from below (etk_bsdf_pdf)
+    if (m.type == ETK_MAT_DIFFUSE)
+        return ETK_INV_PI;
+    float ps = etk_specular_weight(m);
+    if (!m.vndf && ps > 0.0f)
+        return ETK_PDF_UNBOUNDED;
+    float a2 = m.alpha * m.alpha;
+    float d_max = fmax(a2, 1.0f / a2) * ETK_INV_PI;
+    return ps * (etk_smith_g1(wo.z, m.alpha) * d_max / (4.0f * wo.z)) + (1.0f - ps) * ETK_INV_PI;
+}
+
 typedef struct {
     float3 wi;
     float3 weight; // f cos / pdf (for a delta lobe: the reflectance)

@@ -20,6 +20,9 @@ typedef struct {
     // The black mask's blocks across and down (host/lib/prepare/env_black_mask.h); 0: the map has
     // no black block, and nothing asks.
     int black_w, black_h;
+    // The solid angle (sr) of the blocks the mask leaves clear: where the map's light can come
+    // from (read only where black_w > 0).
+    float lit_sr;
 } EtkEnvMap;
 
 ETK_FN float3 etk_env_to_world(EtkEnvMap env, float3 d) {

@@ -86,6 +86,25 @@ ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p, int depth
     return p.strategy == ETK_STRATEGY_COMPENSATED && depth > 0 ? S.env_dist_comp : S.env_dist;
 }
 
+// The compensated strategy's BSDF sample at a path's last vertex, where the map's light sits in a
+// few blocks on black (a studio's lamps, spot1Lux): taken only with probability q, the expected
+// BSDF sample count, and weighted by MIS on the counts (1 p_light, q p_bsdf): the light sample
+// counts f L cos / (p_light + q p_bsdf) (balance), a BSDF sample, when taken, the same over
+// (p_light + q p_bsdf) -- unbiased for every q in (0, 1], and never above the light sample's own
+// value, so a rare BSDF sample makes no firefly. Most of those BSDF samples would look at black
+// (their rays are not traced there, but drawing and mapping them is a quarter of a depth-1 render
+// of spot1Lux) and the light sample finds the lamps alone: q is the most the BSDF's samples can
+// put into the directions that are not black for certain, p_bsdf's bound over them times their
+// solid angle (lit_sr), so a lobe that could put more of its samples there -- a glossy one facing
+// a lamp -- keeps them. 1 for a map without a black block (bit for bit the strategy without it),
+// at delta vertices, below the last bounce and for the other strategies; 0 where the BSDF
+// reflects nothing at all.
+ETK_FN float etk_last_bsdf_share(EtkParams p, EtkMaterial m, float3 wo, int last, int delta) {
+    if (p.strategy != ETK_STRATEGY_COMPENSATED || !last || delta || p.env.black_w == 0)
+        return 1.0f;
+    return fmin(1.0f, p.env.lit_sr * etk_bsdf_pdf_bound(m, wo));
+}
+
 // Adaptive allocation (ETK_STRATEGY_ADAPTIVE). A vertex draws two samples -- A, traced as the
 // shadow ray, and B, the continuation -- each from the light distribution or the BSDF, so that
 // s of the two are light samples in expectation: A is a light sample with probability min(s, 1),
@@ -340,6 +359,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     int last = etk_last_bounce(p, depth);
     int adaptive = p.strategy == ETK_STRATEGY_ADAPTIVE;
     int delta = etk_bsdf_is_delta(m);
+    float bq = etk_last_bsdf_share(p, m, wo, last, delta); // the BSDF sample's expected count
     // Adaptive: this vertex's share, distribution and GGX sampling; learning passes note the
     // first hit's bin.
     float share = 1.0f;
@@ -435,7 +455,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
                 float w = etk_strategy_is_mis(p.strategy)
                               ? etk_light_sample_weight(
                                     p, lc, pdf_light,
-                                    etk_cguide_mix_pdf(S, p, cell, cg, etk_bsdf_pdf(m, wo, wi),
+                                    etk_cguide_mix_pdf(S, p, cell, cg, bq * etk_bsdf_pdf(m, wo, wi),
                                                        etk_surface_origin(s, wi_world), wi_world))
                               : 1.0f; // sample 0 of the vertex's light samples
                 float3 L = p.light_batch ? etk_xyz(P.light_L[slot])
@@ -478,6 +498,11 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
                                            !etk_strategy_is_mis(p.strategy) && !adaptive && !delta))
         return;
     float2 rr = etk_dims(p, pixel, pair + 2u);
+    if (bq < 1.0f) { // taken with probability bq (etk_last_bsdf_share); rr.y stays uniform
+        if (!(rr.y < bq))
+            return;
+        rr.y /= bq;
+    }
     float2 u = etk_dims(p, pixel, pair + 1u);
     float3 wi_world, weight;
     float pdf; // p_bsdf of the direction for the adaptive strategy; else the pdf it was drawn with
@@ -520,6 +545,10 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
         wz = bs.wi.z;
         weight = bs.weight;
         pdf = bs.pdf;
+        if (bq < 1.0f) { // a sample of expected count bq: density bq p_bsdf in the miss's weight
+            weight = weight / bq;
+            pdf = pdf * bq;
+        }
         delta_sample = bs.delta;
         if (adaptive && !delta && share > 1.0f) { // drawn from the mixture, not the BSDF alone
             float pl = etk_env_pdf_uv(dist, p.env, etk_env_uv(p.env, wi_world));

@@ -13,14 +13,16 @@
 
 namespace {
 
-et::Scene lamp_scene(int depth, et::Strategy strategy) {
-    et::RgbImage img = ett::constant_image(128, 64, 0.0f);
-    for (int y = 10; y < 13; ++y) // the lamp, high in the sky
-        for (int x = 40; x < 43; ++x)
+// band: a band of sky too; w: the map's width (its height is half that).
+et::Scene lamp_scene(int depth, et::Strategy strategy, bool band = true, int w = 128) {
+    et::RgbImage img = ett::constant_image(w, w / 2, 0.0f);
+    const int k = w / 128;
+    for (int y = 10 * k; y < 10 * k + 3; ++y) // the lamp, high in the sky
+        for (int x = 40 * k; x < 40 * k + 3; ++x)
             for (int c = 0; c < 3; ++c)
                 img.at(x, y)[c] = 400.0f;
-    for (int y = 26; y < 30; ++y) // a band of sky just above the horizon, on one side
-        for (int x = 80; x < 110; ++x)
+    for (int y = 26 * k; y < 30 * k && band; ++y) // a band of sky above the horizon, on one side
+        for (int x = 80 * k; x < 110 * k; ++x)
             img.at(x, y)[2] = 2.0f;
     et::Scene s = ett::base_scene(40, 24, et::make_envmap("lamp", img, {}));
     et::Material glossy;
@@ -49,7 +51,8 @@ struct MaskRun {
     uint64_t continuations = 0;
 };
 
-MaskRun render(const et::Scene& scene, const std::string& backend, bool mask) {
+// lit_sr > 0: the mask's lit solid angle replaced (the compensated strategy's last BSDF share).
+MaskRun render(const et::Scene& scene, const std::string& backend, bool mask, float lit_sr = 0.0f) {
     et::RenderSettings st = scene.settings;
     st.backend = et::parse_backend(backend, "test");
     st.threads = 2;
@@ -57,6 +60,8 @@ MaskRun render(const et::Scene& scene, const std::string& backend, bool mask) {
     EXPECT_GT(ds.params.env.black_w, 0) << "the lamp's map must have a black mask";
     if (!mask)
         ds.params.env.black_w = ds.params.env.black_h = 0;
+    if (lit_sr > 0.0f)
+        ds.params.env.lit_sr = lit_sr;
     auto r = et::make_renderer(ds);
     for (uint32_t k = 0; k < 12; ++k)
         r->render_sample(k);
@@ -87,6 +92,34 @@ TEST(LastBounce, SkippingBlackContinuationsChangesNoBit) {
                 else
                     EXPECT_LT(with.continuations, without.continuations);
             }
+}
+
+// The compensated strategy takes its last vertex's BSDF sample with probability q = the lit solid
+// angle times the BSDF's density bound (integrator.h, etk_last_bsdf_share): under a lamp alone
+// (lit: 0.1 sr, q = 0.03 on diffuse surfaces) most of those samples are never drawn, so fewer
+// continuations
+// are traced than with the rule off (a lit solid angle so large that q = 1); the image changes
+// (an estimator with other weights) and stays finite, on both back ends. That it converges to
+// the same image is Strategies.CompensatedWithFewLastBsdfSamplesConverges.
+TEST(LastBounce, CompensatedDrawsFewBsdfSamplesUnderALamp) {
+    for (const char* backend : {"cpu", "opencl"})
+        for (int depth : {1, 3}) {
+            SCOPED_TRACE(std::string(backend) + " depth " + std::to_string(depth));
+            const et::Scene s = lamp_scene(depth, et::Strategy::compensated, false, 256);
+            const MaskRun few = render(s, backend, true), all = render(s, backend, true, 1e30f);
+            size_t differ = 0;
+            for (size_t i = 0; i < few.image.size(); ++i)
+                differ += few.image[i] != all.image[i];
+            if (depth == 1) { // every vertex is the last
+                EXPECT_LT(few.continuations, all.continuations / 4);
+                EXPECT_GT(differ, few.image.size() / 4);
+            } else { // only paths that reach a third surface
+                EXPECT_LT(few.continuations, all.continuations);
+                EXPECT_GT(differ, 0u);
+            }
+            EXPECT_NEAR(ett::image_mean(few.image), ett::image_mean(all.image),
+                        0.1 * ett::image_mean(all.image));
+        }
 }
 
 } // namespace

@@ -130,6 +130,30 @@ TEST(Strategies, CompensatedLeavesTheFirstVertexToTheFullMap) {
         }
 }
 
+// The compensated strategy's last BSDF sample, taken with probability q below 1 where the map has
+// black blocks (integrator.h, etk_last_bsdf_share), weighted on the counts (1, q) by the light
+// sample, by the BSDF sample and at its miss. Under a map that is black nowhere those weights
+// carry much of the image (glossy lobes, the compensated distribution's zeros below the mean),
+// so the test forces the rule there: a mask with no black block and a lit solid angle of 0.5 sr
+// (q = 0.16 on the diffuse surfaces). Any q in (0, 1] leaves the estimator unbiased: the image
+// agrees with the light and mis strategies'. Fails when any of the three weights leaves q out.
+TEST_P(Strategies, CompensatedWithFewLastBsdfSamplesConverges) {
+    ETT_DATA_FILE(path, "envmaps/pisa.hdr");
+    const int depth = GetParam(), spp = 256;
+    const et::EnvMap env = et::load_envmap(path, {});
+    const auto light = ett::render(scene(env, "light", depth, 21), "cpu", spp);
+    const auto mis = ett::render(scene(env, "mis", depth, 22), "cpu", spp);
+    const auto few =
+        ett::render(scene(env, "compensated", depth, 23), "cpu", spp, true, [](et::DeviceScene& d) {
+            d.params.env.black_w = d.params.env.black_h = 1;
+            d.env_black = {0}; // one block, clear: nothing is black
+            d.params.env.lit_sr = 0.5f;
+        });
+    const std::string d = " depth " + std::to_string(depth);
+    expect_agree(light, few, "light vs compensated, q < 1" + d);
+    expect_agree(mis, few, "mis vs compensated, q < 1" + d);
+}
+
 // An interior, where the visibility strategy's tables move light samples away from the map's
 // distribution: a closed box lit through one opening (the open side's square is missing) and a
 // block inside, seen from within.

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace {
@@ -91,6 +92,38 @@ TEST(EnvBlackMask, MostOfAOneTexelMapIsBlack) {
     // A map with no black block has no mask; an all-black one is black everywhere.
     EXPECT_EQ(et::env_black_mask(ett::constant_image(64, 32, 0.5f)).width, 0);
     EXPECT_GT(check_sound(ett::constant_image(64, 32, 0.0f)), 0.999);
+}
+
+// The solid angle of the directions the mask leaves clear (lit_solid_angle, which bounds the
+// compensated strategy's last BSDF samples): the sum over a grid of 4 x 4 cells per texel -- each
+// inside one block, so its bit is the kernel's reading at its centre -- of the cells' exact solid
+// angles, for sizes with partial blocks, a lit pole and the seam. 4 pi without a mask; 0 for a
+// black map.
+TEST(EnvBlackMask, LitSolidAngleIsWhereTheMaskSaysNotBlack) {
+    for (auto [w, h] : {std::pair{64, 32}, {61, 29}, {128, 64}}) {
+        et::RgbImage img = ett::constant_image(w, h, 0.0f);
+        light(img, 7, 3, 0);
+        light(img, w - 1, h / 2, 1);
+        light(img, w / 3, h - 1, 2);
+        const et::EnvBlackMask m = et::env_black_mask(img);
+        ASSERT_GT(m.width, 0) << w << "x" << h;
+        const etk::EtkEnvMap d = desc_of(img, m);
+        const int gw = 4 * w, gh = 4 * h;
+        double clear = 0.0;
+        for (int y = 0; y < gh; ++y) {
+            const double band =
+                2.0 * M_PI / gw * (std::cos(M_PI * y / gh) - std::cos(M_PI * (y + 1) / gh));
+            for (int x = 0; x < gw; ++x)
+                if (!etk::etk_env_black_uv(m.bits.data(), d,
+                                           etk::make_float2((x + 0.5f) / gw, (y + 0.5f) / gh)))
+                    clear += band;
+        }
+        EXPECT_NEAR(m.lit_solid_angle, clear, 1e-5 * 4.0 * M_PI) << w << "x" << h;
+        EXPECT_LT(m.lit_solid_angle, 0.9 * 4.0 * M_PI) << w << "x" << h;
+    }
+    EXPECT_NEAR(et::env_black_mask(ett::constant_image(64, 32, 0.5f)).lit_solid_angle, 4.0 * M_PI,
+                1e-5);
+    EXPECT_EQ(et::env_black_mask(ett::constant_image(64, 32, 0.0f)).lit_solid_angle, 0.0f);
 }
 
 } // namespace

@@ -72,6 +72,7 @@ etk::EtkEnvMap EnvMap::desc() const {
     d.rot_sin = static_cast<float>(std::sin(a));
     d.has_light = dist.has_light() && scale > 0.0f ? 1 : 0;
     d.black_w = d.black_h = 0; // no black mask unless the preparation builds one
+    d.lit_sr = static_cast<float>(4.0 * M_PI);
     return d;
 }
 

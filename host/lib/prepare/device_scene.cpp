@@ -276,6 +276,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     EnvBlackMask black = env_black_mask(scene.env.image);
     p.env.black_w = black.width;
     p.env.black_h = black.height;
+    p.env.lit_sr = black.lit_solid_angle;
     d.env_black = std::move(black.bits);
     d.env_texels = std::move(scene.env.image.rgb);
     if (st.strategy == Strategy::visibility)

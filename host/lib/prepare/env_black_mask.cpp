@@ -2,6 +2,7 @@
 #include "kernels/envmap.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -50,6 +51,20 @@ EnvBlackMask env_black_mask(const RgbImage& image) {
             }
         }
     if (any) {
+        // Each clear block's solid angle: its columns' share of 2 pi times cos theta0 - cos
+        // theta1 over its rows (the last row and column of blocks may be partial).
+        double lit_sr = 0.0;
+        for (int by = 0; by < bh; ++by) {
+            const double t0 = M_PI * by * B / image.height,
+                         t1 = M_PI * std::min(by * B + B, image.height) / image.height;
+            const double band = 2.0 * M_PI * (std::cos(t0) - std::cos(t1)) / image.width;
+            for (int bx = 0; bx < bw; ++bx) {
+                const int bit = by * bw + bx;
+                if (!((bits[bit / 32] >> (bit % 32)) & 1))
+                    lit_sr += band * (std::min(bx * B + B, image.width) - bx * B);
+            }
+        }
+        m.lit_solid_angle = static_cast<float>(lit_sr);
         m.width = bw;
         m.height = bh;
         m.bits = std::move(bits);

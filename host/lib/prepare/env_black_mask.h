@@ -12,6 +12,10 @@ namespace et {
 struct EnvBlackMask {
     int width = 0, height = 0; // in blocks of ETK_ENV_BLACK_BLOCK texels; 0 x 0: no black block
     std::vector<int> bits;     // bit by * width + bx of word (by * width + bx) / 32
+    // The solid angle (sr) of the blocks whose bit is clear: where any light can come from. 4 pi
+    // without a mask. The compensated strategy's last bounce bounds the chance that a BSDF sample
+    // finds light by it (kernels/integrator.h, etk_last_bsdf_share).
+    float lit_solid_angle = 4.0f * 3.14159265f;
 };
 
 // A block's bit is set when its texels and those of its eight neighbours (wrapping in longitude,
