@@ -6,7 +6,8 @@ paper's MIS (issue 10).
                                     [--strategies light bsdf mis ...] [--out DIR] [--tiny]
 
 The suite: five maps (a tiny intense sun: royal_esplanade_1k, spot1Lux; few small sources:
-grace; broad light: pedestrian_overpass_1k, venice_sunset_1k), each lighting one scene of five
+grace; broad light: pedestrian_overpass_1k, venice_sunset_1k; `--maps studio` adds a generated
+map of three softboxes on black), each lighting one scene of five
 spheres in a row on a diffuse ground -- diffuse, plastic (GGX alpha 0.3), metal alpha 0.2, metal
 alpha 0.05, mirror -- at path depth 1 and 5. Strategies are --strategy names with options:
 `mis+vndf` (--bsdf-sampling vndf), `visibility+power` (--mis-heuristic power), `compensated+ndf`,
@@ -54,7 +55,26 @@ MAPS = {  # name -> (file, kind)
     "grace": ("grace.hdr", "few small sources"),
     "overpass": ("pedestrian_overpass_1k.hdr", "broad"),
     "venice": ("venice_sunset_1k.hdr", "broad"),
+    # Not in the suite (--maps studio): three softboxes on black, generated (studio_map), where
+    # the black mask and the compensated strategy's last BSDF share act on area lights.
+    "studio": (None, "softboxes on black"),
 }
+SUITE = ["esplanade", "spot", "grace", "overpass", "venice"]
+
+
+def studio_map(cache):
+    """A 1024 x 512 lat-long map, black but for three rectangular softboxes of 20-30 (0.11-0.14 sr
+    each with the mask's margin), written as PFM into the cache. Returns its path."""
+    w, h = 1024, 512
+    img = np.zeros((h, w, 3), np.float32)
+    for c0, r0, bw, bh, L in [(100, 120, 60, 30, (20, 20, 20)), (400, 90, 40, 50, (30, 28, 25)),
+                              (700, 160, 80, 20, (10, 12, 15))]:
+        img[r0:r0 + bh, c0:c0 + bw] = L
+    path = os.path.join(cache, "studio.pfm")
+    with open(path, "wb") as f:  # PFM: rows bottom to top, little-endian floats
+        f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+        f.write(img[::-1].astype("<f4").tobytes())
+    return path
 MATERIALS = [  # region name, material
     ("diffuse", {"type": "diffuse", "albedo": 0.8}),
     ("plastic 0.3", {"type": "plastic", "albedo": 0.6, "specular": 0.04, "roughness": 0.3}),
@@ -229,7 +249,7 @@ def main():
     p = common.parser(__doc__.splitlines()[0])
     p.add_argument("--budgets", type=float, nargs="+", default=[0.5, 2.0])
     p.add_argument("--seeds", type=int, default=3)
-    p.add_argument("--maps", nargs="+", default=list(MAPS), choices=list(MAPS))
+    p.add_argument("--maps", nargs="+", default=SUITE, choices=list(MAPS))
     p.add_argument("--depths", type=int, nargs="+", default=[1, 5])
     p.add_argument("--strategies", nargs="+", default=["light", "bsdf", "mis"])
     p.add_argument("--ref-seconds", type=float, default=None,
@@ -266,7 +286,8 @@ def main():
                 name = f"{map_key}-d{depth}"
                 scene = os.path.join(cache, f"{name}-{width}x{height}.json")
                 with open(scene, "w") as f:
-                    json.dump(scene_json(MAPS[map_key][0], depth, width, height), f, indent=1)
+                    map_file = MAPS[map_key][0] or studio_map(cache)
+                    json.dump(scene_json(map_file, depth, width, height), f, indent=1)
                 cases.append((name, scene, map_key, depth))
     for name, scene, map_key, depth in cases:
             tag = os.path.splitext(os.path.basename(scene))[0] if a.scenes else f"{name}-{width}x{height}"

@@ -23,7 +23,7 @@ def main():
     p = common.parser(__doc__.splitlines()[0])
     p.add_argument("--spp", type=int, default=128)
     p.add_argument("--split", type=int, default=32, help="light and BSDF samples per vertex")
-    p.add_argument("--maps", nargs="+", default=list(efficiency.MAPS),
+    p.add_argument("--maps", nargs="+", default=efficiency.SUITE,
                    choices=list(efficiency.MAPS))
     p.add_argument("--depths", type=int, nargs="+", default=[1, 5])
     a = p.parse_args()
@@ -39,7 +39,8 @@ def main():
         for depth in a.depths:
             scene = os.path.join(work, f"{m}-d{depth}.json")
             with open(scene, "w") as f:
-                json.dump(efficiency.scene_json(efficiency.MAPS[m][0], depth, width, height), f)
+                map_file = efficiency.MAPS[m][0] or efficiency.studio_map(work)
+                json.dump(efficiency.scene_json(map_file, depth, width, height), f)
             res = {}
             for name, extra in variants.items():
                 imgs, spp_s = [], None

@@ -5,6 +5,7 @@
 #pragma once
 #include "image/image_io.h"
 
+#include <cmath>
 #include <vector>
 
 namespace et {
@@ -15,7 +16,7 @@ struct EnvBlackMask {
     // The solid angle (sr) of the blocks whose bit is clear: where any light can come from. 4 pi
     // without a mask. The compensated strategy's last bounce bounds the chance that a BSDF sample
     // finds light by it (kernels/integrator.h, etk_last_bsdf_share).
-    float lit_solid_angle = 4.0f * 3.14159265f;
+    float lit_solid_angle = static_cast<float>(4.0 * M_PI);
 };
 
 // A block's bit is set when its texels and those of its eight neighbours (wrapping in longitude,
