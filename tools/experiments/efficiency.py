@@ -63,8 +63,9 @@ SUITE = ["esplanade", "spot", "grace", "overpass", "venice"]
 
 
 def studio_map(cache):
-    """A 1024 x 512 lat-long map, black but for three rectangular softboxes of 20-30 (0.11-0.14 sr
-    each with the mask's margin), written as PFM into the cache. Returns its path."""
+    """A 1024 x 512 lat-long map, black but for three rectangular softboxes of radiance 10-30
+    (0.34 sr left clear by the black mask, margins included), written as PFM into the cache.
+    Returns its path."""
     w, h = 1024, 512
     img = np.zeros((h, w, 3), np.float32)
     for c0, r0, bw, bh, L in [(100, 120, 60, 30, (20, 20, 20)), (400, 90, 40, 50, (30, 28, 25)),
