@@ -501,7 +501,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     if (bq < 1.0f) { // taken with probability bq (etk_last_bsdf_share); rr.y stays uniform
         if (!(rr.y < bq))
             return;
-        rr.y /= bq;
+        rr.y = fmin(rr.y / bq, 0.99999994f); // below 1, as it was, whatever the quotient rounds to
     }
     float2 u = etk_dims(p, pixel, pair + 1u);
     float3 wi_world, weight;
