@@ -1,8 +1,8 @@
 #include "prepare/env_black_mask.h"
 #include "kernels/envmap.h"
+#include "load/environment_map.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -51,13 +51,13 @@ EnvBlackMask env_black_mask(const RgbImage& image) {
             }
         }
     if (any) {
-        // Each clear block's solid angle: its columns' share of 2 pi times cos theta0 - cos
-        // theta1 over its rows (the last row and column of blocks may be partial).
+        // Each clear block's solid angle: its texels' (the last row and column of blocks may be
+        // partial).
         double lit_sr = 0.0;
         for (int by = 0; by < bh; ++by) {
-            const double t0 = M_PI * by * B / image.height,
-                         t1 = M_PI * std::min(by * B + B, image.height) / image.height;
-            const double band = 2.0 * M_PI * (std::cos(t0) - std::cos(t1)) / image.width;
+            double band = 0.0; // one column of the block's rows
+            for (int y = by * B; y < std::min(by * B + B, image.height); ++y)
+                band += texel_solid_angle(y, image.width, image.height);
             for (int bx = 0; bx < bw; ++bx) {
                 const int bit = by * bw + bx;
                 if (!((bits[bit / 32] >> (bit % 32)) & 1))
