@@ -97,10 +97,9 @@ TEST(LastBounce, SkippingBlackContinuationsChangesNoBit) {
 // The compensated strategy takes its last vertex's BSDF sample with probability q = the lit solid
 // angle times the BSDF's density bound (integrator.h, etk_last_bsdf_share): under a lamp alone
 // (lit: 0.1 sr, q = 0.03 on diffuse surfaces) most of those samples are never drawn, so fewer
-// continuations
-// are traced than with the rule off (a lit solid angle so large that q = 1); the image changes
-// (an estimator with other weights) and stays finite, on both back ends. That it converges to
-// the same image is Strategies.CompensatedWithFewLastBsdfSamplesConverges.
+// continuations are traced than with the rule off (a lit solid angle so large that q = 1); the
+// image changes (an estimator with other weights), on both back ends. That it converges to the
+// same image is Strategies.CompensatedWithFewLastBsdfSamplesConverges.
 TEST(LastBounce, CompensatedDrawsFewBsdfSamplesUnderALamp) {
     for (const char* backend : {"cpu", "opencl"})
         for (int depth : {1, 3}) {
