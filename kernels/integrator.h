@@ -21,6 +21,7 @@
 #include "directional_lights.h"
 #include "envmap.h"
 #include "film.h"
+#include "normal_bins.h"
 #include "params.h"
 #include "path_state.h"
 #include "sampler.h"
@@ -83,7 +84,10 @@ ETK_FN uint etk_vertex_pair(int depth) {
 // full distribution there 1.02-1.08x; below it, where the points are padded, the compensated
 // distribution's lower variance per sample wins (depth 5: up to 1.3x; docs/results.md).
 ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p, int depth) {
-    return p.strategy == ETK_STRATEGY_COMPENSATED && depth > 0 ? S.env_dist_comp : S.env_dist;
+    return (p.strategy == ETK_STRATEGY_COMPENSATED || p.strategy == ETK_STRATEGY_COSINE) &&
+                   depth > 0
+               ? S.env_dist_comp
+               : S.env_dist;
 }
 
 // The compensated strategy's BSDF sample at a path's last vertex, where the map's light sits in a
@@ -260,11 +264,14 @@ ETK_FN void etk_escaped(EtkScene S, EtkPaths P, EtkParams p, int slot) {
             // The visibility strategy's density: from the vertex's grid cell (beta.w) and, for
             // the portal table, the continuation's origin (portal_guide.h); the cell's light
             // samples are the weight's count.
+            // The cosine strategy's: the vertex's normal bin (beta.w; -1: the full map).
             int guided = p.strategy == ETK_STRATEGY_VISIBILITY, cell = (int)P.beta[slot].w;
             float pl = guided
                            ? etk_guide_light_pdf(S, p, cell, etk_xyz(P.ray_o[slot]), etk_xyz(d), uv)
                            : etk_env_pdf_uv(etk_light_dist(S, p, (int)P.ray_o[slot].w - 1), p.env,
                                             uv); // the continuation's vertex
+            if (p.strategy == ETK_STRATEGY_COSINE && cell >= 0)
+                pl *= etk_guide_factor(S, p, cell, uv);
             float lc = guided ? etk_guide_light_count(S, p, cell) : 1.0f;
             w = etk_bsdf_sample_weight(p, lc, d.w, pl); // sample 0 of the vertex's BSDF samples
         } else if (p.strategy != ETK_STRATEGY_BSDF)
@@ -311,6 +318,10 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
     (void)out;
     (void)F;
     int n = (int)Q.counters[ETK_Q_SHADE], first = i * ETK_LIGHT_BATCH;
+    // Every path of a shade queue is at the same depth (run_wave shades one bounce at a time).
+    int depth = (int)P.ray_o[Q.shade[min(first, n - 1)]].w;
+    if (!etk_light_drawn(p, depth))
+        return;
     float xu[ETK_LIGHT_BATCH], xv[ETK_LIGHT_BATCH];
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
         int slot = Q.shade[min(first + k, n - 1)];
@@ -321,8 +332,6 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
     float dx[ETK_LIGHT_BATCH], dy[ETK_LIGHT_BATCH], dz[ETK_LIGHT_BATCH], pdf[ETK_LIGHT_BATCH];
     float Lr[ETK_LIGHT_BATCH], Lg[ETK_LIGHT_BATCH], Lb[ETK_LIGHT_BATCH];
     int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH];
-    // Every path of a shade queue is at the same depth (run_wave shades one bounce at a time).
-    int depth = (int)P.ray_o[Q.shade[min(first, n - 1)]].w;
     etk_env_light_batch(etk_light_dist(S, p, depth), S.env_texels, p.env, xu, xv, dx, dy, dz, pdf,
                         Lr, Lg, Lb, row, col);
     for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) {
@@ -381,7 +390,11 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
             P.learn_bin[slot] = S.material_bin[S.tri_material[prim]];
     }
     int guided = p.strategy == ETK_STRATEGY_VISIBILITY;
-    int cell = guided ? etk_guide_cell(p, s.origin, ng) : 0;
+    // The cosine strategy's normal bin; -1 (the full map) at a dielectric, lit from both sides.
+    int binned = p.strategy == ETK_STRATEGY_COSINE && depth == 0 && !etk_bsdf_is_dielectric(m);
+    int cell = guided   ? etk_guide_cell(p, s.origin, ng)
+               : binned ? etk_normal_bin(ns)
+                        : (p.strategy == ETK_STRATEGY_COSINE ? -1 : 0);
     // The guided share of the continuation; none at the last bounce, where the continuation
     // only gathers the map's light, which the light sample already draws from a learned table.
     float cg = guided && !last ? etk_cguide_share(S, p, cell, m) : 0.0f;
@@ -394,7 +407,8 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     // Light sample (sample A of the adaptive strategy).
     if (p.strategy != ETK_STRATEGY_BSDF && !delta && take_light) {
         // With the sample_lights stage the sample is drawn already, from this pair.
-        float2 u = p.light_batch ? make_float2(0.0f, 0.0f) : etk_dims(p, pixel, pair);
+        int drawn = etk_light_drawn(p, depth);
+        float2 u = drawn ? make_float2(0.0f, 0.0f) : etk_dims(p, pixel, pair);
         float3 c = make_float3(0.0f, 0.0f, 0.0f);
         float3 wi_world;
         float learn_val = 0.0f;
@@ -448,9 +462,10 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
                 light_uv = etk_env_uv(p.env, wi_world);
                 pdf_light = 0.25f * ETK_INV_PI;
             } else {
-                EtkEnvSample ls = guided          ? etk_guide_light_sample(S, p, cell, s, u, &parts)
-                                  : p.light_batch ? etk_drawn_light_sample(P, slot)
-                                                  : etk_env_sample(dist, p.env, u);
+                EtkEnvSample ls = guided   ? etk_guide_light_sample(S, p, cell, s, u, &parts)
+                                  : binned ? etk_guide_sample(S, p, cell, u)
+                                  : drawn  ? etk_drawn_light_sample(P, slot)
+                                           : etk_env_sample(dist, p.env, u);
                 wi_world = ls.dir;
                 light_uv = ls.uv;
                 pdf_light = ls.pdf;
@@ -465,8 +480,8 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
                                     etk_cguide_mix_pdf(S, p, cell, cg, bq * etk_bsdf_pdf(m, wo, wi),
                                                        etk_surface_origin(s, wi_world), wi_world))
                               : 1.0f; // sample 0 of the vertex's light samples
-                float3 L = p.light_batch ? etk_xyz(P.light_L[slot])
-                                         : etk_env_radiance_uv(S.env_texels, p.env, light_uv);
+                float3 L = drawn ? etk_xyz(P.light_L[slot])
+                                 : etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
                 // Visibility learning: what this direction would bring, unweighted, and where.
                 learn_val = etk_luma(L) * fabs(wi.z) / pdf_light;
@@ -589,7 +604,9 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
         return;
     P.ray_o[slot] = etk_f4(etk_surface_origin(s, wi_world), (float)(depth + 1));
     P.ray_d[slot] = etk_f4(normalize(wi_world), delta_sample ? -1.0f : pdf);
-    P.beta[slot] = etk_f4(beta, guided ? (float)cell : etk_share_code(share, b_from_light, flags));
+    P.beta[slot] = etk_f4(beta, guided || p.strategy == ETK_STRATEGY_COSINE
+                                    ? (float)cell
+                                    : etk_share_code(share, b_from_light, flags));
     P.radiance[slot] = rad;
     out->slot[ETK_Q_RAY_OUT] = slot;
 }

@@ -16,6 +16,8 @@
 #define ETK_STRATEGY_ADAPTIVE 7    // compensated map, light/BSDF share learned per material bin
 // MIS, light samples and diffuse continuations guided by tables learned in the first passes.
 #define ETK_STRATEGY_VISIBILITY 8
+// MIS, light samples from the map times the cosine to the vertex's normal bin (normal_bins.h).
+#define ETK_STRATEGY_COSINE 9
 #define ETK_HEURISTIC_BALANCE 0
 #define ETK_HEURISTIC_POWER 1
 #define ETK_MAX_SPLIT 64 // light and BSDF samples per vertex, at most
@@ -27,7 +29,7 @@ ETK_BEGIN
 // The strategies that draw one light and one BSDF sample and weight them by MIS.
 ETK_FN int etk_strategy_is_mis(int strategy) {
     return strategy == ETK_STRATEGY_MIS || strategy == ETK_STRATEGY_COMPENSATED ||
-           strategy == ETK_STRATEGY_VISIBILITY;
+           strategy == ETK_STRATEGY_VISIBILITY || strategy == ETK_STRATEGY_COSINE;
 }
 
 // Adaptive strategy: how a material bin samples, as flags beside its light share.
@@ -104,7 +106,13 @@ typedef struct {
 // draw them ahead of the shade stage, in batches (integrator.h).
 ETK_FN int etk_batches_light_samples(int strategy) {
     return strategy == ETK_STRATEGY_LIGHT || strategy == ETK_STRATEGY_MIS ||
-           strategy == ETK_STRATEGY_COMPENSATED;
+           strategy == ETK_STRATEGY_COMPENSATED || strategy == ETK_STRATEGY_COSINE;
+}
+// Whether the sample_lights stage draws the light samples of the vertices at `depth`: with
+// batches on, at every depth but the cosine strategy's first vertex, whose samples come from
+// the tables of its normal's bin (normal_bins.h) and are drawn in the shade stage.
+ETK_FN int etk_light_drawn(EtkParams p, int depth) {
+    return p.light_batch && !(p.strategy == ETK_STRATEGY_COSINE && depth == 0);
 }
 
 // Whether a vertex at `depth` (surface interactions before it) is the path's last: its

@@ -694,7 +694,8 @@ void add_render_command(CLI::App& app, Globals& g) {
            "light | bsdf | mis (the paper's) | compensated (the default: MIS, the light "
            "distribution compensated below the first vertex) | adaptive (compensated, light/BSDF "
            "shares learned per material) | visibility (MIS, learns what blocks the map) "
-           "| uniform | sis (structured importance sampling)")
+           "| cosine (compensated, the first vertex's light from the map x the cosine to its "
+           "normal) | uniform | sis (structured importance sampling)")
         ->check(CLI::IsMember(strategy_names()));
     cmd->add_option("--sis-samples", a->sis_samples,
                     "SIS strata (one shadow ray per sample; --spp a multiple of it)")
@@ -709,7 +710,7 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "Render with this directional light set ('envtrace lights'), natively");
     cmd->add_option("--mis-heuristic", a->heuristic,
                     "auto | balance | power (auto: power for mis, the paper's estimator; balance "
-                    "for compensated, adaptive, visibility)")
+                    "for compensated, adaptive, visibility, cosine)")
         ->check(CLI::IsMember(heuristic_names()));
     cmd->add_option("--sampler", a->sampler, "sobol | random")
         ->check(CLI::IsMember(sampler_names()));

@@ -63,7 +63,12 @@ class Furnace : public ::testing::TestWithParam<std::tuple<std::string, int, std
 
 TEST_P(Furnace, FlatSphereRendersTheMapValue) {
     const auto& [backend, depth, strategy] = GetParam();
-    const auto r = ett::render(furnace_scene(false, 48, depth, strategy), backend, 64);
+    // The cosine strategy's estimate here is nearly constant but for its light samples that land
+    // behind the normal (the map's defensive share, the bin's margin), about one in twenty: 64
+    // passes see too few of them for the variance the bound is built on (worst pixel z 5.4 at 64
+    // spp, 3.9 at 256, 3.4 at 512, the image mean within 1.4 sigma throughout).
+    const int spp = strategy == "cosine" ? 512 : 64;
+    const auto r = ett::render(furnace_scene(false, 48, depth, strategy), backend, spp);
     const FurnaceStats st = check_furnace(r, 5.0);
     std::printf("furnace %s depth %d %s: mean %.6f (z %.2f), worst pixel z %.2f\n", backend.c_str(),
                 depth, strategy.c_str(), st.mean, st.mean_z, st.worst_z);
@@ -77,7 +82,9 @@ INSTANTIATE_TEST_SUITE_P(
                       std::make_tuple("opencl", 50, "light"),
                       // Guided light samples and continuations, tables learned as it renders.
                       std::make_tuple("cpu", 50, "visibility"),
-                      std::make_tuple("opencl", 50, "visibility")),
+                      std::make_tuple("opencl", 50, "visibility"),
+                      // Light samples from the normal's bin at the first vertex.
+                      std::make_tuple("cpu", 50, "cosine")),
     [](const auto& info) {
         return std::get<0>(info.param) + "_depth" + std::to_string(std::get<1>(info.param)) + "_" +
                std::get<2>(info.param);

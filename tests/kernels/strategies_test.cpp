@@ -1,7 +1,7 @@
-// The light, bsdf, mis, compensated and adaptive strategies (and either GGX sampling, any
-// light share, and mis split into several light and BSDF samples per vertex) estimate the same
-// integral, so they converge to the same image; and the error of an unbiased estimator with
-// independent samples falls as 1/sqrt(spp).
+// The light, bsdf, mis, compensated, adaptive, visibility and cosine strategies (and either GGX
+// sampling, any light share, and mis split into several light and BSDF samples per vertex)
+// estimate the same integral, so they converge to the same image; and the error of an unbiased
+// estimator with independent samples falls as 1/sqrt(spp).
 //
 // Noise: every render uses the random sampler (independent passes), and the per-pixel variance
 // of the mean is measured from the passes (render_util.h). Two renders of the same image give
@@ -77,6 +77,8 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     const auto adaptive_high = ett::render(high, "cpu", spp);
     // Light samples guided by learned visibility (tables from the first passes).
     const auto visibility = ett::render(scene(env, "visibility", depth, 10), "cpu", spp);
+    // Light samples from the map times the cosine to the first vertex's normal bin.
+    const auto cosine = ett::render(scene(env, "cosine", depth, 13), "cpu", spp);
     // Splitting: more light than BSDF samples per vertex, and the other way round (the
     // multi-sample MIS weights on the counts; the extra samples' lattice and lobe choice).
     et::Scene split_light = scene(env, "mis", depth, 11), split_bsdf = scene(env, "mis", depth, 12);
@@ -101,6 +103,7 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     expect_agree(light, adaptive_low, "light vs adaptive s=0.125" + d);
     expect_agree(mis, adaptive_high, "mis vs adaptive s=1.875" + d);
     expect_agree(mis, visibility, "mis vs visibility" + d);
+    expect_agree(light, cosine, "light vs cosine" + d);
     expect_agree(light, mis_split_light, "light vs mis 4+2 samples" + d);
     expect_agree(bsdf, mis_split_bsdf, "bsdf vs mis 1+8 samples" + d);
 }

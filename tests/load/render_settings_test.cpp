@@ -18,7 +18,7 @@ TEST(RenderSettings, NamesRoundTrip) {
         EXPECT_EQ(et::name_of(et::parse_backend(n, "t")), n);
     for (const auto& n : et::bsdf_sampling_names())
         EXPECT_EQ(et::name_of(et::parse_bsdf_sampling(n, "t")), n);
-    EXPECT_EQ(et::strategy_names().size(), 8u); // "lights" is chosen by --lights only
+    EXPECT_EQ(et::strategy_names().size(), 9u); // "lights" is chosen by --lights only
 }
 
 TEST(RenderSettings, ValuesAreTheKernelCodes) {
@@ -28,12 +28,13 @@ TEST(RenderSettings, ValuesAreTheKernelCodes) {
     EXPECT_EQ(static_cast<int>(et::parse_strategy("compensated", "t")), ETK_STRATEGY_COMPENSATED);
     EXPECT_EQ(static_cast<int>(et::parse_strategy("adaptive", "t")), ETK_STRATEGY_ADAPTIVE);
     EXPECT_EQ(static_cast<int>(et::parse_strategy("visibility", "t")), ETK_STRATEGY_VISIBILITY);
+    EXPECT_EQ(static_cast<int>(et::parse_strategy("cosine", "t")), ETK_STRATEGY_COSINE);
     // auto: visible normals for the strategies beyond the paper, the paper's sampling for mis.
     et::RenderSettings st;
     st.strategy = et::Strategy::mis;
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
-    for (et::Strategy s :
-         {et::Strategy::compensated, et::Strategy::adaptive, et::Strategy::visibility}) {
+    for (et::Strategy s : {et::Strategy::compensated, et::Strategy::adaptive,
+                           et::Strategy::visibility, et::Strategy::cosine}) {
         st.strategy = s;
         EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf) << et::name_of(s);
     }
@@ -52,7 +53,8 @@ TEST(RenderSettings, AutomaticHeuristicIsPowerForThePapersEstimatorAlone) {
     EXPECT_EQ(st.heuristic, et::MisHeuristic::automatic);
     for (const auto& n : et::strategy_names()) {
         st.strategy = et::parse_strategy(n, "t");
-        const bool balance = n == "compensated" || n == "adaptive" || n == "visibility";
+        const bool balance =
+            n == "compensated" || n == "adaptive" || n == "visibility" || n == "cosine";
         EXPECT_EQ(et::resolved_heuristic(st),
                   balance ? et::MisHeuristic::balance : et::MisHeuristic::power)
             << n;

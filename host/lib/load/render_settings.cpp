@@ -17,7 +17,7 @@ constexpr Named<Strategy> kStrategies[] = {
     {Strategy::mis, "mis"},           {Strategy::uniform, "uniform"},
     {Strategy::sis, "sis"},           {Strategy::compensated, "compensated"},
     {Strategy::adaptive, "adaptive"}, {Strategy::visibility, "visibility"},
-    {Strategy::lights, "lights"}};
+    {Strategy::cosine, "cosine"},     {Strategy::lights, "lights"}};
 constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::automatic, "auto"},
                                                {MisHeuristic::balance, "balance"},
                                                {MisHeuristic::power, "power"}};
@@ -57,7 +57,7 @@ E parse_in(const Named<E> (&table)[N], const std::string& s, const std::string& 
     throw Error(what + ": unknown " + kind + " '" + shown + "' (use " + choices + ")");
 }
 
-constexpr size_t kUserStrategies = 8; // all but "lights"
+constexpr size_t kUserStrategies = 9; // all but "lights"
 
 } // namespace
 
@@ -95,7 +95,8 @@ std::vector<std::string> light_batch_names() {
 namespace {
 // The MIS strategies beyond the paper's estimator: what `auto` gives them, it never gives `mis`.
 bool beyond_the_paper(Strategy s) {
-    return s == Strategy::compensated || s == Strategy::adaptive || s == Strategy::visibility;
+    return s == Strategy::compensated || s == Strategy::adaptive || s == Strategy::visibility ||
+           s == Strategy::cosine;
 }
 } // namespace
 

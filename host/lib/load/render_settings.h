@@ -21,6 +21,8 @@ enum class Strategy : int {
     adaptive = ETK_STRATEGY_ADAPTIVE, // compensated map, light/BSDF shares learned per material
     lights = ETK_STRATEGY_LIGHTS,     // a directional light set (--lights), never named by a user
     visibility = ETK_STRATEGY_VISIBILITY, // MIS, light samples guided by learned visibility
+    cosine =
+        ETK_STRATEGY_COSINE, // MIS, light samples from the map x the cosine to the normal's bin
 };
 // How GGX lobes are sampled (kernels/bsdf.h): automatic picks vndf for the strategies beyond the
 // paper -- compensated, adaptive, visibility -- and ndf, the paper's, for the others, so that

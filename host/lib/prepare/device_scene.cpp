@@ -1,4 +1,6 @@
 #include "prepare/device_scene.h"
+
+#include "prepare/cosine_tables.h"
 #include "prepare/env_black_mask.h"
 #include "prepare/env_compensation.h"
 
@@ -21,6 +23,10 @@ namespace {
 // 2e-4 of the hit point's coordinates leaked light at contact (bunny_grace +0.08%) and, with its
 // absolute floor below coordinates of 1, made small scenes up to 10% too bright.
 constexpr float kRayEpsilon = 1e-5f;
+
+// The cosine strategy's defensive share of the map's own distribution in every bin's table (as
+// the visibility strategy's alpha: a light sample weighs at most 10x the map's own).
+constexpr float kCosineAlpha = 0.1f;
 
 void set_camera(const Scene& scene, etk::EtkParams& p) {
     const Camera& c = scene.camera;
@@ -270,7 +276,8 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     d.map_width = scene.env.image.width;
     d.map_height = scene.env.image.height;
     d.map_build_seconds = scene.env.build_seconds;
-    if (st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive)
+    if (st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive ||
+        st.strategy == Strategy::cosine)
         d.env_dist_comp = compensate_distribution(scene.env.dist).table;
     d.env_dist = std::move(scene.env.dist.table);
     EnvBlackMask black = env_black_mask(scene.env.image);
@@ -281,6 +288,12 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     d.env_texels = std::move(scene.env.image.rgb);
     if (st.strategy == Strategy::visibility)
         add_visibility_guide(scene, d);
+    if (st.strategy == Strategy::cosine) {
+        // One table per bin of normals, in the visibility strategy's slots (kernels/normal_bins.h).
+        d.guide_regions = guide_region_tables(d.env_dist, p.env.dist_w, p.env.dist_h);
+        d.guide_cells = cosine_bin_tables(d.env_dist, d.guide_regions, p.env, kCosineAlpha);
+        p.guide_slots = ETK_NORMAL_BINS;
+    }
     return d;
 }
 

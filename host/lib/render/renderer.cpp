@@ -52,6 +52,7 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
     learning_ = scene.settings.strategy == Strategy::adaptive && scene.settings.light_share < 0.0f;
     options_.last_bounce = scene.settings.max_depth <= 1;
     guide_ = scene.settings.strategy == Strategy::visibility;
+    guide_ready_ = scene.settings.strategy == Strategy::cosine; // its tables are prepared
     if (guide_) {
         guide_options_ = scene.guide_options;
         guide_options_.continuation = scene.params.guide_continuation != 0;
