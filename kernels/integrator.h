@@ -90,12 +90,19 @@ ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p, int depth
                : S.env_dist;
 }
 
-// The compensated strategy's BSDF sample at a path's last vertex, where the map's light sits in a
-// few blocks on black (a studio's lamps, spot1Lux): taken only with probability q, the expected
-// BSDF sample count, and weighted by MIS on the counts (1 p_light, q p_bsdf): the light sample
-// counts f L cos / (p_light + q p_bsdf) (balance), a BSDF sample, when taken, the same over
-// (p_light + q p_bsdf) -- unbiased for every q in (0, 1], and never above the light sample's own
-// value, so a rare BSDF sample makes no firefly. Most of those BSDF samples would look at black
+// The cosine strategy's bin for a vertex at `depth` with shading normal ns (normal_bins.h): the
+// table its light sample is drawn from at a path's first vertex; -1, the full map, below it
+// (etk_light_dist: the compensated distribution) and at a dielectric, lit from both sides.
+ETK_FN int etk_cosine_cell(EtkMaterial m, float3 ns, int depth) {
+    return depth == 0 && !etk_bsdf_is_dielectric(m) ? etk_normal_bin(ns) : -1;
+}
+
+// The compensated (and cosine) strategy's BSDF sample at a path's last vertex, where the map's
+// light sits in a few blocks on black (a studio's lamps, spot1Lux): taken only with probability q,
+// the expected BSDF sample count, and weighted by MIS on the counts (1 p_light, q p_bsdf): the
+// light sample counts f L cos / (p_light + q p_bsdf) (balance), a BSDF sample, when taken, the same
+// over (p_light + q p_bsdf) -- unbiased for every q in (0, 1], and never above the light sample's
+// own value, so a rare BSDF sample makes no firefly. Most of those BSDF samples would look at black
 // (their rays are not traced there, but drawing and mapping them is a quarter of a depth-1 render
 // of spot1Lux) and the light sample finds the lamps alone: q is the most the BSDF's samples can
 // put into the directions that are not black for certain, p_bsdf's bound over them times their
@@ -104,7 +111,8 @@ ETK_FN ETK_GLOBAL const float* etk_light_dist(EtkScene S, EtkParams p, int depth
 // at delta vertices, below the last bounce and for the other strategies; 0 where the BSDF
 // reflects nothing at all.
 ETK_FN float etk_last_bsdf_share(EtkParams p, EtkMaterial m, float3 wo, int last, int delta) {
-    if (p.strategy != ETK_STRATEGY_COMPENSATED || !last || delta || p.env.black_w == 0)
+    if ((p.strategy != ETK_STRATEGY_COMPENSATED && p.strategy != ETK_STRATEGY_COSINE) || !last ||
+        delta || p.env.black_w == 0)
         return 1.0f;
     return fmin(1.0f, p.env.lit_sr * etk_bsdf_pdf_bound(m, wo));
 }
@@ -320,14 +328,52 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
     int n = (int)Q.counters[ETK_Q_SHADE], first = i * ETK_LIGHT_BATCH;
     // Every path of a shade queue is at the same depth (run_wave shades one bounce at a time).
     int depth = (int)P.ray_o[Q.shade[min(first, n - 1)]].w;
-    if (!etk_light_drawn(p, depth))
-        return;
     float xu[ETK_LIGHT_BATCH], xv[ETK_LIGHT_BATCH];
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
         int slot = Q.shade[min(first + k, n - 1)];
         float2 xi = etk_dims(p, P.pixel[slot], etk_vertex_pair((int)P.ray_o[slot].w));
         xu[k] = xi.x;
         xv[k] = xi.y;
+    }
+    if (p.strategy == ETK_STRATEGY_COSINE && depth == 0) {
+        // Each from its vertex's bin's table (etk_guide_sample's steps, each over the batch, so
+        // that the cache misses of the bins' tables and the map's rows overlap), the bin kept in
+        // light_L.w for the shade stage.
+        int cell[ETK_LIGHT_BATCH], R[ETK_LIGHT_BATCH];
+        float2 t[ETK_LIGHT_BATCH], uv[ETK_LIGHT_BATCH];
+        int m = min(ETK_LIGHT_BATCH, n - first);
+        for (int k = 0; k < m; ++k) {
+            int slot = Q.shade[first + k];
+            float4 h = P.hit[slot];
+            int prim = (int)as_uint(h.y), front;
+            float3 ng;
+            float3 ns = etk_shading_normal(S, prim, h.z, h.w, etk_xyz(P.ray_d[slot]), &ng, &front);
+            cell[k] =
+                p.guide_ready
+                    ? etk_cosine_cell(etk_material_load(S.materials, S.tri_material[prim]), ns, 0)
+                    : -1;
+        }
+        for (int k = 0; k < m; ++k)
+            R[k] = cell[k] >= 0
+                       ? etk_guide_pick_region(S.guide_cells + cell[k] * ETK_GUIDE_CELL_FLOATS,
+                                               make_float2(xu[k], xv[k]), &t[k])
+                       : 0;
+        for (int k = 0; k < m; ++k)
+            uv[k] = cell[k] >= 0 ? etk_guide_sample_region(S, p.env, R[k], t[k])
+                                 : make_float2(0.0f, 0.0f);
+        for (int k = 0; k < m; ++k) {
+            EtkEnvSample ls = cell[k] >= 0
+                                  ? etk_guide_sample_at(S, p, cell[k], uv[k])
+                                  : etk_env_sample(S.env_dist, p.env, make_float2(xu[k], xv[k]));
+            uv[k] = ls.pdf > 0.0f ? ls.uv : make_float2(-1.0f, -1.0f);
+            P.light_dir[Q.shade[first + k]] = etk_f4(ls.dir, ls.pdf);
+        }
+        for (int k = 0; k < m; ++k) // the texels, last: a loop of lookups alone
+            P.light_L[Q.shade[first + k]] =
+                etk_f4(uv[k].x >= 0.0f ? etk_env_radiance_uv(S.env_texels, p.env, uv[k])
+                                       : make_float3(0.0f, 0.0f, 0.0f),
+                       (float)cell[k]);
+        return;
     }
     float dx[ETK_LIGHT_BATCH], dy[ETK_LIGHT_BATCH], dz[ETK_LIGHT_BATCH], pdf[ETK_LIGHT_BATCH];
     float Lr[ETK_LIGHT_BATCH], Lg[ETK_LIGHT_BATCH], Lb[ETK_LIGHT_BATCH];
@@ -390,11 +436,13 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
             P.learn_bin[slot] = S.material_bin[S.tri_material[prim]];
     }
     int guided = p.strategy == ETK_STRATEGY_VISIBILITY;
-    // The cosine strategy's normal bin; -1 (the full map) at a dielectric, lit from both sides.
-    int binned = p.strategy == ETK_STRATEGY_COSINE && depth == 0 && !etk_bsdf_is_dielectric(m);
-    int cell = guided   ? etk_guide_cell(p, s.origin, ng)
-               : binned ? etk_normal_bin(ns)
-                        : (p.strategy == ETK_STRATEGY_COSINE ? -1 : 0);
+    // The cosine strategy's normal bin (-1: the full map), as sample_lights found it if it drew
+    // the light sample.
+    int cell = guided                              ? etk_guide_cell(p, s.origin, ng)
+               : p.strategy != ETK_STRATEGY_COSINE ? 0
+               : p.light_batch && depth == 0       ? (int)P.light_L[slot].w
+                                                   : etk_cosine_cell(m, ns, depth);
+    int binned = p.strategy == ETK_STRATEGY_COSINE && cell >= 0;
     // The guided share of the continuation; none at the last bounce, where the continuation
     // only gathers the map's light, which the light sample already draws from a learned table.
     float cg = guided && !last ? etk_cguide_share(S, p, cell, m) : 0.0f;
@@ -407,7 +455,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
     // Light sample (sample A of the adaptive strategy).
     if (p.strategy != ETK_STRATEGY_BSDF && !delta && take_light) {
         // With the sample_lights stage the sample is drawn already, from this pair.
-        int drawn = etk_light_drawn(p, depth);
+        int drawn = p.light_batch;
         float2 u = drawn ? make_float2(0.0f, 0.0f) : etk_dims(p, pixel, pair);
         float3 c = make_float3(0.0f, 0.0f, 0.0f);
         float3 wi_world;
@@ -463,8 +511,8 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
                 pdf_light = 0.25f * ETK_INV_PI;
             } else {
                 EtkEnvSample ls = guided   ? etk_guide_light_sample(S, p, cell, s, u, &parts)
-                                  : binned ? etk_guide_sample(S, p, cell, u)
                                   : drawn  ? etk_drawn_light_sample(P, slot)
+                                  : binned ? etk_guide_sample(S, p, cell, u)
                                            : etk_env_sample(dist, p.env, u);
                 wi_world = ls.dir;
                 light_uv = ls.uv;

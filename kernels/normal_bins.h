@@ -1,17 +1,18 @@
 // Bins of the sphere of normals for the cosine strategy (ETK_STRATEGY_COSINE): the octahedral
 // map of a unit vector folded onto the square [0,1)^2, cut into ETK_NORMAL_BIN_SIDE^2 cells
 // (their solid angles within 0.34 .. 1.65 of the mean, tests/kernels/normal_bins_test.cpp). A
-// vertex's shading normal picks its bin; the bin's light table (the map's regions weighted by the
-// clamped cosine to the bin's centre, host/lib/prepare/ cosine_tables.h) is what its light sample
-// is drawn from. The bins are a fixed partition of the sphere, so preparation builds every table
+// vertex's shading normal picks its bin; the bin's light table (the map's regions weighted by a
+// bound of the clamped cosine to any normal of the bin, host/lib/prepare/cosine_tables.h) is what
+// its light sample is drawn from. The bins are a fixed partition of the sphere, so preparation builds every table
 // once, with no learning.
 #ifndef ETK_NORMAL_BINS_H
 #define ETK_NORMAL_BINS_H
 #include "compat.h"
 
-// 32 x 32 bins of ~6 degrees. Diffuse vertices, unoccluded, issue 10's maps, one light and one
-// cosine sample by the balance heuristic (tools/experiments/cosine_bins.py): 8 x 8 bins leave
-// 0.23-0.40 of the paper's variance, 16 x 16 0.18-0.28, 32 x 32 0.16-0.21; 2 MB of tables.
+// 32 x 32 bins of ~6 degrees. Diffuse vertices, unoccluded, under issue 10's maps, one light and
+// one cosine sample by the balance heuristic (tools/experiments/cosine_bins.py): 8 x 8 bins leave
+// 0.22-0.44 of the paper's variance, 16 x 16 0.18-0.34, 32 x 32 0.17-0.31 (spot1Lux's one texel:
+// 1.00); 2 MB of tables.
 #define ETK_NORMAL_BIN_SIDE 32
 #define ETK_NORMAL_BINS (ETK_NORMAL_BIN_SIDE * ETK_NORMAL_BIN_SIDE)
 

@@ -102,17 +102,12 @@ typedef struct {
     int light_batch;
 } EtkParams;
 
-// Strategies whose light sample is one etk_env_sample at every vertex: the sample_lights stage can
-// draw them ahead of the shade stage, in batches (integrator.h).
+// Strategies whose light sample is one etk_env_sample at every vertex (the cosine strategy's, at a
+// path's first vertex, one of its bin's table): the sample_lights stage can draw them ahead of the
+// shade stage, in batches (integrator.h).
 ETK_FN int etk_batches_light_samples(int strategy) {
     return strategy == ETK_STRATEGY_LIGHT || strategy == ETK_STRATEGY_MIS ||
            strategy == ETK_STRATEGY_COMPENSATED || strategy == ETK_STRATEGY_COSINE;
-}
-// Whether the sample_lights stage draws the light samples of the vertices at `depth`: with
-// batches on, at every depth but the cosine strategy's first vertex, whose samples come from
-// the tables of its normal's bin (normal_bins.h) and are drawn in the shade stage.
-ETK_FN int etk_light_drawn(EtkParams p, int depth) {
-    return p.light_batch && !(p.strategy == ETK_STRATEGY_COSINE && depth == 0);
 }
 
 // Whether a vertex at `depth` (surface interactions before it) is the path's last: its

@@ -77,6 +77,26 @@ ETK_FN float3 etk_hit_point(EtkScene S, EtkHit h, float3* extent) {
     return v0 + e1 * h.b1 + e2 * h.b2;
 }
 
+// The normals at barycentrics (b1, b2) of triangle prim hit by a ray in direction d: the
+// interpolated shading normal, returned, and the geometric one, *ng, both on the side that faces
+// the viewer (surfaces are two-sided); *front: whether the triangle's winding faces the viewer.
+ETK_FN float3 etk_shading_normal(EtkScene S, int prim, float b1, float b2, float3 d, float3* ng,
+                                 int* front) {
+    float3 g = etk_xyz(S.face_normals[prim]);
+    float b0 = 1.0f - b1 - b2;
+    float3 ns = etk_xyz(S.normals[3 * prim]) * b0 + etk_xyz(S.normals[3 * prim + 1]) * b1 +
+                etk_xyz(S.normals[3 * prim + 2]) * b2;
+    float nl = length(ns);
+    ns = nl > 0.0f && isfinite(nl) ? ns / nl : g;
+    *front = dot(g, -d) >= 0.0f;
+    if (!*front)
+        g = -g;
+    if (dot(ns, g) < 0.0f)
+        ns = -ns;
+    *ng = g;
+    return ns;
+}
+
 // The surface at the closest hit h of a ray in direction d. Surfaces are two-sided; the shading
 // normal is flipped to the geometric normal's side.
 ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 d, EtkHit h) {
@@ -84,18 +104,10 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 d, EtkHit h) {
     int prim = h.prim;
     float3 extent;
     float3 pos = etk_hit_point(S, h, &extent);
-    float3 ng = etk_xyz(S.face_normals[prim]);
-    float b0 = 1.0f - h.b1 - h.b2;
-    float3 ns = etk_xyz(S.normals[3 * prim]) * b0 + etk_xyz(S.normals[3 * prim + 1]) * h.b1 +
-                etk_xyz(S.normals[3 * prim + 2]) * h.b2;
-    float nl = length(ns);
-    ns = nl > 0.0f && isfinite(nl) ? ns / nl : ng;
+    float3 ng;
+    int front;
+    float3 ns = etk_shading_normal(S, prim, h.b1, h.b2, d, &ng, &front);
     float3 wo_world = -d;
-    int front = dot(ng, wo_world) >= 0.0f; // the triangle's winding faces the viewer
-    if (!front)
-        ng = -ng;
-    if (dot(ns, ng) < 0.0f)
-        ns = -ns;
     etk_make_frame(ns, &s.t, &s.b);
     s.ns = ns;
     s.ng = ng;

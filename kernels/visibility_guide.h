@@ -216,18 +216,22 @@ ETK_FN int etk_guide_pick_region(ETK_GLOBAL const float* cdf, float2 u, float2* 
 // A light sample of the visibility strategy at a vertex in `cell`, from u in [0,1)^2: the region
 // by inverting the cell's table, then the map inside the region. pdf: the mixture's, 0 for no
 // sample.
+// The sample of `cell` at map coordinates uv, drawn there by the two steps above: its direction
+// and density, the map's (etk_env_pdf_uv's) times the cell's factor -- the mixture's.
+ETK_FN EtkEnvSample etk_guide_sample_at(EtkScene S, EtkParams p, int cell, float2 uv) {
+    int w = p.env.dist_w, h = p.env.dist_h;
+    EtkEnvSample s = etk_env_sample_at(p.env, uv, etk_pdf_2d(S.env_dist, w, h, uv),
+                                       etk_cell_of(uv.y, h), etk_cell_of(uv.x, w));
+    s.pdf *= etk_guide_factor(S, p, cell, uv);
+    return s;
+}
+
 ETK_CL_INLINE_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
     if (!p.guide_ready)
         return etk_env_sample(S.env_dist, p.env, u);
     float2 t;
     int R = etk_guide_pick_region(S.guide_cells + cell * ETK_GUIDE_CELL_FLOATS, u, &t);
-    int w = p.env.dist_w, h = p.env.dist_h;
-    float2 uv = etk_guide_sample_region(S, p.env, R, t);
-    // The map's density at uv (etk_env_pdf_uv's), times the cell's factor: the mixture's.
-    EtkEnvSample s = etk_env_sample_at(p.env, uv, etk_pdf_2d(S.env_dist, w, h, uv),
-                                       etk_cell_of(uv.y, h), etk_cell_of(uv.x, w));
-    s.pdf *= etk_guide_factor(S, p, cell, uv);
-    return s;
+    return etk_guide_sample_at(S, p, cell, etk_guide_sample_region(S, p.env, R, t));
 }
 
 ETK_END

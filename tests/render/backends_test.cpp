@@ -205,16 +205,17 @@ TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
     }
 }
 
-// The sample_lights stage draws the light samples of the light, mis and compensated strategies
-// in batches ahead of the shade stage (kernels/integrator.h); without it the shade stage draws
-// each itself. The same values: bit-identical films on each back end, at depth 3 (shade queues of
-// many lengths, their last batch partly past the queue's end, vertices of three depths).
+// The sample_lights stage draws the light samples of the light, mis, compensated and cosine
+// strategies in batches ahead of the shade stage (kernels/integrator.h; the cosine strategy's
+// first vertex from its bins' tables); without it the shade stage draws each itself. The same
+// values: bit-identical films on each back end, at depth 3 (shade queues of many lengths, their
+// last batch partly past the queue's end, vertices of three depths).
 TEST_P(Backends, BatchedLightSamplesGiveTheSameBits) {
     const et::Scene& s = scene_;
     const et::LightBatch modes[] = {et::LightBatch::off, et::LightBatch::on,
                                     et::LightBatch::automatic};
     for (et::Strategy strategy :
-         {et::Strategy::mis, et::Strategy::compensated, et::Strategy::light})
+         {et::Strategy::mis, et::Strategy::compensated, et::Strategy::light, et::Strategy::cosine})
         for (et::Backend b : {et::Backend::opencl, et::Backend::cpu}) {
             SCOPED_TRACE(std::string(et::name_of(strategy)) +
                          (b == et::Backend::cpu ? ", native" : ", OpenCL"));

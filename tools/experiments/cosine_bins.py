@@ -9,8 +9,8 @@ with one light and one cosine-distributed BSDF sample, weighted by the balance h
 variance of the estimate of the reflected light, summed over the normals, for light samples from
 the map's own distribution (the paper's) and from the bin's table (the normal's octahedral bin of
 SIDE x SIDE; 16 x 32 regions of the map, each weighted by its light times max(0, cos) to the bin's
-centre, the map inside a region; a defensive share 0.1 of the map). Exact sums over a 256 x 128
-copy of the map, independent samples: the variance of one sample, not what the Sobol' points
+centre -- the renderer's tables bound it over the bin's normals instead -- the map inside a
+region; a defensive share 0.1 of the map). Exact sums over a 256 x 128 copy of the map, independent samples: the variance of one sample, not what the Sobol' points
 make of it. Twice: open (the whole sphere lights the vertex) and with the lower hemisphere hidden
 (the suite's ground under the spheres). Writes OUT/cosine_bins.md."""
 import argparse
@@ -86,6 +86,8 @@ def binned_pdf(lum, weight, dA):
     import numpy as np
     t = (weight * dA).reshape(RH, H // RH, RW, W // RW).sum(axis=(1, 3))
     m = (lum * dA).reshape(RH, H // RH, RW, W // RW).sum(axis=(1, 3))
+    if not t.sum() > 0:  # a bin facing away from all the light: the map's own (as the host does)
+        t = m
     ratio = np.divide(t / t.sum(), m, out=np.zeros_like(t), where=m > 0)
     return (lum.reshape(RH, H // RH, RW, W // RW) * ratio[:, None, :, None]).ravel()
 

@@ -178,8 +178,7 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
         ex.reset_counters();
         ex.launch(etk::ETK_STAGE_intersect, rays, p); // lights the escaped rays itself
         ex.read_counters(c);
-        // The shade queue's light samples, ETK_LIGHT_BATCH per work-item.
-        if (etk::etk_light_drawn(p, bounce))
+        if (p.light_batch) // the shade queue's light samples, ETK_LIGHT_BATCH per work-item
             ex.launch(
                 etk::ETK_STAGE_sample_lights,
                 static_cast<int>((c[etk::ETK_Q_SHADE] + ETK_LIGHT_BATCH - 1) / ETK_LIGHT_BATCH), p);
