@@ -3,8 +3,8 @@
 // (their solid angles within 0.34 .. 1.65 of the mean, tests/kernels/normal_bins_test.cpp). A
 // vertex's shading normal picks its bin; the bin's light table (the map's regions weighted by a
 // bound of the clamped cosine to any normal of the bin, host/lib/prepare/cosine_tables.h) is what
-// its light sample is drawn from. The bins are a fixed partition of the sphere, so preparation builds every table
-// once, with no learning.
+// its light sample is drawn from. The bins are a fixed partition of the sphere, so preparation
+// builds every table once, with no learning.
 #ifndef ETK_NORMAL_BINS_H
 #define ETK_NORMAL_BINS_H
 #include "compat.h"
