@@ -6,6 +6,7 @@
 // its area: no direction the map lights is missed), and the learned tables must not depend on
 // the order records arrive in (host/lib/render/visibility_cache.h).
 #include "chi2.h"
+#include "guide_sampling_check.h"
 #include "kernels/continuation_guide.h"
 #include "kernels/portal_guide.h"
 #include "kernels/visibility_guide.h"
@@ -86,61 +87,20 @@ void make(Fixture& f, int w, int h, uint32_t seed, bool black_band = false) {
     f.p.guide_ready = 1;
 }
 
-// The mixture's density in the lat-long square, constant over each distribution cell.
-double uv_density(const Fixture& f, int row, int col) {
-    const int w = f.p.env.dist_w, h = f.p.env.dist_h;
-    const double pmap = double(f.dist.table[row]) *
-                        f.dist.table[etk::etk_dist2d_conditional_pdf(h) + row * w + col];
-    const etk::float2 uv = etk::make_float2((col + 0.5f) / float(w), (row + 0.5f) / float(h));
-    return pmap * etk::etk_guide_factor(f.S, f.p, 0, uv);
-}
-
 class VisibilityGuide : public ::testing::TestWithParam<std::pair<int, int>> {};
 
 TEST_P(VisibilityGuide, SamplesMatchTheirDensity) {
     const auto [w, h] = GetParam();
     Fixture f;
     make(f, w, h, 7u + w);
-    const int n = 1 << 20;
-    std::mt19937 rng(2024u + w);
-    std::uniform_real_distribution<float> U(0.0f, 1.0f);
-    std::vector<double> observed(static_cast<size_t>(w) * h, 0.0);
-    double inv_pdf = 0.0, inv_pdf2 = 0.0;
-    int bad = 0, mismatched = 0;
-    for (int i = 0; i < n; ++i) {
-        const etk::float2 u =
-            etk::make_float2(std::min(U(rng), 0.99999994f), std::min(U(rng), 0.99999994f));
-        const etk::EtkEnvSample s = etk::etk_guide_sample(f.S, f.p, 0, u);
-        if (!(s.pdf > 0.0f) || !std::isfinite(s.pdf)) {
-            ++bad;
-            continue;
-        }
-        const int row = etk::etk_cell_of(s.uv.y, h), col = etk::etk_cell_of(s.uv.x, w);
-        observed[static_cast<size_t>(row) * w + col] += 1.0;
-        // The density reported is the one evaluated for MIS at the same direction.
-        const float again = etk::etk_env_pdf_uv(f.S.env_dist, f.p.env, s.uv) *
-                            etk::etk_guide_factor(f.S, f.p, 0, s.uv);
-        mismatched += again != s.pdf;
-        inv_pdf += 1.0 / s.pdf;
-        inv_pdf2 += 1.0 / (double(s.pdf) * s.pdf);
-    }
-    EXPECT_EQ(bad, 0);
-    EXPECT_EQ(mismatched, 0);
-    std::vector<double> expected(observed.size());
-    double integral = 0.0;
-    for (int r = 0; r < h; ++r)
-        for (int c = 0; c < w; ++c) {
-            const double d = uv_density(f, r, c) / (double(w) * h);
-            integral += d;
-            expected[static_cast<size_t>(r) * w + c] = n * d;
-        }
-    EXPECT_NEAR(integral, 1.0, 1e-4) << "the mixture's density does not integrate to one";
-    const ett::Chi2Result chi =
-        ett::chi2_test(observed, expected, w, h, ett::sidak_alpha(0.01, kTests));
-    EXPECT_TRUE(chi.passed) << chi.report;
+    const ett::GuideSamplingCheck g =
+        ett::check_guide_sampling(f.S, f.p, 0, 1 << 20, 2024u + w, ett::sidak_alpha(0.01, kTests));
+    EXPECT_EQ(g.bad, 0);
+    EXPECT_EQ(g.mismatched, 0);
+    EXPECT_NEAR(g.integral, 1.0, 1e-4) << "the mixture's density does not integrate to one";
+    EXPECT_TRUE(g.chi.passed) << g.chi.report;
     // E[1 / pdf] = the sphere's area where the density is positive everywhere (this map).
-    const double mean = inv_pdf / n, var = inv_pdf2 / n - mean * mean;
-    EXPECT_NEAR(mean, 4.0 * M_PI, 5.0 * std::sqrt(var / n)) << "sd " << std::sqrt(var / n);
+    EXPECT_NEAR(g.mean_inv_pdf, 4.0 * M_PI, 5.0 * g.sd_inv_pdf) << "sd " << g.sd_inv_pdf;
 }
 
 // The light sample with learned portals (kernels/portal_guide.h): the mixture of the cell's

@@ -7,7 +7,7 @@
 // and reach every direction the map lights.
 #include "prepare/cosine_tables.h"
 
-#include "chi2.h"
+#include "guide_sampling_check.h"
 #include "kernels/latlong.h"
 #include "kernels/normal_bins.h"
 #include "kernels/visibility_guide.h"
@@ -49,11 +49,19 @@ Map make_map(const et::RgbImage& img, float rotation) {
     return m;
 }
 
-et::RgbImage image(int w, int h) {
+// A w x h map of random radiance in [0.05, 1.05) with a sun of radiance `sun` a fifth of the way
+// down.
+et::RgbImage random_map(int w, int h, uint32_t seed, float sun) {
     et::RgbImage img;
     img.width = w;
     img.height = h;
-    img.rgb.assign(static_cast<size_t>(w) * h * 3, 1.0f);
+    img.rgb.resize(static_cast<size_t>(w) * h * 3);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    for (float& x : img.rgb)
+        x = 0.05f + U(rng);
+    for (int k = 0; k < 3; ++k)
+        img.rgb[3 * (static_cast<size_t>(h / 5) * w + w / 3) + k] = sun;
     return img;
 }
 
@@ -65,14 +73,9 @@ et::RgbImage image(int w, int h) {
 // then alpha x the map's region masses + (1 - alpha) x the weights' proportions.
 TEST(CosineTables, BoundTheClampedCosineOfEveryNormalOfTheBin) {
     const int w = 128, h = 64;
-    et::RgbImage img = image(w, h);
-    std::mt19937 rng(11);
+    const Map m = make_map(random_map(w, h, 11, 300.0f), 0.7f);
+    std::mt19937 rng(5);
     std::uniform_real_distribution<float> U(0.0f, 1.0f);
-    for (float& x : img.rgb)
-        x = 0.05f + U(rng);
-    for (int k = 0; k < 3; ++k) // a sun
-        img.rgb[3 * (static_cast<size_t>(h / 5) * w + w / 3) + k] = 300.0f;
-    const Map m = make_map(img, 0.7f);
     const std::vector<double> weights = et::cosine_bin_weights(m.dist.table, m.env);
     // Each texel's mass in the distribution, its region and, a quarter of the mass each, the
     // directions (map space) at its four corners, just inside: a light sample lands anywhere in
@@ -145,15 +148,7 @@ TEST(CosineTables, BoundTheClampedCosineOfEveryNormalOfTheBin) {
 // to one; E[1 / pdf] is the sphere's area (the defensive share reaches everything the map lights,
 // the bin's far side included).
 TEST(CosineTables, SamplesMatchTheirDensity) {
-    const int w = 96, h = 48;
-    et::RgbImage img = image(w, h);
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> U(0.05f, 1.0f);
-    for (float& x : img.rgb)
-        x = U(rng);
-    for (int k = 0; k < 3; ++k) // a sun
-        img.rgb[3 * (static_cast<size_t>(h / 4) * w + w / 3) + k] = 400.0f;
-    const Map m = make_map(img, -1.1f);
+    const Map m = make_map(random_map(96, 48, 3, 400.0f), -1.1f);
     etk::EtkScene S{};
     S.env_dist = m.dist.table.data();
     S.guide_regions = m.regions.data();
@@ -162,48 +157,14 @@ TEST(CosineTables, SamplesMatchTheirDensity) {
     p.env = m.env;
     p.guide_slots = ETK_NORMAL_BINS;
     p.guide_ready = 1;
-    const int tests = 2;
-    std::uniform_real_distribution<float> U01(0.0f, 1.0f);
     for (int bin : {kBins[1], kBins[3]}) {
-        const int n = 1 << 20;
-        std::vector<double> observed(static_cast<size_t>(w) * h, 0.0);
-        double inv_pdf = 0.0, inv_pdf2 = 0.0;
-        int bad = 0, mismatched = 0;
-        for (int i = 0; i < n; ++i) {
-            const etk::float2 u =
-                etk::make_float2(std::min(U01(rng), 0.99999994f), std::min(U01(rng), 0.99999994f));
-            const etk::EtkEnvSample s = etk::etk_guide_sample(S, p, bin, u);
-            if (!(s.pdf > 0.0f) || !std::isfinite(s.pdf)) {
-                ++bad;
-                continue;
-            }
-            observed[static_cast<size_t>(etk::etk_cell_of(s.uv.y, h)) * w +
-                     etk::etk_cell_of(s.uv.x, w)] += 1.0;
-            mismatched += etk::etk_env_pdf_uv(S.env_dist, p.env, s.uv) *
-                              etk::etk_guide_factor(S, p, bin, s.uv) !=
-                          s.pdf;
-            inv_pdf += 1.0 / s.pdf;
-            inv_pdf2 += 1.0 / (double(s.pdf) * s.pdf);
-        }
-        EXPECT_EQ(bad, 0);
-        EXPECT_EQ(mismatched, 0);
-        std::vector<double> expected(observed.size());
-        double integral = 0.0;
-        for (int r = 0; r < h; ++r)
-            for (int c = 0; c < w; ++c) {
-                const etk::float2 uv = etk::make_float2((c + 0.5f) / w, (r + 0.5f) / h);
-                const double d = double(m.dist.table[r]) *
-                                 m.dist.table[etk::etk_dist2d_conditional_pdf(h) + r * w + c] *
-                                 etk::etk_guide_factor(S, p, bin, uv) / (double(w) * h);
-                integral += d;
-                expected[static_cast<size_t>(r) * w + c] = n * d;
-            }
-        EXPECT_NEAR(integral, 1.0, 1e-4);
-        const ett::Chi2Result chi =
-            ett::chi2_test(observed, expected, w, h, ett::sidak_alpha(0.01, tests));
-        EXPECT_TRUE(chi.passed) << "bin " << bin << ": " << chi.report;
-        const double mean = inv_pdf / n, var = inv_pdf2 / n - mean * mean;
-        EXPECT_NEAR(mean, 4.0 * M_PI, 5.0 * std::sqrt(var / n)) << "bin " << bin;
+        const ett::GuideSamplingCheck g =
+            ett::check_guide_sampling(S, p, bin, 1 << 20, 17u + bin, ett::sidak_alpha(0.01, 2));
+        EXPECT_EQ(g.bad, 0) << "bin " << bin;
+        EXPECT_EQ(g.mismatched, 0) << "bin " << bin;
+        EXPECT_NEAR(g.integral, 1.0, 1e-4) << "bin " << bin;
+        EXPECT_TRUE(g.chi.passed) << "bin " << bin << ": " << g.chi.report;
+        EXPECT_NEAR(g.mean_inv_pdf, 4.0 * M_PI, 5.0 * g.sd_inv_pdf) << "bin " << bin;
     }
 }
 
