@@ -191,22 +191,18 @@ ETK_FN float etk_guide_rescale(float u, float a, float b) {
 // where u lies inside the region, rescaled to [0,1)^2 for the next level.
 ETK_FN int etk_guide_pick_region(ETK_GLOBAL const float* cdf, float2 u, float2* t) {
     // Both conditions hold for a prefix of the (non-decreasing) entries, so binary lifting finds
-    // the last of them: 4 + 5 steps where a scan of every entry took 15 + 31.
+    // the last of them: 4 + 5 steps where a scan of every entry took 15 + 31. ROWS and COLS are
+    // powers of two, so the steps sum to ROWS - 1 and COLS - 1: no index passes the table.
     int band = 0;
-    for (int step = ETK_GUIDE_ROWS / 2; step > 0; step >>= 1) {
-        int mid = band + step;
-        band = mid < ETK_GUIDE_ROWS && cdf[min(mid, ETK_GUIDE_ROWS - 1) * ETK_GUIDE_COLS] <= u.y
-                   ? mid
-                   : band;
-    }
+    for (int step = ETK_GUIDE_ROWS / 2; step > 0; step >>= 1)
+        band = cdf[(band + step) * ETK_GUIDE_COLS] <= u.y ? band + step : band;
     int first = band * ETK_GUIDE_COLS;
     float b0 = cdf[first], b1 = cdf[first + ETK_GUIDE_COLS];
     float x = b0 + u.x * (b1 - b0);
     int col = 0;
     for (int step = ETK_GUIDE_COLS / 2; step > 0; step >>= 1) {
-        int mid = col + step;
-        float c = cdf[first + min(mid, ETK_GUIDE_COLS - 1)];
-        col = mid < ETK_GUIDE_COLS && c <= x && c < b1 ? mid : col;
+        float c = cdf[first + col + step];
+        col = c <= x && c < b1 ? col + step : col;
     }
     int R = first + col;
     *t = make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(u.y, b0, b1));

@@ -113,11 +113,10 @@ std::vector<double> cosine_bin_weights(const std::vector<float>& dist, const etk
     std::vector<float> ux(np), uy(np), uz(np), mass(np), cr(np), sr(np);
     for (size_t i = 0; i < np; ++i) {
         const Part& p = parts[i];
-        const bool lit = p.mass > 0.0;
-        ux[i] = float(p.x); // unit (or zero) after the reach's pass
+        ux[i] = float(p.x); // unit (or zero: a part of no mass) after the reach's pass
         uy[i] = float(p.y);
         uz[i] = float(p.z);
-        mass[i] = lit ? float(p.mass) : 0.0f;
+        mass[i] = float(p.mass);
         cr[i] = float(std::cos(std::min(p.reach, M_PI)));
         sr[i] = float(std::sin(std::min(p.reach, M_PI)));
     }

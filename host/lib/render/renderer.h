@@ -95,7 +95,8 @@ class Renderer {
     LightShareOptions options_;
     std::unique_ptr<LightShareLearner> learner_;
     bool guide_ = false;       // visibility strategy
-    bool guide_ready_ = false; // its tables hold something learned
+    bool guide_ready_ = false; // its tables hold something to sample: learned (visibility) or
+                               // prepared with the map (cosine)
     VisibilityOptions guide_options_;
     std::unique_ptr<VisibilityCache> cache_;
     std::unique_ptr<GuideVerdict> verdict_;
