@@ -251,13 +251,8 @@ ETK_CL_INLINE_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 
         s.wi = h * (2.0f * dot(wo, h)) - wo;
     } else if (etk_bsdf_is_glossy(m) && lobe < etk_specular_weight(m)) {
         // GGX normal distribution sampling: pdf(h) = D(h) cos(theta_h).
-        float a2 = m.alpha * m.alpha;
-        float cos2 = (1.0f - u.x) / (1.0f + (a2 - 1.0f) * u.x);
-        float ct = sqrt(fmax(0.0f, cos2)), st = sqrt(fmax(0.0f, 1.0f - cos2));
-        float2 sc = etk_sincospi(2.0f * u.y);
-        float3 h = make_float3(st * sc.y, st * sc.x, ct);
-        float oh = dot(wo, h);
-        s.wi = h * (2.0f * oh) - wo;
+        float3 h = etk_sample_ggx_ndf(m.alpha, u);
+        s.wi = h * (2.0f * dot(wo, h)) - wo;
     } else {
         s.wi = etk_sample_cosine_hemisphere(u);
     }

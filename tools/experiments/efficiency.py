@@ -30,6 +30,13 @@ channel (x - ref)^2 / (ref^2 + (0.01 mean ref)^2)), which is subtracted from eve
 measured MSE (so a reference that is not quite converged does not flatten the ratios). Cached in
 OUT/ref/ by scene and duration.
 
+How sure: each gain comes with a 90% bootstrap interval over the seeds -- every (scene,
+strategy, budget)'s seeds resampled with replacement, `mis`'s too, 2000 times with a fixed
+generator (so the tables are reproducible), and the gain and the geometric mean recomputed. A
+scene whose error is a few rare fireflies (caustics of a tiny sun) shows a wide interval: its
+gain in one run says little, and more seeds or longer budgets are needed to rank estimators on it.
+`--tables-from OUT/efficiency.csv` rewrites the tables of an earlier run without rendering.
+
 Fireflies: the brightest pixel of each render over the brightest pixel of the reference (max over
 seeds); NaN/Inf: the renders' nonfinite_samples and any non-finite pixel.
 
@@ -258,7 +265,11 @@ def main():
     p.add_argument("--size", type=int, nargs=2, default=None, help="film (default 320 x 72; "
                    "with --scenes, each scene's own)")
     p.add_argument("--scenes", nargs="+", default=None, help="scene files instead of the suite")
+    p.add_argument("--tables-from", default=None, metavar="CSV",
+                   help="write the tables of an earlier run's efficiency.csv (no rendering)")
     a = p.parse_args()
+    if a.tables_from:
+        return tables_from(a)
     if a.tiny:
         a.budgets, a.seeds, a.maps, a.depths = [0.05], 2, ["grace"], [1]
         a.size, a.ref_seconds = [60, 16], 0.4
@@ -269,6 +280,7 @@ def main():
     work = common.tmpdir("efficiency")
     if a.tiny:
         check_regions(work)
+        check_intervals()
     extra = []  # common.render: the native back end
     if a.size is None and not a.scenes:
         a.size = [320, 72]
@@ -325,24 +337,112 @@ def main():
     write_tables(rows, strategies, region_names, a, ref_seconds, out_dir)
 
 
-def gains(rows, strategies, column):
-    """{(scene, strategy): gain over mis} of the geometric mean over budgets of
-    (MSE x time of mis) / (MSE x time of the strategy), MSE and time averaged over seeds."""
-    def cost(scene, strategy, budget):
-        rs = [r for r in rows if r["scene"] == scene and r["strategy"] == strategy and r["budget"] == budget]
-        return np.mean([r[column] for r in rs]) * np.mean([r["seconds"] for r in rs])
+def tables_from(a):
+    """The tables of an earlier run, from its CSV: its strategies, budgets, seeds and film as the
+    rows give them; the reference's duration is not in the CSV (--ref-seconds, else `?`)."""
+    import csv
 
+    with open(a.tables_from, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        sys.exit(f"efficiency: {a.tables_from}: no rows")
+    for r in rows:
+        for k in r:
+            if k in ("budget", "seconds", "max_ratio", "ref_noise") or k.startswith("mse"):
+                r[k] = float(r[k])
+        r["nonfinite"], r["seed"] = int(r["nonfinite"]), int(r["seed"])
+    strategies = list(dict.fromkeys(r["strategy"] for r in rows))
+    region_names = [k[4:] for k in rows[0] if k.startswith("mse ")]
+    a.budgets = sorted(set(r["budget"] for r in rows))
+    a.seeds = len(set(r["seed"] for r in rows))
+    a.strategies = strategies
+    a.size = a.size or ([320, 72] if region_names else None)
+    out_dir = a.out or os.path.dirname(os.path.abspath(a.tables_from))
+    os.makedirs(out_dir, exist_ok=True)
+    write_tables(rows, strategies, region_names, a, a.ref_seconds or "?", out_dir)
+
+
+def costs_by_group(rows, column):
+    """{(scene, strategy, budget): (errors, seconds)} over the group's seeds, as arrays."""
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["scene"], r["strategy"], r["budget"]), []).append(
+            (r[column], r["seconds"]))
+    return {k: (np.array([e for e, _ in v]), np.array([t for _, t in v])) for k, v in groups.items()}
+
+
+def gain_table(cost, scenes, strategies, budgets):
+    """{(scene, strategy): gain over mis} from {(scene, strategy, budget): MSE x time}: the
+    geometric mean over budgets of the cost ratio."""
     out = {}
-    scenes = list(dict.fromkeys(r["scene"] for r in rows))
-    budgets = sorted(set(r["budget"] for r in rows))
     for sc in scenes:
         for st in strategies:
             logs = []
             for b in budgets:
-                c, m = cost(sc, st, b), cost(sc, "mis", b)
+                c, m = cost[(sc, st, b)], cost[(sc, "mis", b)]
                 logs.append(math.log(m / c) if c > 0 and m > 0 else float("nan"))
             out[(sc, st)] = math.exp(np.mean(logs))
-    return scenes, out
+    return out
+
+
+def gain_intervals(rows, strategies, column, level=0.90, draws=2000):
+    """Bootstrap interval over the seeds of every gain and of each strategy's geometric mean
+    over the scenes: {(scene, strategy): (lo, hi)}, {strategy: (lo, hi)}. Each draw resamples
+    every group's seeds with replacement (the error and the time of a render stay together);
+    the generator's seed is fixed, so a table is the same every time it is written."""
+    groups = costs_by_group(rows, column)
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    budgets = sorted(set(r["budget"] for r in rows))
+    rng = np.random.default_rng(20261128)
+    per_scene = {(sc, st): [] for sc in scenes for st in strategies}
+    overall = {st: [] for st in strategies}
+    for _ in range(draws):
+        cost = {}
+        for key, (err, sec) in groups.items():
+            pick = rng.integers(0, len(err), len(err))
+            cost[key] = float(err[pick].mean()) * float(sec[pick].mean())
+        g = gain_table(cost, scenes, strategies, budgets)
+        for k, v in g.items():
+            per_scene[k].append(v)
+        for st in strategies:
+            overall[st].append(geomean([g[(sc, st)] for sc in scenes]))
+    q = [50 * (1 - level), 50 * (1 + level)]
+
+    def band(xs):
+        xs = [x for x in xs if math.isfinite(x)]
+        return tuple(np.percentile(xs, q)) if xs else (float("nan"), float("nan"))
+
+    return ({k: band(v) for k, v in per_scene.items()}, {k: band(v) for k, v in overall.items()})
+
+
+def check_intervals():
+    """gain_intervals on made-up runs whose answer is known (run by --tiny): seeds that agree give
+    a point; one outlier seed of three widens the interval to the gains without it (2.0: a draw
+    misses it with probability 8/27) and with it twice (0.29), around the gain with it (0.5)."""
+    def rows(errors):
+        return [{"scene": "s", "strategy": st, "budget": 1.0, "seed": k + 1, "seconds": 1.0,
+                 "mse": e} for st, es in (("mis", [1.0] * 3), ("x", errors)) for k, e in enumerate(es)]
+
+    band, _ = gain_intervals(rows([0.5] * 3), ["mis", "x"], "mse")
+    lo, hi = band[("s", "x")]
+    if not (abs(lo - 2.0) < 1e-9 and abs(hi - 2.0) < 1e-9):
+        sys.exit(f"efficiency: interval of agreeing seeds is {lo}-{hi}, not 2-2")
+    _, g = gains(rows([0.5, 0.5, 5.0]), ["mis", "x"], "mse")
+    band, _ = gain_intervals(rows([0.5, 0.5, 5.0]), ["mis", "x"], "mse")
+    lo, hi = band[("s", "x")]
+    if not (abs(g[("s", "x")] - 0.5) < 1e-9 and abs(lo - 1 / 3.5) < 1e-6 and abs(hi - 2.0) < 1e-9):
+        sys.exit(f"efficiency: outlier seed: gain {g[('s', 'x')]} interval {lo}-{hi}, "
+                 "expected 0.5 in 0.286-2")
+    print("efficiency: bootstrap intervals check out")
+
+
+def gains(rows, strategies, column):
+    """{(scene, strategy): gain over mis} of the geometric mean over budgets of
+    (MSE x time of mis) / (MSE x time of the strategy), MSE and time averaged over seeds."""
+    cost = {k: float(e.mean()) * float(t.mean()) for k, (e, t) in costs_by_group(rows, column).items()}
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    budgets = sorted(set(r["budget"] for r in rows))
+    return scenes, gain_table(cost, scenes, strategies, budgets)
 
 
 def geomean(xs):
@@ -353,21 +453,30 @@ def geomean(xs):
 def write_tables(rows, strategies, region_names, a, ref_seconds, out_dir):
     scenes, g = gains(rows, strategies, "mse")
     film = f"{a.size[0]}x{a.size[1]}" if a.size else "each scene's film"
+    ref_txt = ref_seconds if isinstance(ref_seconds, str) else f"{ref_seconds:g}"
     scenes_arg = f" --scenes {' '.join(a.scenes)}" if a.scenes else ""
     size_arg = f" --size {a.size[0]} {a.size[1]}" if a.scenes and a.size else ""
     lines = [f"Efficiency (1 / (relative MSE x time)) relative to the paper's MIS; budgets "
              f"{', '.join(f'{b:g} s' for b in a.budgets)}, {a.seeds} seeds, "
-             f"{film}, native back end, reference {ref_seconds:g} s of MIS. "
+             f"{film}, native back end, reference {ref_txt} s of MIS. "
              f"Command: `tools/experiments/efficiency.py{scenes_arg}{size_arg} --budgets "
              f"{' '.join(f'{b:g}' for b in a.budgets)} "
              f"--seeds {a.seeds} --strategies {' '.join(strategies)}`.", ""]
+    band, band_all = gain_intervals(rows, strategies, "mse")
+
+    def cell(x, lo_hi):
+        return f"{x:.2f}" if lo_hi[0] == lo_hi[1] else f"{x:.2f} ({lo_hi[0]:.2f}-{lo_hi[1]:.2f})"
+
     lines.append("| scene | " + " | ".join(strategies) + " | best of light/bsdf/mis |")
     lines.append("|---" * (len(strategies) + 2) + "|")
     for sc in scenes:
         best = max(g.get((sc, s), 0) for s in ("light", "bsdf", "mis") if (sc, s) in g)
-        lines.append(f"| {sc} | " + " | ".join(f"{g[(sc, s)]:.2f}" for s in strategies) + f" | {best:.2f} |")
+        lines.append(f"| {sc} | " + " | ".join(cell(g[(sc, s)], band[(sc, s)]) for s in strategies)
+                     + f" | {best:.2f} |")
     lines.append("| **geometric mean** | " + " | ".join(
-        f"**{geomean([g[(sc, s)] for sc in scenes]):.2f}**" for s in strategies) + " | |")
+        f"**{cell(geomean([g[(sc, s)] for sc in scenes]), band_all[s])}**" for s in strategies)
+        + " | |")
+    lines += ["", "In brackets: 90% bootstrap interval over the seeds (see the script's header)."]
     lines += ["", "Per material region (geometric mean over the scenes; each sphere's pixels, and the ground's):", ""]
     lines.append("| material | " + " | ".join(strategies) + " |")
     lines.append("|---" * (len(strategies) + 1) + "|")
