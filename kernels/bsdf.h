@@ -10,8 +10,9 @@
 // (the paper's), or from the distribution of normals visible from wo (Heitz 2018, "Sampling the
 // GGX Distribution of Visible Normals"), pdf(h) = G1(wo) max(0, wo.h) D(h) / wo.z: it never
 // draws a normal that faces away from wo, so fewer samples go below the horizon and the weights
-// f cos / pdf vary only through G1(wi) and the Fresnel term. EtkMaterial.vndf picks which; the
-// pdf follows it.
+// f cos / pdf vary only through G1(wi) and the Fresnel term; or from their even mixture, whose
+// weights are at most twice the better one's (ggx.h). EtkMaterial.ggx_sampling picks which
+// (ETK_GGX_*); the pdf follows it. Dielectrics take the mixture as visible normals.
 //
 // A conductor (ETK_MAT_CONDUCTOR) is the same GGX lobe with the exact Fresnel reflectance of a
 // metal of complex index eta + i k per channel in place of Schlick's, and no diffuse base: it
@@ -43,8 +44,8 @@ typedef struct {
     float3 specular;
     float alpha;
     int type;
-    int vndf;  // GGX lobe sampled from visible normals (1) or from D(h) cos(theta_h) (0)
-    float eta; // dielectrics: n(far side) / n(side of wo) (dielectric.h); set by surface.h
+    int ggx_sampling; // ETK_GGX_NDF, ETK_GGX_VNDF or ETK_GGX_MIX (ggx.h)
+    float eta;        // dielectrics: n(far side) / n(side of wo) (dielectric.h); set by surface.h
 } EtkMaterial;
 
 ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
@@ -54,7 +55,7 @@ ETK_FN EtkMaterial etk_material_load(ETK_GLOBAL const float4* mats, int id) {
     m.type = (int)a.w; // a float value, not int bits: a.w rides along in albedo's fourth lane
     m.specular = make_float3(b.x, b.y, b.z);
     m.alpha = fmax(b.w, 1e-3f);
-    m.vndf = 0;
+    m.ggx_sampling = ETK_GGX_NDF;
     m.eta = b.x; // dielectrics: the ior, as seen from outside
     return m;
 }
@@ -183,7 +184,8 @@ ETK_CL_INLINE_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
 
 ETK_CL_INLINE_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
     if (etk_bsdf_is_dielectric(m))
-        return etk_bsdf_is_delta(m) ? 0.0f : etk_dielectric_pdf(m.eta, m.alpha, m.vndf, wo, wi);
+        return etk_bsdf_is_delta(m) ? 0.0f
+                                    : etk_dielectric_pdf(m.eta, m.alpha, m.ggx_sampling, wo, wi);
     if (wo.z <= 0.0f || wi.z <= 0.0f || m.type == ETK_MAT_MIRROR)
         return 0.0f;
     float diffuse = wi.z * ETK_INV_PI;
@@ -191,8 +193,11 @@ ETK_CL_INLINE_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
         return diffuse;
     float3 h = normalize(wo + wi);
     // The half vector's density over the reflection's Jacobian 1 / (4 wo.h).
-    float spec = m.vndf ? etk_smith_g1(wo.z, m.alpha) * etk_ggx_d(h.z, m.alpha) / (4.0f * wo.z)
-                        : etk_ggx_d(h.z, m.alpha) * h.z / (4.0f * dot(wo, h));
+    float d = etk_ggx_d(h.z, m.alpha);
+    float spec_v =
+        m.ggx_sampling != ETK_GGX_NDF ? etk_smith_g1(wo.z, m.alpha) * d / (4.0f * wo.z) : 0.0f;
+    float spec_n = m.ggx_sampling != ETK_GGX_VNDF ? d * h.z / (4.0f * dot(wo, h)) : 0.0f;
+    float spec = m.ggx_sampling == ETK_GGX_MIX ? 0.5f * (spec_v + spec_n) : spec_v + spec_n;
     float ps = etk_specular_weight(m);
     return ps * spec + (1.0f - ps) * diffuse;
 }
@@ -211,7 +216,7 @@ ETK_FN float etk_bsdf_pdf_bound(EtkMaterial m, float3 wo) {
     if (m.type == ETK_MAT_DIFFUSE)
         return ETK_INV_PI;
     float ps = etk_specular_weight(m);
-    if (!m.vndf && ps > 0.0f)
+    if (m.ggx_sampling != ETK_GGX_VNDF && ps > 0.0f) // the NDF's share is unbounded
         return ETK_PDF_UNBOUNDED;
     float a2 = m.alpha * m.alpha;
     float d_max = fmax(a2, 1.0f / a2) * ETK_INV_PI;
@@ -233,8 +238,9 @@ ETK_CL_INLINE_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 
     s.delta = 0;
     s.wi = make_float3(0.0f, 0.0f, 1.0f);
     if (etk_bsdf_is_dielectric(m)) {
-        etk_dielectric_sample(m.albedo, m.eta, m.alpha, m.vndf, m.type == ETK_MAT_SMOOTH_DIELECTRIC,
-                              wo, u, lobe, &s.wi, &s.weight, &s.pdf, &s.delta);
+        etk_dielectric_sample(m.albedo, m.eta, m.alpha, m.ggx_sampling,
+                              m.type == ETK_MAT_SMOOTH_DIELECTRIC, wo, u, lobe, &s.wi, &s.weight,
+                              &s.pdf, &s.delta);
         return s;
     }
     if (wo.z <= 0.0f)
@@ -246,12 +252,13 @@ ETK_CL_INLINE_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 
         s.delta = 1;
         return s;
     }
-    if (etk_bsdf_is_glossy(m) && lobe < etk_specular_weight(m) && m.vndf) {
-        float3 h = etk_sample_ggx_vndf(wo, m.alpha, u);
-        s.wi = h * (2.0f * dot(wo, h)) - wo;
-    } else if (etk_bsdf_is_glossy(m) && lobe < etk_specular_weight(m)) {
-        // GGX normal distribution sampling: pdf(h) = D(h) cos(theta_h).
-        float3 h = etk_sample_ggx_ndf(m.alpha, u);
+    float ps = etk_specular_weight(m);
+    if (etk_bsdf_is_glossy(m) && lobe < ps) {
+        // The mixture's technique from the lobe number's remainder (uniform on [0, ps) given
+        // the lobe): its upper half draws visible normals.
+        int visible =
+            m.ggx_sampling == ETK_GGX_VNDF || (m.ggx_sampling == ETK_GGX_MIX && lobe >= 0.5f * ps);
+        float3 h = visible ? etk_sample_ggx_vndf(wo, m.alpha, u) : etk_sample_ggx_ndf(m.alpha, u);
         s.wi = h * (2.0f * dot(wo, h)) - wo;
     } else {
         s.wi = etk_sample_cosine_hemisphere(u);

@@ -9,6 +9,15 @@
 
 ETK_BEGIN
 
+// How a GGX lobe is sampled (EtkMaterial.ggx_sampling, bsdf.h): from D(h) cos(theta_h), from the
+// normals visible from wo, or from the even mixture of the two (one-sample MIS: the density is
+// the mean of both, so f cos / pdf is never above twice the better technique's -- neither the
+// NDF's weights that explode at grazing wo nor the visible normals' sparser samples of
+// microfacets turned away from wo; docs/results.md).
+#define ETK_GGX_NDF 0
+#define ETK_GGX_VNDF 1
+#define ETK_GGX_MIX 2
+
 ETK_FN float etk_ggx_d(float cos_h, float alpha) {
     float a2 = alpha * alpha;
     float c2 = cos_h * cos_h;

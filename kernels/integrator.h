@@ -431,7 +431,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
         int prim = (int)as_uint(P.hit[slot].y);
         share = etk_vertex_config(S, p, prim, pixel, last, &flags);
         dist = (flags & ETK_BIN_COMPENSATED) ? S.env_dist_comp : S.env_dist;
-        m.vndf = (flags & ETK_BIN_VNDF) ? 1 : 0;
+        m.ggx_sampling = (flags & ETK_BIN_VNDF) ? ETK_GGX_VNDF : ETK_GGX_NDF;
         if (p.learn && depth == 0)
             P.learn_bin[slot] = S.material_bin[S.tri_material[prim]];
     }

@@ -114,7 +114,7 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 d, EtkHit h) {
     s.wo = etk_to_local(wo_world, s.t, s.b, ns);
     s.m = etk_material_load(S.materials, S.tri_material[prim]);
     s.m = etk_material_textured(S, s.m, S.tri_material[prim], prim, h.b1, h.b2);
-    s.m.vndf = p.bsdf_sampling;
+    s.m.ggx_sampling = p.bsdf_sampling;
     // A dielectric's outside is its front face (counter-clockwise winding, the OBJ convention):
     // from the back, the ray is inside and sees 1 / ior.
     if (!front && etk_bsdf_is_dielectric(s.m))

@@ -715,8 +715,9 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--sampler", a->sampler, "sobol | random")
         ->check(CLI::IsMember(sampler_names()));
     cmd->add_option("--bsdf-sampling", a->bsdf_sampling,
-                    "GGX lobes: vndf (visible normals) | ndf (the paper's) | auto (vndf for "
-                    "compensated, adaptive and visibility, ndf otherwise)")
+                    "GGX lobes: vndf (visible normals) | ndf (the paper's) | mix (both, half "
+                    "each) | auto (vndf for compensated, adaptive, visibility and cosine, ndf "
+                    "otherwise)")
         ->check(CLI::IsMember(bsdf_sampling_names()));
     cmd->add_option("--light-batch", a->light_batch,
                     "Draw light samples " + std::to_string(ETK_LIGHT_BATCH) +

@@ -27,7 +27,7 @@ constexpr int kSamples = 1 << 20;
 etk::EtkMaterial glass(float eta, float alpha, int vndf, bool smooth = false) {
     etk::EtkMaterial m;
     m.type = smooth ? ETK_MAT_SMOOTH_DIELECTRIC : ETK_MAT_DIELECTRIC;
-    m.vndf = vndf;
+    m.ggx_sampling = vndf;
     m.albedo = etk::make_float3(1, 1, 1);
     m.specular = etk::make_float3(0, 0, 0);
     m.alpha = alpha;
@@ -117,7 +117,7 @@ std::vector<double> integrate_pdf(const etk::EtkMaterial& m, etk::float3 wo) {
 std::string label_of(const Config& c) {
     std::ostringstream s;
     s << "eta " << c.m.eta << " alpha " << c.m.alpha << " cos(theta_o) " << c.cos_o
-      << (c.m.vndf ? " vndf" : " ndf");
+      << (c.m.ggx_sampling ? " vndf" : " ndf");
     return s.str();
 }
 

@@ -66,6 +66,11 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     et::Scene vndf_scene = scene(env, "mis", depth, 6);
     vndf_scene.settings.bsdf_sampling = et::BsdfSampling::vndf;
     const auto mis_vndf = ett::render(vndf_scene, "cpu", spp);
+    // The compensated strategy with the even mixture of both GGX samplers, on OpenCL (the
+    // mixture's choice and density in the kernels PoCL compiles).
+    et::Scene mix_scene = scene(env, "compensated", depth, 14);
+    mix_scene.settings.bsdf_sampling = et::BsdfSampling::mix;
+    const auto comp_mix = ett::render(mix_scene, "opencl", spp);
     // Adaptive allocation: shares learned from the first passes, and fixed shares at both ends
     // of the range (mostly BSDF samples; mostly light samples, the continuation too at the
     // last bounce).
@@ -99,6 +104,7 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     expect_agree(light, comp, "light vs compensated" + d);
     expect_agree(mis, comp, "mis vs compensated" + d);
     expect_agree(light, mis_vndf, "light vs mis+vndf" + d);
+    expect_agree(light, comp_mix, "light vs compensated+mix (OpenCL)" + d);
     expect_agree(mis, adaptive, "mis vs adaptive" + d);
     expect_agree(light, adaptive_low, "light vs adaptive s=0.125" + d);
     expect_agree(mis, adaptive_high, "mis vs adaptive s=1.875" + d);

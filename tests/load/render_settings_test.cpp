@@ -38,6 +38,8 @@ TEST(RenderSettings, ValuesAreTheKernelCodes) {
         st.strategy = s;
         EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf) << et::name_of(s);
     }
+    EXPECT_EQ(static_cast<int>(et::parse_bsdf_sampling("vndf", "t")), ETK_GGX_VNDF);
+    EXPECT_EQ(static_cast<int>(et::parse_bsdf_sampling("mix", "t")), ETK_GGX_MIX);
     st.strategy = et::Strategy::compensated;
     st.bsdf_sampling = et::BsdfSampling::ndf;
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);

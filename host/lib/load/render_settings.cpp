@@ -23,8 +23,10 @@ constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::automatic, "auto"}
                                                {MisHeuristic::power, "power"}};
 constexpr Named<SamplerKind> kSamplers[] = {{SamplerKind::sobol, "sobol"},
                                             {SamplerKind::random, "random"}};
-constexpr Named<BsdfSampling> kBsdfSamplings[] = {
-    {BsdfSampling::automatic, "auto"}, {BsdfSampling::ndf, "ndf"}, {BsdfSampling::vndf, "vndf"}};
+constexpr Named<BsdfSampling> kBsdfSamplings[] = {{BsdfSampling::automatic, "auto"},
+                                                  {BsdfSampling::ndf, "ndf"},
+                                                  {BsdfSampling::vndf, "vndf"},
+                                                  {BsdfSampling::mix, "mix"}};
 constexpr Named<LightBatch> kLightBatches[] = {
     {LightBatch::automatic, "auto"}, {LightBatch::on, "on"}, {LightBatch::off, "off"}};
 constexpr Named<Backend> kBackends[] = {{Backend::opencl, "opencl"}, {Backend::cpu, "cpu"}};

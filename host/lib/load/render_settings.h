@@ -2,6 +2,7 @@
 // renderer factory and the device parameters. Each enum's names live in one table here, used to
 // parse, to print and to list the choices in --help.
 #pragma once
+#include "kernels/ggx.h"
 #include "kernels/params.h"
 #include "kernels/sampler.h"
 
@@ -29,7 +30,14 @@ enum class Strategy : int {
 // `mis` stays the paper's estimator (visibility: equal-spp variance lower on every scene of
 // issue 10's suite, by up to 21%, and on the five shipped scenes with GGX lobes, up to 12%, at
 // the same time per sample: docs/results.md, "The visibility strategy's verdict").
-enum class BsdfSampling : int { automatic = -1, ndf = 0, vndf = 1 };
+// mix: the even mixture of both (one-sample MIS; kernels/ggx.h), never more than twice the better
+// one's variance.
+enum class BsdfSampling : int {
+    automatic = -1,
+    ndf = ETK_GGX_NDF,
+    vndf = ETK_GGX_VNDF,
+    mix = ETK_GGX_MIX
+};
 // The MIS weights (kernels/integrator.h): automatic picks power for mis, the project's choice
 // for the paper's estimator, which every efficiency figure is relative to, and balance for the
 // strategies beyond it -- compensated, adaptive, visibility -- whose variance at equal samples
