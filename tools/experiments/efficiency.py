@@ -386,12 +386,12 @@ def gain_table(cost, scenes, strategies, budgets):
 
 
 def gain_intervals(rows, strategies, column, level=0.90, draws=2000):
-    """Bootstrap interval over the seeds of every gain and of each strategy's geometric mean
-    over the scenes, and of every gain over the best of light, bsdf and mis in the same draw (the
+    """Bootstrap interval over the seeds of every gain, of each strategy's geometric mean over
+    the scenes, and of every gain over the best of light, bsdf and mis in the same draw (the
     issue's 0.9 criterion): {(scene, strategy): (lo, hi)}, {strategy: (lo, hi)},
-    {(scene, strategy): (lo, hi)}. Each draw resamples
-    every group's seeds with replacement (the error and the time of a render stay together);
-    the generator's seed is fixed, so a table is the same every time it is written."""
+    {(scene, strategy): (lo, hi)}. Each draw resamples every group's seeds with replacement (the
+    error and the time of a render stay together); the generator's seed is fixed, so a table is
+    the same every time it is written."""
     groups = costs_by_group(rows, column)
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     budgets = sorted(set(r["budget"] for r in rows))
