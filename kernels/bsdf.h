@@ -252,8 +252,8 @@ ETK_CL_INLINE_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 
         s.delta = 1;
         return s;
     }
-    float ps = etk_specular_weight(m);
-    if (etk_bsdf_is_glossy(m) && lobe < ps) {
+    float ps = etk_bsdf_is_glossy(m) ? etk_specular_weight(m) : 0.0f; // lobe >= 0: cosine
+    if (lobe < ps) {
         // The mixture's technique from the lobe number's remainder (uniform on [0, ps) given
         // the lobe): its upper half draws visible normals.
         int visible =
