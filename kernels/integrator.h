@@ -116,12 +116,13 @@ ETK_FN float etk_last_bsdf_share(EtkParams p, EtkMaterial m, float3 wo, int last
         return 1.0f;
     return fmin(1.0f, p.env.lit_sr * etk_bsdf_pdf_bound(m, wo));
 }
-// The uniform number that chooses whether that sample is taken: a hash of seed, pixel, sample
-// and depth, independent of the vertex's Sobol' points (whose pairs cost twice as many
-// instructions: 115 a sample under valgrind).
-ETK_FN float etk_last_bsdf_choice(EtkParams p, int pixel, int depth) {
-    uint key = etk_hash_combine(etk_hash_combine(p.seed ^ 0x2c1b3c6du, (uint)pixel), (uint)depth);
-    return etk_unit_float(etk_hash_combine(key, p.sample_index));
+// The uniform number that chooses whether that sample is taken: a hash of seed, pixel and sample,
+// independent of the vertex's Sobol' points (whose pairs cost ~115 instructions a sample under
+// valgrind; these three hashes ~20). Only a path's last vertex asks, one a sample, so the depth
+// need not be in it.
+ETK_FN float etk_last_bsdf_choice(EtkParams p, int pixel) {
+    uint key = etk_hash_combine(p.seed ^ 0x2c1b3c6du, (uint)pixel);
+    return etk_unit_float(etk_hash(key + p.sample_index * 0x9e3779b9u));
 }
 
 // Adaptive allocation (ETK_STRATEGY_ADAPTIVE). A vertex draws two samples -- A, traced as the
@@ -522,12 +523,17 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
             // Above the surface, or below it at a dielectric (it transmits light from there).
             if (pdf_light > 0.0f && etk_light_side_ok(m, wi.z, dot(wi_world, ng))) {
                 float3 f = etk_bsdf_eval(m, wo, wi);
-                float w = etk_strategy_is_mis(p.strategy)
-                              ? etk_light_sample_weight(
-                                    p, lc, pdf_light,
-                                    etk_cguide_mix_pdf(S, p, cell, cg, bq * etk_bsdf_pdf(m, wo, wi),
-                                                       etk_surface_origin(s, wi_world), wi_world))
-                              : 1.0f; // sample 0 of the vertex's light samples
+                float w = 1.0f; // sample 0 of the vertex's light samples
+                if (etk_strategy_is_mis(p.strategy)) {
+                    // The continuation's density: the BSDF's, at a guided vertex its mixture with
+                    // the learned directions (asked only there: the call's arguments cost ~65
+                    // instructions a light sample in GCC's native code even when it returns at once).
+                    float pb = bq * etk_bsdf_pdf(m, wo, wi);
+                    if (cg > 0.0f)
+                        pb = etk_cguide_mix_pdf(S, p, cell, cg, pb, etk_surface_origin(s, wi_world),
+                                                wi_world);
+                    w = etk_light_sample_weight(p, lc, pdf_light, pb);
+                }
                 float3 L = drawn ? etk_xyz(P.light_L[slot])
                                  : etk_env_radiance_uv(S.env_texels, p.env, light_uv);
                 c = beta * f * L * (fabs(wi.z) * w / pdf_light);
@@ -569,7 +575,7 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
         return;
     // Taken with probability bq (etk_last_bsdf_share), chosen by a hash of the sample: a Sobol'
     // pair would cost twice as much, and most of these samples are never drawn.
-    if (bq < 1.0f && !(etk_last_bsdf_choice(p, pixel, depth) < bq))
+    if (bq < 1.0f && !(etk_last_bsdf_choice(p, pixel) < bq))
         return;
     float2 rr = etk_dims(p, pixel, pair + 2u);
     float2 u = etk_dims(p, pixel, pair + 1u);

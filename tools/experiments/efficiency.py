@@ -2,7 +2,7 @@
 """Efficiency of envtrace's estimators: relative MSE x time against a converged reference, relative to the
 paper's MIS (issue 10).
 
-    tools/experiments/efficiency.py [--budgets 0.5 2] [--seeds 3] [--maps ...] [--depths 1 5]
+    tools/experiments/efficiency.py [--budgets 0.5 2 | --spp N] [--seeds 3] [--maps ...] [--depths 1 5]
                                     [--strategies light bsdf mis ...] [--out DIR] [--tiny]
 
 The suite: five maps (a tiny intense sun: royal_esplanade_1k, spot1Lux; few small sources:
@@ -36,6 +36,15 @@ generator (so the tables are reproducible), and the gain and the geometric mean 
 scene whose error is a few rare fireflies (caustics of a tiny sun) shows a wide interval: its
 gain in one run says little, and more seeds or longer budgets are needed to rank estimators on it.
 `--tables-from OUT/efficiency.csv` rewrites the tables of an earlier run without rendering.
+The seeds are resampled together: a seed's renders by two strategies share sample points and are
+correlated, so their ratio is surer than either.
+
+Equal samples (`--spp N ...`, with --ref-seconds): renders of N samples per pixel instead of N
+seconds, each timed by its render_seconds; the efficiency is the same 1 / (MSE x time). A seed's
+image is then the same whatever the machine's load, only its time moves, so a scene whose error
+is rare fireflies can be given many seeds on a busy machine, and the seed-by-seed pairing of the
+strategies is closer (at equal time they render different sample counts). The strategies
+alternate seed by seed in both modes, so a drifting load times them alike.
 
 Fireflies: the brightest pixel of each render over the brightest pixel of the reference (max over
 seeds); NaN/Inf: the renders' nonfinite_samples and any non-finite pixel.
@@ -202,7 +211,8 @@ def check_regions(work, width=320, height=72):
                      f"({100 * agree:.1f}% of its pixels)")
 
 
-def render(scene, out, strategy, budget, seed, extra):
+def render(scene, out, strategy, budget, seed, extra, unit="s"):
+    """One render of `budget` seconds (unit "s") or samples per pixel (unit "spp")."""
     args, exponent = strategy_args(strategy)
     if exponent is not None:  # a scene variant with a tone-mapped distribution
         with open(scene) as f:
@@ -211,7 +221,8 @@ def render(scene, out, strategy, budget, seed, extra):
         scene = out + ".json"
         with open(scene, "w") as f:
             json.dump(s, f)
-    args = ["--time-limit", str(budget), "--seed", str(seed)] + args + extra
+    limit = ["--time-limit", str(budget)] if unit == "s" else ["--spp", str(int(budget))]
+    args = limit + ["--seed", str(seed)] + args + extra
     stats = common.render(scene, out, args)
     return common.read_pfm(out), stats
 
@@ -256,6 +267,8 @@ def reference(scene, name, ref_seconds, cache, extra):
 def main():
     p = common.parser(__doc__.splitlines()[0])
     p.add_argument("--budgets", type=float, nargs="+", default=[0.5, 2.0])
+    p.add_argument("--spp", type=int, nargs="+", default=None,
+                   help="equal samples instead of equal time: renders of N spp, each timed")
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--maps", nargs="+", default=SUITE, choices=list(MAPS))
     p.add_argument("--depths", type=int, nargs="+", default=[1, 5])
@@ -273,6 +286,14 @@ def main():
     if a.tiny:
         a.budgets, a.seeds, a.maps, a.depths = [0.05], 2, ["grace"], [1]
         a.size, a.ref_seconds = [60, 16], 0.4
+    unit = "s"
+    if a.spp:
+        if any(n < 1 for n in a.spp):
+            sys.exit("efficiency: --spp takes positive sample counts")
+        a.budgets, unit = [float(n) for n in a.spp], "spp"
+        if a.ref_seconds is None:
+            sys.exit("efficiency: --spp needs --ref-seconds (the reference's duration)")
+    a.unit = unit
     ref_seconds = a.ref_seconds or 40 * max(a.budgets)
     out_dir = common.out_dir(a, "efficiency")
     cache = os.path.join(out_dir, "ref")
@@ -311,11 +332,13 @@ def main():
             masks += [m for _, m in regions(width, ref.shape[0])] if region_names else []
             rel_denom = ref ** 2 + (0.01 * float(ref.mean())) ** 2
             ref_noise = [float((ref_var / rel_denom)[m].mean()) for m in masks]
+            # The strategies alternate seed by seed, so that a machine whose load drifts during
+            # the run times them alike.
             for budget in a.budgets:
-                for strategy in strategies:
-                    for seed in range(1, a.seeds + 1):
+                for seed in range(1, a.seeds + 1):
+                    for strategy in strategies:
                         out = os.path.join(work, f"{name}-{strategy}-{budget:g}-{seed}.pfm")
-                        img, stats = render(scene, out, strategy, budget, seed, extra)
+                        img, stats = render(scene, out, strategy, budget, seed, extra, unit)
                         finite = bool(np.isfinite(img).all())
                         # Relative squared error per pixel channel: (x - ref)^2 / (ref^2 + eps),
                         # eps = (1% of the image mean)^2, so that dark and bright pixels weigh
@@ -324,14 +347,15 @@ def main():
                         mse = [max(float(err[m].mean()) - n, 0.0) for m, n in zip(masks, ref_noise)]
                         rows.append({
                             "scene": name, "map": map_key, "depth": depth, "strategy": strategy,
-                            "budget": budget, "seed": seed, "seconds": stats["render_seconds"],
+                            "budget": budget, "unit": unit, "seed": seed,
+                            "seconds": stats["render_seconds"],
                             "spp": stats["spp"], "nonfinite": stats["nonfinite_samples"] +
                             (0 if finite else 1),
                             "max_ratio": float(img.mean(axis=2).max()) / max(ref_max, 1e-30),
                             "mse": mse[0], **{f"mse {b}": m for b, m in zip(region_names, mse[1:])},
                             "ref_noise": ref_noise[0],
                         })
-                        print(f"{name} {strategy:>16} {budget:g}s seed {seed}: {stats['spp']} spp "
+                        print(f"{name} {strategy:>16} {budget:g}{unit} seed {seed}: {stats['spp']} spp "
                               f"{stats['render_seconds']:.2f}s mse {mse[0]:.4g}", flush=True)
     common.write_csv(os.path.join(out_dir, "efficiency.csv"), list(rows[0]), [list(r.values()) for r in rows])
     write_tables(rows, strategies, region_names, a, ref_seconds, out_dir)
@@ -354,6 +378,7 @@ def tables_from(a):
     strategies = list(dict.fromkeys(r["strategy"] for r in rows))
     region_names = [k[4:] for k in rows[0] if k.startswith("mse ")]
     a.budgets = sorted(set(r["budget"] for r in rows))
+    a.unit = rows[0].get("unit", "s")  # runs before --spp existed are equal-time
     a.seeds = len(set(r["seed"] for r in rows))
     a.strategies = strategies
     a.size = a.size or ([320, 72] if region_names else None)
@@ -363,9 +388,10 @@ def tables_from(a):
 
 
 def costs_by_group(rows, column):
-    """{(scene, strategy, budget): (errors, seconds)} over the group's seeds, as arrays."""
+    """{(scene, strategy, budget): (errors, seconds)} over the group's seeds, as arrays in the
+    order of the seeds (so that entry k of two strategies is the same seed's)."""
     groups = {}
-    for r in rows:
+    for r in sorted(rows, key=lambda r: int(r["seed"])):
         groups.setdefault((r["scene"], r["strategy"], r["budget"]), []).append(
             (r[column], r["seconds"]))
     return {k: (np.array([e for e, _ in v]), np.array([t for _, t in v])) for k, v in groups.items()}
@@ -400,11 +426,17 @@ def gain_intervals(rows, strategies, column, level=0.90, draws=2000):
     overall = {st: [] for st in strategies}
     vs_best = {(sc, st): [] for sc in scenes for st in strategies}
     singles = [st for st in ("light", "bsdf", "mis") if st in strategies]
+    seeds = {}  # (scene, budget) -> number of seeds, the same for each strategy
+    for (sc, st, b), (err, _) in groups.items():
+        if seeds.setdefault((sc, b), len(err)) != len(err):
+            sys.exit(f"efficiency: {sc} at {b:g} has {len(err)} seeds of {st}, "
+                     f"{seeds[(sc, b)]} of another strategy")
     for _ in range(draws):
+        picks = {k: rng.integers(0, n, n) for k, n in seeds.items()}
         cost = {}
-        for key, (err, sec) in groups.items():
-            pick = rng.integers(0, len(err), len(err))
-            cost[key] = float(err[pick].mean()) * float(sec[pick].mean())
+        for (sc, st, b), (err, sec) in groups.items():
+            pick = picks[(sc, b)]
+            cost[(sc, st, b)] = float(err[pick].mean()) * float(sec[pick].mean())
         g = gain_table(cost, scenes, strategies, budgets)
         for k, v in g.items():
             per_scene[k].append(v)
@@ -425,10 +457,15 @@ def gain_intervals(rows, strategies, column, level=0.90, draws=2000):
 def check_intervals():
     """gain_intervals on made-up runs whose answer is known (run by --tiny): seeds that agree give
     a point; one outlier seed of three widens the interval to the gains without it (2.0: a draw
-    misses it with probability 8/27) and with it twice (0.29), around the gain with it (0.5)."""
+    misses it with probability 8/27) and with it twice (0.29), around the gain with it (0.5);
+    seeds whose errors differ but are always half of mis's in the same seed give a point (the
+    seeds are resampled together)."""
     def rows(errors):
+        return rows_of([1.0] * 3, errors)
+
+    def rows_of(mis, errors):
         return [{"scene": "s", "strategy": st, "budget": 1.0, "seed": k + 1, "seconds": 1.0,
-                 "mse": e} for st, es in (("mis", [1.0] * 3), ("x", errors)) for k, e in enumerate(es)]
+                 "mse": e} for st, es in (("mis", mis), ("x", errors)) for k, e in enumerate(es)]
 
     band, _, _ = gain_intervals(rows([0.5] * 3), ["mis", "x"], "mse")
     lo, hi = band[("s", "x")]
@@ -440,6 +477,10 @@ def check_intervals():
     if not (abs(g[("s", "x")] - 0.5) < 1e-9 and abs(lo - 1 / 3.5) < 1e-6 and abs(hi - 2.0) < 1e-9):
         sys.exit(f"efficiency: outlier seed: gain {g[('s', 'x')]} interval {lo}-{hi}, "
                  "expected 0.5 in 0.286-2")
+    band, _, _ = gain_intervals(rows_of([1.0, 4.0, 16.0], [0.5, 2.0, 8.0]), ["mis", "x"], "mse")
+    lo, hi = band[("s", "x")]
+    if not (abs(lo - 2.0) < 1e-9 and abs(hi - 2.0) < 1e-9):
+        sys.exit(f"efficiency: paired seeds give the interval {lo}-{hi}, not 2-2")
     print("efficiency: bootstrap intervals check out")
 
 
@@ -463,12 +504,16 @@ def write_tables(rows, strategies, region_names, a, ref_seconds, out_dir):
     ref_txt = ref_seconds if isinstance(ref_seconds, str) else f"{ref_seconds:g}"
     scenes_arg = f" --scenes {' '.join(a.scenes)}" if a.scenes else ""
     size_arg = f" --size {a.size[0]} {a.size[1]}" if a.scenes and a.size else ""
-    lines = [f"Efficiency (1 / (relative MSE x time)) relative to the paper's MIS; budgets "
-             f"{', '.join(f'{b:g} s' for b in a.budgets)}, {a.seeds} seeds, "
+    unit = getattr(a, "unit", "s")
+    what = ("budgets " + ", ".join(f"{b:g} s" for b in a.budgets) if unit == "s" else
+            "equal samples, " + ", ".join(f"{b:g} spp" for b in a.budgets) + " (each render timed)")
+    lines = [f"Efficiency (1 / (relative MSE x time)) relative to the paper's MIS; {what}, {a.seeds} seeds, "
              f"{film}, native back end, reference {ref_txt} s of MIS. "
-             f"Command: `tools/experiments/efficiency.py{scenes_arg}{size_arg} --budgets "
+             f"Command: `tools/experiments/efficiency.py{scenes_arg}{size_arg} "
+             f"{'--budgets' if unit == 's' else '--spp'} "
              f"{' '.join(f'{b:g}' for b in a.budgets)} "
-             f"--seeds {a.seeds} --strategies {' '.join(strategies)}`.", ""]
+             f"--seeds {a.seeds} --strategies {' '.join(strategies)}"
+             f"{'' if unit == 's' else f' --ref-seconds {ref_txt}'}`.", ""]
     band, band_all, band_best = gain_intervals(rows, strategies, "mse")
 
     def cell(x, lo_hi):
