@@ -527,7 +527,8 @@ ETK_FORCE_INLINE_FN void etk_shade(ETK_STAGE_PARAMS) {
                 if (etk_strategy_is_mis(p.strategy)) {
                     // The continuation's density: the BSDF's, at a guided vertex its mixture with
                     // the learned directions (asked only there: the call's arguments cost ~65
-                    // instructions a light sample in GCC's native code even when it returns at once).
+                    // instructions a light sample in GCC's native code even when it returns at
+                    // once).
                     float pb = bq * etk_bsdf_pdf(m, wo, wi);
                     if (cg > 0.0f)
                         pb = etk_cguide_mix_pdf(S, p, cell, cg, pb, etk_surface_origin(s, wi_world),
