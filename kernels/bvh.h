@@ -13,9 +13,19 @@
 // without a fetch. The host keeps the tree shallow enough for ETK_BVH_STACK (at most 1 + 3 x
 // depth entries).
 // A leaf's triangles lie in packets of four, ETK_BVH_PACKET float4 each, again one triangle per
-// lane: v0.x, v0.y, v0.z, e1.x, e1.y, e1.z, e2.x, e2.y, e2.z (edges e1 = v1 - v0, e2 = v2 - v0,
-// for Moller-Trumbore) and the triangle's index; an unused lane has index -1 and zero edges,
-// which no ray hits (determinant 0). The packets are the traversal's only triangle data.
+// lane: v0.x, v0.y, v0.z, v1.x, ..., v2.z and the triangle's index; an unused lane has index -1
+// and three zero vertices, which no ray hits (determinant 0). The packets are the traversal's only
+// triangle data.
+//
+// The triangle test is watertight (Woop, Benthin and Wald 2013): the vertices are moved into a
+// frame where the ray is the +z axis, by a translation and a shear that depend on the ray alone,
+// so a vertex shared by several triangles has the same sheared coordinates in each, and an edge
+// shared by two triangles has edge functions of exactly opposite sign (each is a difference of
+// the same two products, no fused multiply-add: compat.h). A ray through an edge or a vertex
+// therefore hits at least one of the triangles around it. Moller-Trumbore, used before, computed
+// each triangle's edges and barycentrics on its own, and let a ray aimed at shared edges and
+// vertices through a closed mesh about once in ten (Bvh.ClosedMeshesHaveNoCracks): light leaked
+// into closed spheres and rooms.
 #ifndef ETK_BVH_H
 #define ETK_BVH_H
 #include "compat.h"
@@ -23,10 +33,10 @@
 #define ETK_BVH_STACK 96
 #define ETK_BVH_NODE 8    // float4 per node
 #define ETK_BVH_PACKET 10 // float4 per packet of four triangles
-// A packet's rows (float4 each, one lane per triangle): v0 x, y, z, then e1, e2, the index.
+// A packet's rows (float4 each, one lane per triangle): v0 x, y, z, then v1, v2, the index.
 #define ETK_PACKET_V0 0
-#define ETK_PACKET_E1 3
-#define ETK_PACKET_E2 6
+#define ETK_PACKET_V1 3
+#define ETK_PACKET_V2 6
 #define ETK_PACKET_PRIM 9
 
 ETK_BEGIN
@@ -52,22 +62,80 @@ ETK_FN void etk_box_hit4(ETK_GLOBAL const float4* nd, float4 ox, float4 oy, floa
                       ETK_MAXF(ETK_MINF(tz0, tz1), zero));
     *tfar = ETK_MINF(ETK_MINF(ETK_MAXF(tx0, tx1), ETK_MAXF(ty0, ty1)),
                      ETK_MINF(ETK_MAXF(tz0, tz1), tm)) *
-            1.00000024f;
+            1.000001f;
 }
 
-// Whether a triangle test hit: non-degenerate (det non-zero and finite), inside the triangle,
-// at t in (0, tmax). One expression for a lane (floats: 0 or 1) and for four lanes at once
-// (etk_lanes: a mask per lane), so the two can never disagree.
-#define ETK_TRIANGLE_HIT(det, b1, b2, t, tmax, zero, one)                                          \
-    ((det != zero) & (det - det == zero) & (b1 >= zero) & (b1 <= one) & (b2 >= zero) &             \
-     (b1 + b2 <= one) & (t > zero) & (t < tmax))
+// The ray in the watertight test's frame: kz the axis of the direction's largest component, kx
+// and ky the other two (swapped where that component is negative, which keeps the triangles'
+// winding), the shear (sx, sy) that takes the direction onto the kz axis and sz = 1 / d[kz], and
+// the origin's coordinates in that order. Made once per ray.
+typedef struct {
+    float3 org, dir; // as given, for the distance to a triangle that is hit
+    int kx, ky, kz;
+    float sx, sy, sz;
+    float ox, oy, oz;
+} EtkShearedRay;
+
+ETK_FN float etk_axis(float3 v, int k) {
+    return k == 0 ? v.x : (k == 1 ? v.y : v.z);
+}
+
+ETK_FN EtkShearedRay etk_sheared_ray(float3 org, float3 dir) {
+    EtkShearedRay r;
+    r.org = org;
+    r.dir = dir;
+    float ax = fabs(dir.x), ay = fabs(dir.y), az = fabs(dir.z);
+    r.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    r.kx = r.kz == 2 ? 0 : r.kz + 1;
+    r.ky = r.kx == 2 ? 0 : r.kx + 1;
+    float dz = etk_axis(dir, r.kz);
+    if (dz < 0.0f) {
+        int k = r.kx;
+        r.kx = r.ky;
+        r.ky = k;
+    }
+    r.sz = 1.0f / dz; // a zero direction: infinite, and every test below fails
+    r.sx = etk_axis(dir, r.kx) * r.sz;
+    r.sy = etk_axis(dir, r.ky) * r.sz;
+    r.ox = etk_axis(org, r.kx);
+    r.oy = etk_axis(org, r.ky);
+    r.oz = etk_axis(org, r.kz);
+    return r;
+}
+
+// Whether a triangle test hit: the edge functions u, v, w all of one sign (a zero counts as
+// either: the ray passes through the edge, and both triangles there take it), a non-degenerate
+// triangle (det = u + v + w non-zero and finite), t in (0, tmax). One expression for a lane
+// (floats: 0 or 1) and for four lanes at once (etk_lanes: a mask per lane), so the two can never
+// disagree.
+#define ETK_TRIANGLE_HIT(u, v, w, det, t, tmax, zero)                                              \
+    ((((u >= zero) & (v >= zero) & (w >= zero)) | ((u <= zero) & (v <= zero) & (w <= zero))) &     \
+     (det != zero) & (det - det == zero) & (t > zero) & (t < tmax))
 
 // One lane of a packet test: the hit is taken when closer than hit->t (so of two triangles at
-// the same distance the one tested first keeps it).
-ETK_FORCE_INLINE_FN int etk_triangle_lane(float det, float b1, float b2, float t, float prim,
-                                          EtkHit* hit) {
-    if (!ETK_TRIANGLE_HIT(det, b1, b2, t, hit->t, 0.0f, 1.0f))
+// the same distance the one tested first keeps it). Its distance is the ray's to the triangle's
+// plane, from the edges in the scene's coordinates (as Moller-Trumbore has it): the edge
+// functions' t, from vertices relative to the ray's origin, loses the digits of the distance
+// over the triangle's size (a triangle 1e-6 the size of its distance is placed ~10% off), which
+// the sign tests tolerate but the closest hit's choice and the boxes' culling do not.
+ETK_FORCE_INLINE_FN int etk_triangle_lane(ETK_GLOBAL const float4* pk, int lane, EtkShearedRay r,
+                                          float u, float v, float w, float det, float t0,
+                                          float prim, EtkHit* hit) {
+    if (!ETK_TRIANGLE_HIT(u, v, w, det, t0, hit->t * 2.0f, 0.0f))
         return 0;
+    ETK_GLOBAL const float* f = (ETK_GLOBAL const float*)pk;
+    float3 v0 = make_float3(f[4 * ETK_PACKET_V0 + lane], f[4 * ETK_PACKET_V0 + 4 + lane],
+                            f[4 * ETK_PACKET_V0 + 8 + lane]);
+    float3 v1 = make_float3(f[4 * ETK_PACKET_V1 + lane], f[4 * ETK_PACKET_V1 + 4 + lane],
+                            f[4 * ETK_PACKET_V1 + 8 + lane]);
+    float3 v2 = make_float3(f[4 * ETK_PACKET_V2 + lane], f[4 * ETK_PACKET_V2 + 4 + lane],
+                            f[4 * ETK_PACKET_V2 + 8 + lane]);
+    float3 n = cross(v1 - v0, v2 - v0);
+    float t = dot(v0 - r.org, n) / dot(r.dir, n);
+    if (!(t > 0.0f && t < hit->t))
+        return 0;
+    float inv = 1.0f / det;
+    float b1 = v * inv, b2 = w * inv;
     hit->t = t;
     hit->prim = (int)as_uint(prim);
     hit->b1 = b1;
@@ -75,58 +143,57 @@ ETK_FORCE_INLINE_FN int etk_triangle_lane(float det, float b1, float b2, float t
     return 1;
 }
 
-// Vertex v0 and edges e1, e2 of the triangle in `slot` (packet index x 4 + lane) of the packets.
-ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, float3* v0, float3* e1,
-                                float3* e2) {
+// The vertices of the triangle in `slot` (packet index x 4 + lane) of the packets.
+ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, float3* v0, float3* v1,
+                                float3* v2) {
     int lane = slot & 3;
     ETK_GLOBAL const float* pk = (ETK_GLOBAL const float*)(packets + (slot >> 2) * ETK_BVH_PACKET);
     *v0 = make_float3(pk[4 * ETK_PACKET_V0 + lane], pk[4 * ETK_PACKET_V0 + 4 + lane],
                       pk[4 * ETK_PACKET_V0 + 8 + lane]);
-    *e1 = make_float3(pk[4 * ETK_PACKET_E1 + lane], pk[4 * ETK_PACKET_E1 + 4 + lane],
-                      pk[4 * ETK_PACKET_E1 + 8 + lane]);
-    *e2 = make_float3(pk[4 * ETK_PACKET_E2 + lane], pk[4 * ETK_PACKET_E2 + 4 + lane],
-                      pk[4 * ETK_PACKET_E2 + 8 + lane]);
+    *v1 = make_float3(pk[4 * ETK_PACKET_V1 + lane], pk[4 * ETK_PACKET_V1 + 4 + lane],
+                      pk[4 * ETK_PACKET_V1 + 8 + lane]);
+    *v2 = make_float3(pk[4 * ETK_PACKET_V2 + lane], pk[4 * ETK_PACKET_V2 + 4 + lane],
+                      pk[4 * ETK_PACKET_V2 + 8 + lane]);
 }
 
-// Moller-Trumbore on the four triangles of a packet at once: each step one vector operation on
-// both back ends, every lane rounded as a test of its triangle alone would be. The lanes are
-// then taken in order, as one-by-one tests would take them. Returns 1 when any_hit and one was
-// hit. The ray is broadcast here rather than passed broadcast: fewer live vectors across the
-// traversal loop, which PoCL's code otherwise keeps on the stack.
-ETK_FORCE_INLINE_FN int etk_packet_hit(ETK_GLOBAL const float4* pk, float3 org, float3 dir,
-                                       int any_hit, EtkHit* hit) {
-    float4 ox = make_float4(org.x, org.x, org.x, org.x),
-           oy = make_float4(org.y, org.y, org.y, org.y);
-    float4 oz = make_float4(org.z, org.z, org.z, org.z);
-    float4 dx = make_float4(dir.x, dir.x, dir.x, dir.x),
-           dy = make_float4(dir.y, dir.y, dir.y, dir.y);
-    float4 dz = make_float4(dir.z, dir.z, dir.z, dir.z);
-    float4 e1x = pk[ETK_PACKET_E1], e1y = pk[ETK_PACKET_E1 + 1], e1z = pk[ETK_PACKET_E1 + 2];
-    float4 e2x = pk[ETK_PACKET_E2], e2y = pk[ETK_PACKET_E2 + 1], e2z = pk[ETK_PACKET_E2 + 2];
-    float4 px = dy * e2z - dz * e2y; // p = d x e2
-    float4 py = dz * e2x - dx * e2z;
-    float4 pz = dx * e2y - dy * e2x;
-    float4 det = e1x * px + e1y * py + e1z * pz;
-    float4 inv = make_float4(1.0f, 1.0f, 1.0f, 1.0f) / det;
-    float4 sx = ox - pk[ETK_PACKET_V0], sy = oy - pk[ETK_PACKET_V0 + 1],
-           sz = oz - pk[ETK_PACKET_V0 + 2];
-    float4 b1 = (sx * px + sy * py + sz * pz) * inv;
-    float4 qx = sy * e1z - sz * e1y; // q = s x e1
-    float4 qy = sz * e1x - sx * e1z;
-    float4 qz = sx * e1y - sy * e1x;
-    float4 b2 = (dx * qx + dy * qy + dz * qz) * inv;
-    float4 t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+// The watertight test (top) on the four triangles of a packet at once: each step one vector
+// operation on both back ends, every lane rounded as a test of its triangle alone would be. The
+// lanes are then taken in order, as one-by-one tests would take them. Returns 1 when any_hit and
+// one was hit. The ray is broadcast here rather than passed broadcast: fewer live vectors across
+// the traversal loop, which PoCL's code otherwise keeps on the stack.
+ETK_FORCE_INLINE_FN int etk_packet_hit(ETK_GLOBAL const float4* pk, EtkShearedRay r, int any_hit,
+                                       EtkHit* hit) {
+    float4 ox = make_float4(r.ox, r.ox, r.ox, r.ox), oy = make_float4(r.oy, r.oy, r.oy, r.oy);
+    float4 oz = make_float4(r.oz, r.oz, r.oz, r.oz);
+    float4 sx = make_float4(r.sx, r.sx, r.sx, r.sx), sy = make_float4(r.sy, r.sy, r.sy, r.sy);
+    // The vertices relative to the origin, sheared: the ray is then the kz axis.
+    float4 az = pk[ETK_PACKET_V0 + r.kz] - oz, bz = pk[ETK_PACKET_V1 + r.kz] - oz,
+           cz = pk[ETK_PACKET_V2 + r.kz] - oz;
+    float4 ax = (pk[ETK_PACKET_V0 + r.kx] - ox) - sx * az,
+           ay = (pk[ETK_PACKET_V0 + r.ky] - oy) - sy * az;
+    float4 bx = (pk[ETK_PACKET_V1 + r.kx] - ox) - sx * bz,
+           by = (pk[ETK_PACKET_V1 + r.ky] - oy) - sy * bz;
+    float4 cx = (pk[ETK_PACKET_V2 + r.kx] - ox) - sx * cz,
+           cy = (pk[ETK_PACKET_V2 + r.ky] - oy) - sy * cz;
+    // Edge functions: twice the signed areas seen along the ray, of edges bc, ca and ab.
+    float4 u = cx * by - cy * bx;
+    float4 v = ax * cy - ay * cx;
+    float4 w = bx * ay - by * ax;
+    float4 det = u + v + w;
+    float4 t = (u * az + v * bz + w * cz) * make_float4(r.sz, r.sz, r.sz, r.sz) / det;
     // Most packets are missed by every lane: one vector test decides that, without a branch
-    // per lane.
-    etk_lanes zero = etk_lanes_splat(0.0f), one = etk_lanes_splat(1.0f);
-    if (!etk_any_lane(ETK_TRIANGLE_HIT(etk_lanes_of(det), etk_lanes_of(b1), etk_lanes_of(b2),
-                                       etk_lanes_of(t), etk_lanes_splat(hit->t), zero, one)))
+    // per lane. Its distance is a first estimate, taken with slack: etk_triangle_lane computes
+    // the one the hit keeps.
+    etk_lanes zero = etk_lanes_splat(0.0f);
+    if (!etk_any_lane(ETK_TRIANGLE_HIT(etk_lanes_of(u), etk_lanes_of(v), etk_lanes_of(w),
+                                       etk_lanes_of(det), etk_lanes_of(t),
+                                       etk_lanes_splat(hit->t * 2.0f), zero)))
         return 0;
     float4 prim = pk[ETK_PACKET_PRIM];
-    return (etk_triangle_lane(det.x, b1.x, b2.x, t.x, prim.x, hit) && any_hit) ||
-           (etk_triangle_lane(det.y, b1.y, b2.y, t.y, prim.y, hit) && any_hit) ||
-           (etk_triangle_lane(det.z, b1.z, b2.z, t.z, prim.z, hit) && any_hit) ||
-           (etk_triangle_lane(det.w, b1.w, b2.w, t.w, prim.w, hit) && any_hit);
+    return (etk_triangle_lane(pk, 0, r, u.x, v.x, w.x, det.x, t.x, prim.x, hit) && any_hit) ||
+           (etk_triangle_lane(pk, 1, r, u.y, v.y, w.y, det.y, t.y, prim.y, hit) && any_hit) ||
+           (etk_triangle_lane(pk, 2, r, u.z, v.z, w.z, det.z, t.z, prim.z, hit) && any_hit) ||
+           (etk_triangle_lane(pk, 3, r, u.w, v.w, w.w, det.w, t.w, prim.w, hit) && any_hit);
 }
 
 ETK_FN float3 etk_safe_inverse(float3 d) {
@@ -140,9 +207,9 @@ ETK_FN float3 etk_safe_inverse(float3 d) {
 // Intersects the packets of a leaf; returns 1 when any_hit and one was hit. Inlined: as a call,
 // GCC passes its vectors through memory (native traversal ~10% slower).
 ETK_FORCE_INLINE_FN int etk_leaf_hit(ETK_GLOBAL const float4* packets, int first, int count,
-                                     float3 org, float3 dir, int any_hit, EtkHit* hit) {
+                                     EtkShearedRay r, int any_hit, EtkHit* hit) {
     for (int i = 0; i < count; ++i)
-        if (etk_packet_hit(packets + ETK_BVH_PACKET * (first + i), org, dir, any_hit, hit))
+        if (etk_packet_hit(packets + ETK_BVH_PACKET * (first + i), r, any_hit, hit))
             return 1;
     return 0;
 }
@@ -152,14 +219,13 @@ ETK_FORCE_INLINE_FN int etk_leaf_hit(ETK_GLOBAL const float4* packets, int first
 // distances decrease towards the top, so the nearest is popped first. The host keeps the stack
 // within ETK_BVH_STACK (see the top); `base` is where this node's pushes began.
 ETK_FORCE_INLINE_FN int etk_bvh_lane(ETK_GLOBAL const float4* packets, int in, float t, float meta,
-                                     float flags, float3 org, float3 dir, int any_hit, EtkHit* hit,
+                                     float flags, EtkShearedRay r, int any_hit, EtkHit* hit,
                                      int* stack, float* stack_t, int base, int* sp) {
     if (!in || !(t <= hit->t * 1.0000005f)) // slack: tnear and t round differently
         return 0;
     uint f = as_uint(flags);
     if (f & 0x80000000u)
-        return etk_leaf_hit(packets, (int)as_uint(meta), (int)(f & 0x7fffffffu), org, dir, any_hit,
-                            hit);
+        return etk_leaf_hit(packets, (int)as_uint(meta), (int)(f & 0x7fffffffu), r, any_hit, hit);
     int j = *sp;
     if (j >= ETK_BVH_STACK) // never, for trees the host builds
         return 0;
@@ -182,6 +248,7 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
     hit->prim = -1;
     hit->b1 = hit->b2 = 0.0f;
     float3 inv_dir = etk_safe_inverse(dir);
+    EtkShearedRay sr = etk_sheared_ray(org, dir);
     float4 ox = make_float4(org.x, org.x, org.x, org.x),
            oy = make_float4(org.y, org.y, org.y, org.y);
     float4 oz = make_float4(org.z, org.z, org.z, org.z);
@@ -202,14 +269,14 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
         etk_box_hit4(nd, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
         float4 meta = nd[6], flags = nd[7];
         int base = sp;
-        if (etk_bvh_lane(packets, tn.x <= tf.x, tn.x, meta.x, flags.x, org, dir, any_hit, hit,
-                         stack, stack_t, base, &sp) ||
-            etk_bvh_lane(packets, tn.y <= tf.y, tn.y, meta.y, flags.y, org, dir, any_hit, hit,
-                         stack, stack_t, base, &sp) ||
-            etk_bvh_lane(packets, tn.z <= tf.z, tn.z, meta.z, flags.z, org, dir, any_hit, hit,
-                         stack, stack_t, base, &sp) ||
-            etk_bvh_lane(packets, tn.w <= tf.w, tn.w, meta.w, flags.w, org, dir, any_hit, hit,
-                         stack, stack_t, base, &sp))
+        if (etk_bvh_lane(packets, tn.x <= tf.x, tn.x, meta.x, flags.x, sr, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(packets, tn.y <= tf.y, tn.y, meta.y, flags.y, sr, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(packets, tn.z <= tf.z, tn.z, meta.z, flags.z, sr, any_hit, hit, stack,
+                         stack_t, base, &sp) ||
+            etk_bvh_lane(packets, tn.w <= tf.w, tn.w, meta.w, flags.w, sr, any_hit, hit, stack,
+                         stack_t, base, &sp))
             return 1;
     }
     return hit->prim >= 0;

@@ -68,9 +68,9 @@ ETK_FN int etk_light_side_ok(EtkMaterial m, float wz, float dwg) {
 // offsets the size of the scene). extent: the largest coordinate magnitude of each axis over
 // the three vertices.
 ETK_FN float3 etk_hit_point(EtkScene S, EtkHit h, float3* extent) {
-    float3 v0, e1, e2;
-    etk_packet_triangle(S.packets, S.packet_slot[h.prim], &v0, &e1, &e2);
-    float3 v1 = v0 + e1, v2 = v0 + e2;
+    float3 v0, v1, v2;
+    etk_packet_triangle(S.packets, S.packet_slot[h.prim], &v0, &v1, &v2);
+    float3 e1 = v1 - v0, e2 = v2 - v0;
     *extent = make_float3(fmax(fmax(fabs(v0.x), fabs(v1.x)), fabs(v2.x)),
                           fmax(fmax(fabs(v0.y), fabs(v1.y)), fabs(v2.y)),
                           fmax(fmax(fabs(v0.z), fabs(v1.z)), fabs(v2.z)));

@@ -8,7 +8,8 @@
 // 1e-5 relative: shared edges, duplicates). On the device the arithmetic may round differently
 // (contraction into FMA, other rounding of the built-ins), so t is compared within 1e-5 relative
 // and a ray whose hit/miss verdict flips is accepted only if it passes within float rounding of a
-// triangle's edge (there Moller-Trumbore is not watertight: either verdict is correct).
+// triangle's edge (either verdict is correct there). Closed meshes: a ray from inside hits them
+// whichever edge or vertex it is aimed at (the test is watertight).
 #include "prepare/bvh_build.h"
 #include "kernels/bvh.h"
 #include "test_data.h"
@@ -56,7 +57,7 @@ int triangle_hit(const Prepared& p, int prim, const Ray& r, etk::EtkHit* h, int 
     lanes[lane] = prim;
     std::vector<float4> pk;
     et::append_packet(p.soup, p.bvh.order, lanes, pk);
-    return etk::etk_packet_hit(pk.data(), f3(r.o), f3(r.d), 1, h);
+    return etk::etk_packet_hit(pk.data(), etk::etk_sheared_ray(f3(r.o), f3(r.d)), 1, h);
 }
 
 // Every triangle in turn, as the kernels' test sees it.
@@ -110,8 +111,8 @@ struct Outcome {
 };
 
 // A triangle thinner than the rounding of the ray's own coordinates (relative 1e-5 of |origin| +
-// t, ~100 float ulps) is hit or missed by rounding: Moller-Trumbore computes origin - v0 and the
-// slab test origin - box with errors larger than the triangle, so either verdict is right.
+// t, ~100 float ulps) is hit or missed by rounding: the triangle test computes vertex - origin and
+// the slab test origin - box with errors larger than the triangle, so either verdict is right.
 bool below_resolution(const Prepared& p, int prim, const Ray& r, float t) {
     if (prim < 0)
         return false;
@@ -317,15 +318,17 @@ void run_host(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const cha
                 "any hits; %d + %d verdicts below float resolution\n",
                 name, soup.size(), p.bvh.depth, closest.rays, closest.hits, closest.ties, any.hits,
                 closest.unresolved, any.unresolved);
-    // Only rays from far away (|origin| >> a triangle's size) can be unresolved.
-    EXPECT_LE(closest.unresolved + any.unresolved, n_rays / 100);
+    // The watertight test decides at the resolution of the ray's coordinates (it moves the
+    // vertices to the ray's origin): a triangle smaller than that -- the awkward soups' 1e-6
+    // triangles seen from the middle of the scene, ~1e-5 of the distance -- is hit or missed
+    // within rounding, and the boxes may cull what the test alone takes. Still, at least 90% of
+    // the rays must be resolved, so the comparison checks something.
+    EXPECT_LE(closest.unresolved + any.unresolved, n_rays / 10);
     EXPECT_GT(closest.hits, n_rays / 4); // the rays do exercise the geometry
 }
 
-void run_device(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const char* name,
-                float max_radius = 1e30f) {
-    const Prepared p = prepare(soup);
-    const std::vector<Ray> rays = make_rays(soup, n_rays, seed, max_radius);
+// The rays traced by kernels/bvh_test.cl on the OpenCL device: (t, prim bits, b1, b2) each.
+std::vector<float4> trace_on_device(const Prepared& p, const std::vector<Ray>& rays, int any) {
     et::ClRuntime& rt = ett::runtime();
     cl::Program program = rt.build("bvh_test.cl");
     cl::Kernel kernel(program, "bvh_trace");
@@ -343,18 +346,27 @@ void run_device(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const c
     cl::Buffer bn = buf(nodes, CL_MEM_READ_ONLY), bt = buf(packets, CL_MEM_READ_ONLY),
                bo = buf(org, CL_MEM_READ_ONLY), bd = buf(dir, CL_MEM_READ_ONLY),
                bout = buf(out, CL_MEM_WRITE_ONLY);
+    kernel.setArg(0, bn);
+    kernel.setArg(1, bt);
+    kernel.setArg(2, bo);
+    kernel.setArg(3, bd);
+    kernel.setArg(4, any);
+    kernel.setArg(5, n);
+    kernel.setArg(6, bout);
+    rt.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange((n + 63) / 64 * 64),
+                                    cl::NDRange(64));
+    rt.queue().enqueueReadBuffer(bout, CL_TRUE, 0, n * sizeof(float4), out.data());
+    return out;
+}
+
+void run_device(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const char* name,
+                float max_radius = 1e30f) {
+    const Prepared p = prepare(soup);
+    const std::vector<Ray> rays = make_rays(soup, n_rays, seed, max_radius);
+    const int n = static_cast<int>(rays.size());
     Outcome closest, any;
     for (int a = 0; a < 2; ++a) {
-        kernel.setArg(0, bn);
-        kernel.setArg(1, bt);
-        kernel.setArg(2, bo);
-        kernel.setArg(3, bd);
-        kernel.setArg(4, a);
-        kernel.setArg(5, n);
-        kernel.setArg(6, bout);
-        rt.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange((n + 63) / 64 * 64),
-                                        cl::NDRange(64));
-        rt.queue().enqueueReadBuffer(bout, CL_TRUE, 0, n * sizeof(float4), out.data());
+        const std::vector<float4> out = trace_on_device(p, rays, a);
         for (int i = 0; i < n; ++i) {
             etk::EtkHit h;
             h.t = out[i].x;
@@ -370,7 +382,7 @@ void run_device(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const c
                 "edge flips); %d + %d verdicts below float resolution\n",
                 name, closest.rays, closest.hits, closest.ties, closest.edge_flips, any.hits,
                 any.edge_flips, closest.unresolved, any.unresolved);
-    EXPECT_LE(closest.unresolved + any.unresolved, n_rays / 100);
+    EXPECT_LE(closest.unresolved + any.unresolved, n_rays / 10); // as in run_host
     // An edge flip needs a ray within float rounding of an edge: rare even among rays aimed at
     // edges on purpose (1 in 40 of a quarter of the rays).
     EXPECT_LE(closest.edge_flips + any.edge_flips, n / 200);
@@ -430,6 +442,79 @@ TEST(Bvh, StanfordBunnyDevice) {
     if (soup.size() == 0)
         GTEST_SKIP() << "meshes/stanford-bunny.obj not found: set ENVTRACE_DATA to ../shared/data";
     run_device(soup, 1200, 22, "stanford-bunny");
+}
+
+// A closed latitude-longitude sphere whose triangles share their vertices' bits (as the scene's
+// "sphere" shape makes them), slivers at the poles included.
+et::TriangleSoup closed_sphere(glm::dvec3 c, double r, int segments) {
+    const int rings = segments / 2;
+    auto point = [&](int i, int j) {
+        const double th = M_PI * i / rings, ph = 2.0 * M_PI * (j % segments) / segments;
+        const glm::dvec3 u = i == 0 || i == rings
+                                 ? glm::dvec3(0.0, i == 0 ? 1.0 : -1.0, 0.0)
+                                 : glm::dvec3(std::sin(th) * std::cos(ph), std::cos(th),
+                                              std::sin(th) * std::sin(ph));
+        return glm::vec3(c + r * u);
+    };
+    et::TriangleSoup soup;
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const glm::vec3 a[3] = {point(i, j), point(i, j + 1), point(i + 1, j + 1)},
+                            b[3] = {point(i, j), point(i + 1, j + 1), point(i + 1, j)};
+            if (i > 0)
+                et::add_triangle(soup, a, nullptr, 0);
+            if (i < rings - 1)
+                et::add_triangle(soup, b, nullptr, 0);
+        }
+    return soup;
+}
+
+// Watertightness: a ray from inside a closed mesh hits it, whichever edge or vertex it passes
+// through. Rays are aimed at points on the triangles' edges and at their vertices, where
+// Moller-Trumbore's rounding let about one in ten through (light leaked into closed spheres and
+// rooms); the closest hit must exist, on the host and on the device.
+TEST(Bvh, ClosedMeshesHaveNoCracks) {
+    struct Case {
+        glm::dvec3 c;
+        double r;
+        int segments;
+    };
+    for (const Case& k : {Case{{0, 0, 0}, 1.0, 96}, Case{{3.7, -1.1, 0.3}, 1e-3, 256},
+                          Case{{1e3, 20, -7}, 50.0, 512}, Case{{0, 0, 0}, 1e6, 64}}) {
+        const et::TriangleSoup soup = closed_sphere(k.c, k.r, k.segments);
+        const Prepared p = prepare(soup);
+        std::mt19937 rng(static_cast<uint32_t>(k.segments));
+        std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+        std::uniform_int_distribution<int> tri(0, static_cast<int>(soup.size()) - 1);
+        std::vector<Ray> rays;
+        int misses = 0;
+        for (int n = 0; n < 40000; ++n) {
+            // From the centre, or from a random point inside, towards a point of an edge (or a
+            // vertex, one ray in eight).
+            const glm::vec3 o =
+                n % 4 == 0 ? glm::vec3(k.c)
+                           : glm::vec3(k.c) + float(0.8 * k.r) * u01(rng) * random_dir(rng);
+            const int t = tri(rng), e = n % 3;
+            const glm::vec3 va = soup.positions[3 * t + e],
+                            vb = soup.positions[3 * t + (e + 1) % 3];
+            const glm::vec3 target = n % 8 == 1 ? va : va + u01(rng) * (vb - va);
+            const glm::vec3 d = target - o;
+            if (!(glm::length(d) > 0.0f))
+                continue;
+            rays.push_back({o, glm::normalize(d), 3e38f});
+            etk::EtkHit h;
+            if (!etk::etk_bvh_traverse(p.bvh.nodes.data(), p.packets.data(), f3(o),
+                                       f3(rays.back().d), 3e38f, 0, &h))
+                ++misses;
+        }
+        EXPECT_EQ(misses, 0) << rays.size() << " rays from inside a sphere of radius " << k.r
+                             << ", " << k.segments << " segments, on the host";
+        int device_misses = 0;
+        for (const float4& h : trace_on_device(p, rays, 0))
+            device_misses += static_cast<int>(etk::as_uint(h.y)) < 0;
+        EXPECT_EQ(device_misses, 0) << rays.size() << " rays from inside a sphere of radius " << k.r
+                                    << ", " << k.segments << " segments, on the device";
+    }
 }
 
 TEST(Bvh, EmptySceneMissesEverything) {

@@ -114,9 +114,17 @@ glm::mat4 read_transform(const json& s, const JsonReader& r) {
 
 void add_sphere(TriangleSoup& soup, glm::vec3 c, float radius, int segments, int material) {
     const int rings = std::max(2, segments / 2);
+    // A closed surface: the last column is the first one again and the poles are single points
+    // (in float, sin(pi) and sin(2 pi) are not 0, which left a slit along the seam and a ring at
+    // the bottom pole that rays passed through). Each vertex is computed once, in double, so
+    // that the triangles around it share its bits.
     auto point = [&](int i, int j) {
-        float th = float(M_PI) * i / rings, ph = 2.0f * float(M_PI) * j / segments;
-        return glm::vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
+        if (i == 0 || i == rings)
+            return glm::vec3(0.0f, i == 0 ? 1.0f : -1.0f, 0.0f);
+        j %= segments;
+        const double th = M_PI * i / rings, ph = 2.0 * M_PI * j / segments;
+        return glm::vec3(
+            glm::dvec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph)));
     };
     // Texture coordinates: u around the axis (from +X towards +Z), v = 1 at the top pole.
     auto uv = [&](int i, int j) { return glm::vec2(float(j) / segments, 1.0f - float(i) / rings); };

@@ -349,7 +349,7 @@ Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
 }
 
 namespace {
-// A triangle as the kernels see it: v0 and the edges e1 = v1 - v0, e2 = v2 - v0 (Moller-Trumbore).
+// A triangle as flatten_triangles gives it: v0 and the edges e1 = v1 - v0, e2 = v2 - v0.
 struct Edges {
     glm::vec3 v0, e1, e2;
 };
@@ -388,12 +388,13 @@ void append_packet(const TriangleSoup& soup, const std::vector<int>& order, cons
                    std::vector<etk::float4>& out) {
     float v[ETK_BVH_PACKET][4];
     for (int k = 0; k < 4; ++k) {
-        Edges t{glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)}; // unused: determinant 0
+        glm::vec3 t[3] = {glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)}; // unused: det 0
         if (lanes[k] >= 0)
-            t = edges_of(soup, order[lanes[k]]);
+            for (int c = 0; c < 3; ++c)
+                t[c] = soup.positions[3 * static_cast<size_t>(order[lanes[k]]) + c];
         const float row[ETK_BVH_PACKET] = {
-            t.v0.x, t.v0.y, t.v0.z, t.e1.x, t.e1.y,
-            t.e1.z, t.e2.x, t.e2.y, t.e2.z, as_float_bits(static_cast<uint32_t>(lanes[k]))};
+            t[0].x, t[0].y, t[0].z, t[1].x, t[1].y,
+            t[1].z, t[2].x, t[2].y, t[2].z, as_float_bits(static_cast<uint32_t>(lanes[k]))};
         for (int r = 0; r < ETK_BVH_PACKET; ++r)
             v[r][k] = row[r];
     }
