@@ -421,6 +421,21 @@ TEST(EnvmapBadInput, HugeTexelsAndIntensityAreBounded) {
     EXPECT_EQ(w.count_containing("scene.json: environment.intensity"), 1u);
 }
 
+// A map so dim that the film's fixed-point sums cannot hold it (render/film_sums.h: 2^-70 units)
+// says so, once; an ordinary one says nothing.
+TEST(EnvmapBadInput, TooDimForTheFilmWarns) {
+    ett::WarningCapture w;
+    et::EnvMap dim = et::make_envmap("dim", ett::constant_image(16, 8, 1e-22f), {});
+    et::bound_intensity(dim, "scene.json: environment.intensity");
+    EXPECT_EQ(w.count_containing("below what the film holds"), 1u);
+    et::EnvMap scaled = et::make_envmap("dim", ett::constant_image(16, 8, 1e-22f), {});
+    scaled.scale = 1e12f; // the way out the warning gives
+    et::bound_intensity(scaled, "scene.json: environment.intensity");
+    et::EnvMap fine = et::make_envmap("fine", ett::constant_image(16, 8, 0.5f), {});
+    et::bound_intensity(fine, "scene.json: environment.intensity");
+    EXPECT_EQ(w.count_containing("below what the film holds"), 1u);
+}
+
 // A map of w x h texels spanning several decades, a third of it black, as float RGB.
 std::vector<float> random_texels(int w, int h, uint32_t seed) {
     std::mt19937 rng(seed);

@@ -331,6 +331,18 @@ TEST_F(MeshFormats, PlyErrorsNameThePlace) {
     std::string corners = tet_ply_ascii();
     corners.replace(corners.rfind("3 1 2 3"), 7, "70000 1 2 3");
     expect_error("corners.ply", corners, "list count 70000 is out of range");
+    // ASCII rows are lines: a value too many or too few on one is an error there, not a shift of
+    // every row after it (which rendered the wrong triangles without a word).
+    const size_t first_vertex_end = tet_ply_ascii().find('\n', tet_ply_ascii().find("end_header"));
+    std::string extra = tet_ply_ascii();
+    extra.insert(extra.find('\n', first_vertex_end + 1), " 5");
+    expect_error("extra.ply", extra,
+                 "line 11: element 'vertex' row 0: more values on the line than the header "
+                 "declares");
+    std::string fewer = tet_ply_ascii();
+    const size_t line_end = fewer.find('\n', first_vertex_end + 1);
+    fewer.erase(fewer.rfind(' ', line_end), line_end - fewer.rfind(' ', line_end)); // its z
+    expect_error("fewer.ply", fewer, "line 11: the line ends before a vertex or element value");
 }
 
 TEST_F(MeshFormats, GltfAndGlbMatchObj) {
@@ -490,6 +502,30 @@ TEST_F(MeshFormats, GltfHostileFilesAreErrors) {
     std::string many = glb(tet_gltf(""), tet_buffer());
     expect_error("glbver.glb", many.substr(0, 4) + std::string("\1\0\0\0", 4) + many.substr(8),
                  "GLB: version 1, not 2");
+    // Attributes of the wrong type or component type, read as floats, made garbage geometry
+    // without a word; a material index past the end fell back to grey.
+    std::string vec2 = tet_gltf(uri);
+    vec2.replace(vec2.find("\"type\": \"VEC3\""), 14, "\"type\": \"VEC2\"");
+    expect_error("vec2.gltf", vec2, "POSITION: accessor 0 is a VEC2, not a VEC3");
+    std::string ints = tet_gltf(uri);
+    ints.replace(ints.find("\"componentType\": 5126"), 21, "\"componentType\": 5125");
+    expect_error("ints.gltf", ints, "POSITION: accessor 0 has componentType 5125");
+    std::string material = tet_gltf(uri, R"([{"mesh": 0}])", "[0]", 4, "{}");
+    material.replace(material.find("\"material\": 0"), 13, "\"material\": 9");
+    expect_error("material.gltf", material,
+                 "mesh 0 primitive 0: material 9 does not exist (1 materials)");
+    // Under KHR_mesh_quantization the positions may be shorts (normalized or not): read (here
+    // the float bytes as shorts make degenerate triangles, a different error).
+    std::string shorts = ints;
+    shorts.replace(shorts.find("5125"), 4, "5122");
+    shorts.insert(1, R"("extensionsUsed": ["KHR_mesh_quantization"], )");
+    write_file(dir + "/shorts.gltf", shorts);
+    try {
+        ett::WarningCapture quiet;
+        load(dir + "/shorts.gltf");
+    } catch (const et::Error& e) {
+        EXPECT_EQ(std::string(e.what()).find("componentType"), std::string::npos) << e.what();
+    }
     std::string deep = tet_gltf(uri);
     deep.insert(deep.size() - 1, ", \"extras\": " + std::string(100, '[') + std::string(100, ']'));
     expect_error("deep.gltf", deep, "nested deeper than");

@@ -288,6 +288,38 @@ TEST(ObjLoader, DegenerateTrianglesAreDroppedWithAWarning) {
     EXPECT_TRUE(flat.soup.positions.empty());
 }
 
+// tinyobjloader reads "nan" and a missing coordinate as 0: the vertex moved without a word, and
+// "v nan 1 0" made a good triangle at x = 0. Now a non-finite coordinate skips the triangles that
+// use the vertex (with the warning), and a word or a missing coordinate is an error at its line.
+TEST(ObjLoader, NonFiniteAndMalformedVertices) {
+    const std::string dir = ett::scratch_dir("obj-vertices");
+    write_file(dir + "/nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 1 1e300\n"
+                                 "f 1 2 3\nf 1 2 4\n");
+    {
+        ett::WarningCapture warnings;
+        const Loaded l = load(dir + "/nan.obj");
+        EXPECT_EQ(l.soup.size(), 0u);
+        EXPECT_EQ(warnings.count_containing("2 degenerate"), 1u)
+            << (warnings.messages().empty() ? "no warning" : warnings.messages().front());
+    }
+    const std::pair<const char*, const char*> bad[] = {
+        {"v 0 0 0\nv 1 2\nv 0 1 0\nf 1 2 3\n", "line 2: a vertex needs three coordinates"},
+        {"v 0 0 0\n# c\n  v 1 abc 0\nf 1 2 3\n", "line 3: vertex coordinate 'abc' is not a number"},
+        {"v 0 0 0\nv\n", "line 2: a vertex needs three coordinates, this one has 0"}};
+    for (const auto& [text, message] : bad) {
+        write_file(dir + "/bad.obj", text);
+        std::vector<et::Material> mats;
+        et::TriangleSoup soup;
+        try {
+            et::load_obj(dir + "/bad.obj", glm::mat4(1.0f), -1, mats, soup);
+            ADD_FAILURE() << text << ": no et::Error";
+        } catch (const et::Error& e) {
+            EXPECT_NE(std::string(e.what()).find(dir + "/bad.obj: " + message), std::string::npos)
+                << e.what();
+        }
+    }
+}
+
 TEST(ObjLoader, AddTriangleKeepsSoupConsistent) {
     et::TriangleSoup soup;
     const glm::vec3 p[3] = {{0, 0, 0}, {1, 0, 0}, {0, 0, -1}}; // faces +Y

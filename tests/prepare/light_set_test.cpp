@@ -168,7 +168,12 @@ TEST(LightSets, KeysOfTheWrongTypeAreErrors) {
              R"({"power_rule": [], "lights": [)" + light + "]}",
              R"({"map": {}, "lights": [)" + light + "]}",
              R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": "x"}]})",
-             R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": -1}]})"}) {
+             R"({"lights": [{"direction": [0, 0, 1], "power": [1, 1, 1], "solid_angle": -1}]})",
+             // Each light in range, their sum not (the render's film would overflow to black).
+             R"({"lights": [{"direction": [0, 0, 1], "power": [1e13, 1, 1]},
+                            {"direction": [0, 1, 0], "power": [1e13, 1, 1]}]})",
+             // A count that disagrees with the lights: a file cut short or edited.
+             R"({"count": 2, "lights": [)" + light + "]}"}) {
         {
             std::ofstream f(dir + "/l.json");
             f << text;

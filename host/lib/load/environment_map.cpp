@@ -311,6 +311,19 @@ void bound_intensity(EnvMap& env, const std::string& where) {
         warn(where + buf);
         env.scale = bounded;
     }
+    // The film sums samples in fixed point, units of 2^-70 (render/film_sums.h): exact to float
+    // precision above 2^-46, coarser below, and 0 under 2^-71. A map that dim would render as
+    // black or a few percent off without a word.
+    const double brightest = static_cast<double>(env.scale) * env.max_texel;
+    if (brightest > 0.0 && brightest < std::ldexp(1.0, -46)) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      ": the brightest texel times the intensity is %g, below what the film holds "
+                      "to float precision (%g); the image would be black or off: raise the "
+                      "intensity and scale the image down afterwards",
+                      brightest, std::ldexp(1.0, -46));
+        warn(where + buf);
+    }
 }
 
 void parse_resolution(const std::string& text, int& width, int& height) {

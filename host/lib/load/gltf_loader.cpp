@@ -147,21 +147,42 @@ constexpr size_t kMaxGltfTriangles = size_t(1) << 27;
 
 class GltfReader {
   public:
-    GltfReader(const std::string& path, const tinygltf::Model& model)
-        : path_(path), model_(model) {}
+    GltfReader(const std::string& path, const tinygltf::Model& model) : path_(path), model_(model) {
+        for (const auto* list : {&model.extensionsUsed, &model.extensionsRequired})
+            for (const std::string& e : *list)
+                quantized_ = quantized_ || e == "KHR_mesh_quantization";
+    }
 
     [[noreturn]] void fail(const std::string& problem) const {
         throw Error(path_ + ": glTF: " + problem);
     }
 
     // The accessor's elements as up to 4 floats each (normalized integers mapped to [0, 1] or
-    // [-1, 1]), after checking that every byte read lies inside its buffer.
-    std::vector<glm::vec4> floats(int index, const char* what) const {
+    // [-1, 1]), after checking that every byte read lies inside its buffer. `type`: the vector
+    // type the attribute must have (glTF 2.0: VEC3 for POSITION and NORMAL, VEC2 for
+    // TEXCOORD_0); floats, or with `normalized_ok` normalized unsigned bytes or shorts (what
+    // the specification allows a TEXCOORD), or under KHR_mesh_quantization any byte or short.
+    // Anything else read as floats would be garbage.
+    std::vector<glm::vec4> floats(int index, const char* what, int type,
+                                  bool normalized_ok = false) const {
         const tinygltf::Accessor& a = accessor(index, what);
         const int comps = tinygltf::GetNumComponentsInType(a.type);
-        if (comps < 1 || comps > 4)
-            fail(std::string(what) + ": accessor " + std::to_string(index) +
-                 " is not a scalar or vector");
+        if (a.type != type)
+            fail(std::string(what) + ": accessor " + std::to_string(index) + " is a " +
+                 type_name(a.type) + ", not a " + type_name(type));
+        const bool is_float = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT;
+        const bool is_unorm =
+            a.normalized && (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                             a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+        const bool is_short_int = a.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
+                                  a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                  a.componentType == TINYGLTF_COMPONENT_TYPE_SHORT ||
+                                  a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+        if (!is_float && !(normalized_ok && is_unorm) && !(quantized_ && is_short_int))
+            fail(std::string(what) + ": accessor " + std::to_string(index) + " has componentType " +
+                 std::to_string(a.componentType) +
+                 (normalized_ok ? " (expected 5126, float, or normalized 5121 or 5123)"
+                                : " (expected 5126, float)"));
         const View view = checked_view(a, index, what, comps); // before allocating
         std::vector<glm::vec4> v(a.count, glm::vec4(0.0f));
         for (size_t i = 0; i < a.count; ++i)
@@ -186,6 +207,23 @@ class GltfReader {
     }
 
   private:
+    bool quantized_ = false; // KHR_mesh_quantization: attributes may be bytes or shorts
+
+    static std::string type_name(int type) {
+        switch (type) {
+        case TINYGLTF_TYPE_SCALAR:
+            return "SCALAR";
+        case TINYGLTF_TYPE_VEC2:
+            return "VEC2";
+        case TINYGLTF_TYPE_VEC3:
+            return "VEC3";
+        case TINYGLTF_TYPE_VEC4:
+            return "VEC4";
+        default:
+            return "type " + std::to_string(type);
+        }
+    }
+
     const tinygltf::Accessor& accessor(int index, const char* what) const {
         if (index < 0 || static_cast<size_t>(index) >= model_.accessors.size())
             fail(std::string(what) + ": accessor " + std::to_string(index) + " does not exist");
@@ -454,12 +492,17 @@ void load_gltf(const std::string& path, const glm::mat4& transform, int override
             }
             const std::string where =
                 "mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(pi);
-            const auto P = r.floats(attr("POSITION"), (where + " POSITION").c_str());
+            const auto P =
+                r.floats(attr("POSITION"), (where + " POSITION").c_str(), TINYGLTF_TYPE_VEC3);
             std::vector<glm::vec4> N, T;
             if (attr("NORMAL") >= 0)
-                N = r.floats(attr("NORMAL"), (where + " NORMAL").c_str());
+                N = r.floats(attr("NORMAL"), (where + " NORMAL").c_str(), TINYGLTF_TYPE_VEC3);
             if (attr("TEXCOORD_0") >= 0)
-                T = r.floats(attr("TEXCOORD_0"), (where + " TEXCOORD_0").c_str());
+                T = r.floats(attr("TEXCOORD_0"), (where + " TEXCOORD_0").c_str(),
+                             TINYGLTF_TYPE_VEC2, true);
+            if (prim.material >= 0 && static_cast<size_t>(prim.material) >= model.materials.size())
+                r.fail(where + ": material " + std::to_string(prim.material) + " does not exist (" +
+                       std::to_string(model.materials.size()) + " materials)");
             if ((!N.empty() && N.size() != P.size()) || (!T.empty() && T.size() != P.size()))
                 r.fail(where + ": NORMAL or TEXCOORD_0 has a count other than POSITION's");
             for (const auto& p : P)

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -129,11 +130,66 @@ int mtl_texture(const std::string& obj_path, const tinyobj::material_t& m, const
     return textures.add_file(p.string(), use, scale, offset, where);
 }
 
+// tinyobjloader reads a vertex coordinate it cannot parse ("nan", "inf", a word) and a missing
+// one ("v 1 2") as 0, which moves the vertex without a word. Every "v" line is checked here
+// first: a word or a missing coordinate is an error naming the line; a coordinate that is not a
+// finite float ("nan", "inf", 1e300) makes the vertex non-finite, so that the triangles using it
+// are skipped with the loader's warning, as the README says. Returns those vertices (0-based).
+std::vector<size_t> check_obj_vertices(const std::string& path, const std::string& text) {
+    std::vector<size_t> nonfinite;
+    size_t line = 0, vertex = 0;
+    for (size_t pos = 0; pos < text.size();) {
+        size_t end = text.find('\n', pos);
+        if (end == std::string::npos)
+            end = text.size();
+        ++line;
+        size_t p = pos;
+        while (p < end && (text[p] == ' ' || text[p] == '\t'))
+            ++p;
+        if (p < end && text[p] == 'v' &&
+            (p + 1 == end || std::isspace(static_cast<unsigned char>(text[p + 1])))) {
+            auto fail = [&](const std::string& problem) {
+                throw Error(path + ": line " + std::to_string(line) + ": " + problem + " ('" +
+                            excerpt(text.substr(pos, std::min<size_t>(end - pos, 80)), 60) + "')");
+            };
+            const char* c = text.c_str() + p + 1;
+            const char* stop = text.c_str() + end;
+            int n = 0;
+            for (;;) {
+                while (c < stop && std::isspace(static_cast<unsigned char>(*c)))
+                    ++c;
+                if (c >= stop || *c == '#')
+                    break;
+                const char* token_end = c;
+                while (token_end < stop && !std::isspace(static_cast<unsigned char>(*token_end)))
+                    ++token_end;
+                const std::string token(c, token_end);
+                char* after = nullptr;
+                const double v = std::strtod(token.c_str(), &after);
+                if (after != token.c_str() + token.size())
+                    fail("vertex coordinate '" + excerpt(token, 20) + "' is not a number");
+                if (n < 3 && !std::isfinite(static_cast<float>(v)) &&
+                    (nonfinite.empty() || nonfinite.back() != vertex))
+                    nonfinite.push_back(vertex);
+                ++n;
+                c = token_end;
+            }
+            if (n < 3)
+                fail("a vertex needs three coordinates, this one has " + std::to_string(n));
+            ++vertex;
+        }
+        pos = end + 1;
+    }
+    return nonfinite;
+}
+
 } // namespace
 
 void load_obj(const std::string& path, const glm::mat4& transform, int override_material,
               std::vector<Material>& materials, TriangleSoup& out, TextureSet* textures) {
-    std::istringstream obj(read_text_file(path, kMaxMeshBytes, "OBJ file"));
+    const std::string text = read_text_file(path, kMaxMeshBytes, "OBJ file");
+    const std::vector<size_t> nonfinite = check_obj_vertices(path, text);
+    std::istringstream obj(text);
     tinyobj::attrib_t attrib_data;
     std::vector<tinyobj::shape_t> shapes_data;
     std::vector<tinyobj::material_t> mtls_data;
@@ -144,6 +200,9 @@ void load_obj(const std::string& path, const glm::mat4& transform, int override_
         const std::string msg = tinyobj_text(error);
         throw Error(path + ": cannot read OBJ: " + (msg.empty() ? "no geometry found" : msg));
     }
+    for (size_t k : nonfinite)
+        if (3 * k + 2 < attrib_data.vertices.size())
+            attrib_data.vertices[3 * k] = std::numeric_limits<float>::quiet_NaN();
     if (!error.empty()) // reported, but the geometry was read
         warning += error;
     if (!warning.empty())

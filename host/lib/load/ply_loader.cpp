@@ -100,6 +100,32 @@ class PlyBody {
 
     size_t remaining() const { return data_.size() - pos_; }
 
+    // ASCII: an element's row is one line (the PLY format's rule), so a line with a value too
+    // few or too many fails here rather than shifting every row after it. Binary: nothing.
+    void begin_row() {
+        if (format_ != PlyFormat::ascii)
+            return;
+        while (pos_ < data_.size() && std::isspace(static_cast<unsigned char>(data_[pos_])))
+            ++pos_;
+        in_row_ = true;
+    }
+    void end_row(const std::string& element, uint64_t row) {
+        if (format_ != PlyFormat::ascii)
+            return;
+        skip_blanks();
+        if (pos_ < data_.size() && data_[pos_] != '\n') {
+            size_t end = data_.find('\n', pos_);
+            end = end == std::string::npos ? data_.size() : end;
+            std::string rest(data_, pos_, std::min<size_t>(20, end - pos_));
+            while (!rest.empty() && std::isspace(static_cast<unsigned char>(rest.back())))
+                rest.pop_back();
+            fail("element '" + element + "' row " + std::to_string(row) +
+                 ": more values on the line than the header declares ('" + excerpt(rest) +
+                 "' left)");
+        }
+        in_row_ = false;
+    }
+
     // "PATH: PLY: line L: problem" (ASCII) or "PATH: PLY: byte B: problem" (binary): the place
     // the reader had reached.
     [[noreturn]] void fail(const std::string& problem) const {
@@ -113,11 +139,23 @@ class PlyBody {
     }
 
   private:
-    double read_ascii(const PlyType& t, const char* what) {
-        while (pos_ < data_.size() && std::isspace(static_cast<unsigned char>(data_[pos_])))
+    void skip_blanks() { // within a line
+        while (pos_ < data_.size() && data_[pos_] != '\n' &&
+               std::isspace(static_cast<unsigned char>(data_[pos_])))
             ++pos_;
+    }
+
+    double read_ascii(const PlyType& t, const char* what) {
+        if (in_row_)
+            skip_blanks();
+        else
+            while (pos_ < data_.size() && std::isspace(static_cast<unsigned char>(data_[pos_])))
+                ++pos_;
         if (pos_ >= data_.size())
             fail(std::string("truncated: the file ends before ") + what);
+        if (data_[pos_] == '\n')
+            fail(std::string("the line ends before ") + what +
+                 " (fewer values than the header declares)");
         // std::string's buffer is NUL-terminated, so strtod stops at the end.
         const char* begin = data_.c_str() + pos_;
         char* end = nullptr;
@@ -136,6 +174,7 @@ class PlyBody {
     const std::string& data_;
     size_t pos_;
     PlyFormat format_;
+    bool in_row_ = false;
 };
 
 // More than this many vertices or faces is refused before allocating (about 10 GiB of soup).
@@ -310,6 +349,7 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
         if (is_face && !have_vertices)
             fail("the face element comes before the vertex element");
         for (uint64_t row = 0; row < e.count; ++row) {
+            body.begin_row();
             for (size_t pi = 0; pi < e.props.size(); ++pi) {
                 const PlyProperty& p = e.props[pi];
                 if (p.is_list) {
@@ -383,6 +423,7 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
                     uv_v[row].y = f;
                 }
             }
+            body.end_row(excerpt(e.name, 40), row);
         }
     }
     if (!have_vertices)

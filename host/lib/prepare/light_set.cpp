@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -165,6 +166,26 @@ LightSet read_lights(const std::string& path) {
     }
     if (set.lights.empty())
         r.fail("the light set is empty");
+    // Together too: a render adds them all, and a sum past what the film holds would come out as
+    // black pixels (non-finite samples are written as 0), not as an error.
+    glm::dvec3 total(0.0);
+    for (const DirectionalLight& d : set.lights)
+        total += d.power;
+    if (glm::any(glm::greaterThan(total, glm::dvec3(max_value)))) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      "the lights' total power (%.4g, %.4g, %.4g) exceeds %.4g, the most a map "
+                      "can hold (4 pi x the largest radiance)",
+                      total.x, total.y, total.z, max_value);
+        rl.fail(buf);
+    }
+    if (j.contains("count")) { // written by `envtrace lights`: a file cut short or edited?
+        const JsonReader rc = r.at("count");
+        const double count = rc.number(j["count"], 0.0, 1e12);
+        if (count != static_cast<double>(set.lights.size()))
+            rc.fail("says " + json_excerpt(j["count"]) + " lights, but 'lights' holds " +
+                    std::to_string(set.lights.size()));
+    }
     return set;
 }
 
