@@ -1,5 +1,6 @@
 #include "commands.h"
 #include "util/json_file.h"
+#include "util/output_batch.h"
 #include "util/error.h"
 #include "image/image_metrics.h"
 
@@ -10,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 namespace et::cli {
 namespace {
@@ -46,6 +48,10 @@ void run(const CompareArgs& args) {
             throw Error(args.mask + ": the mask selects no pixel (none has a first channel > "
                                     "0.5): nothing to compare");
     }
+    // A --json over an input (or into a missing folder) fails before any metric is printed.
+    std::optional<OutputBatch> batch;
+    if (!args.json.empty())
+        batch.emplace(std::vector<std::string>{args.json});
     const ImageErrors e = compare_images(a, b, mask);
     std::printf("pixels %zu\nrmse %.6g\nrel_mse %.6g\nl2 %.6g\nmean %.6g (reference %.6g)\n",
                 e.pixels, e.rmse, e.rel_mse, e.l2, e.mean_a, e.mean_b);
@@ -60,7 +66,8 @@ void run(const CompareArgs& args) {
                          {"l2", e.l2},
                          {"mean", e.mean_a},
                          {"reference_mean", e.mean_b}};
-        write_json_file(args.json, j, 2);
+        write_json_file(*batch, args.json, j, 2);
+        batch->commit();
     }
 }
 

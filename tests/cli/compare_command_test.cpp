@@ -45,6 +45,15 @@ TEST(CompareCli, MetricsSizeMismatchAndMissingFile) {
     EXPECT_NE(out.find("3x3"), std::string::npos) << out;
     EXPECT_EQ(run_cli("compare " + dir + "/a.exr " + dir + "/missing.exr", out), 1);
     EXPECT_NE(out.find("missing.exr"), std::string::npos) << out;
+    // --json over an input, or into a missing folder: refused before any metric is printed.
+    EXPECT_EQ(run_cli("compare " + dir + "/a.exr " + dir + "/b.exr --json " + dir + "/b.exr", out),
+              1);
+    EXPECT_NE(out.find("refusing to write an output over"), std::string::npos) << out;
+    EXPECT_EQ(out.find("l2"), std::string::npos) << out;
+    EXPECT_EQ(
+        run_cli("compare " + dir + "/a.exr " + dir + "/b.exr --json " + dir + "/no/m.json", out),
+        1);
+    EXPECT_EQ(out.find("l2"), std::string::npos) << out;
 }
 
 // NaN or Inf in either image: an error naming the file (an all-NaN image compared as 'l2 0').

@@ -460,6 +460,20 @@ TEST(SceneBadInput, WrongTypesAndCoercionsNameTheKeyPath) {
             expect_clean_error(run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir),
                                "s.json: " + c.path, dir);
     }
+    // An empty output name was replaced by the default without a word (an empty map is an
+    // error).
+    {
+        std::string text = Part().text(dir);
+        text.insert(text.find('{') + 1, R"("output": "", )");
+        write_file(dir + "/s.json", text);
+        try {
+            et::load_scene(dir + "/s.json");
+            ADD_FAILURE() << "loaded an empty output name";
+        } catch (const et::Error& e) {
+            EXPECT_NE(std::string(e.what()).find("s.json: output: is empty"), std::string::npos)
+                << e.what();
+        }
+    }
     // A matrix whose last row is [0, 0, 0, 1] up to round-off (1e-9 from a float or numpy
     // print) is the affine transform it means.
     {

@@ -126,8 +126,9 @@ void check_split(const RenderSettings& st) {
     if ((st.light_samples != 1 || st.bsdf_samples != 1) && st.strategy != Strategy::mis)
         throw Error(std::string("light and BSDF samples per vertex (") +
                     std::to_string(st.light_samples) + ", " + std::to_string(st.bsdf_samples) +
-                    ") split the mis strategy's samples; strategy '" + name_of(st.strategy) +
-                    "' takes one of each (name the strategy mis to split)");
+                    ") split the mis strategy's samples (--light-samples / --bsdf-samples, or "
+                    "the scene's render.light_samples / render.bsdf_samples); strategy '" +
+                    name_of(st.strategy) + "' takes one of each (name the strategy mis to split)");
 }
 
 float parse_light_share(const std::string& s, const std::string& what) {

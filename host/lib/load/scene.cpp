@@ -304,6 +304,9 @@ Scene load_scene(const std::string& path) {
                               rr.at("bsdf_samples").where());
     }
     scene.output = r.string(j, "output", "");
+    if (j.contains("output") && scene.output.empty()) // as an empty map is
+        r.at("output").fail("is empty: name the image to write (.exr, .hdr or .pfm), or leave "
+                            "the key out");
 
     if (!j.contains("environment"))
         r.fail("no \"environment\": a scene needs a map or a sky to be lit by");
