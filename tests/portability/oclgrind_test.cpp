@@ -15,6 +15,7 @@
 #include "render/env_sampling.h"
 #include "render/renderer.h"
 #include "render_util.h"
+#include "bvh_trace.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -163,30 +164,9 @@ TEST(Oclgrind, EnvironmentSamplingEqualsPocl) {
 // ---- bvh_test.cl: closest and any hits through a scene's BVH -------------------------------
 
 std::vector<etk::float4> trace(et::ClRuntime& rt, const et::DeviceScene& ds,
-                               std::vector<etk::float4> org, std::vector<etk::float4> dir,
-                               int any_hit) {
-    cl::Program program = rt.build("bvh_test.cl");
-    cl::Kernel k(program, "bvh_trace");
-    const int n = static_cast<int>(org.size());
-    auto buf = [&](const std::vector<etk::float4>& v) {
-        return cl::Buffer(rt.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                          v.size() * sizeof(etk::float4), const_cast<etk::float4*>(v.data()));
-    };
-    cl::Buffer bn = buf(ds.nodes), bt = buf(ds.packets), bo = buf(org), bd = buf(dir);
-    cl::Buffer out(rt.context(), CL_MEM_WRITE_ONLY, n * sizeof(etk::float4));
-    k.setArg(0, bn);
-    k.setArg(1, bt);
-    k.setArg(2, bo);
-    k.setArg(3, bd);
-    k.setArg(4, any_hit);
-    k.setArg(5, n);
-    k.setArg(6, out);
-    const size_t local = et::choose_local_size(k, rt.device().device, rt.limits());
-    rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + local - 1) / local * local),
-                                    cl::NDRange(local));
-    std::vector<etk::float4> v(n);
-    rt.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(etk::float4), v.data());
-    return v;
+                               const std::vector<etk::float4>& org,
+                               const std::vector<etk::float4>& dir, int any_hit) {
+    return ett::trace_bvh_kernel(rt, ds.nodes, ds.packets, org, dir, any_hit);
 }
 
 et::DeviceScene prepare(const std::string& scene_file, int w, int h, et::Scene* keep = nullptr) {

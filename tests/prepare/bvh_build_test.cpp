@@ -12,6 +12,7 @@
 // whichever edge or vertex it is aimed at (the test is watertight).
 #include "prepare/bvh_build.h"
 #include "kernels/bvh.h"
+#include "bvh_trace.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -329,34 +330,12 @@ void run_host(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const cha
 
 // The rays traced by kernels/bvh_test.cl on the OpenCL device: (t, prim bits, b1, b2) each.
 std::vector<float4> trace_on_device(const Prepared& p, const std::vector<Ray>& rays, int any) {
-    et::ClRuntime& rt = ett::runtime();
-    cl::Program program = rt.build("bvh_test.cl");
-    cl::Kernel kernel(program, "bvh_trace");
-    const int n = static_cast<int>(rays.size());
-    std::vector<float4> org(n), dir(n), out(n);
-    for (int i = 0; i < n; ++i) {
-        org[i] = etk::make_float4(rays[i].o.x, rays[i].o.y, rays[i].o.z, rays[i].tmax);
-        dir[i] = etk::make_float4(rays[i].d.x, rays[i].d.y, rays[i].d.z, 0.0f);
+    std::vector<float4> org, dir;
+    for (const Ray& r : rays) {
+        org.push_back(etk::make_float4(r.o.x, r.o.y, r.o.z, r.tmax));
+        dir.push_back(etk::make_float4(r.d.x, r.d.y, r.d.z, 0.0f));
     }
-    auto buf = [&](std::vector<float4>& v, cl_mem_flags f) {
-        return cl::Buffer(rt.context(), f | CL_MEM_COPY_HOST_PTR, v.size() * sizeof(float4),
-                          v.data());
-    };
-    std::vector<float4> nodes = p.bvh.nodes, packets = p.packets;
-    cl::Buffer bn = buf(nodes, CL_MEM_READ_ONLY), bt = buf(packets, CL_MEM_READ_ONLY),
-               bo = buf(org, CL_MEM_READ_ONLY), bd = buf(dir, CL_MEM_READ_ONLY),
-               bout = buf(out, CL_MEM_WRITE_ONLY);
-    kernel.setArg(0, bn);
-    kernel.setArg(1, bt);
-    kernel.setArg(2, bo);
-    kernel.setArg(3, bd);
-    kernel.setArg(4, any);
-    kernel.setArg(5, n);
-    kernel.setArg(6, bout);
-    rt.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange((n + 63) / 64 * 64),
-                                    cl::NDRange(64));
-    rt.queue().enqueueReadBuffer(bout, CL_TRUE, 0, n * sizeof(float4), out.data());
-    return out;
+    return ett::trace_bvh_kernel(ett::runtime(), p.bvh.nodes, p.packets, org, dir, any);
 }
 
 void run_device(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const char* name,
