@@ -57,6 +57,7 @@ int triangle_hit(const Prepared& p, int prim, const Ray& r, etk::EtkHit* h, int 
     int lanes[4] = {-1, -1, -1, -1};
     lanes[lane] = prim;
     std::vector<float4> pk;
+    pk.reserve(ETK_BVH_PACKET); // one allocation: brute force makes millions (slow under ASan)
     et::append_packet(p.soup, p.bvh.order, lanes, pk);
     return etk::etk_packet_hit(pk.data(), etk::etk_sheared_ray(f3(r.o), f3(r.d)), 1, h);
 }
