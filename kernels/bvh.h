@@ -112,37 +112,6 @@ ETK_FN EtkShearedRay etk_sheared_ray(float3 org, float3 dir) {
     ((((u >= zero) & (v >= zero) & (w >= zero)) | ((u <= zero) & (v <= zero) & (w <= zero))) &     \
      (det != zero) & (det - det == zero) & (t > zero) & (t < tmax))
 
-// One lane of a packet test: the hit is taken when closer than hit->t (so of two triangles at
-// the same distance the one tested first keeps it). Its distance is the ray's to the triangle's
-// plane, from the edges in the scene's coordinates (as Moller-Trumbore has it): the edge
-// functions' t, from vertices relative to the ray's origin, loses the digits of the distance
-// over the triangle's size (a triangle 1e-6 the size of its distance is placed ~10% off), which
-// the sign tests tolerate but the closest hit's choice and the boxes' culling do not.
-ETK_FORCE_INLINE_FN int etk_triangle_lane(ETK_GLOBAL const float4* pk, int lane, EtkShearedRay r,
-                                          float u, float v, float w, float det, float t0,
-                                          float prim, EtkHit* hit) {
-    if (!ETK_TRIANGLE_HIT(u, v, w, det, t0, hit->t * 2.0f, 0.0f))
-        return 0;
-    ETK_GLOBAL const float* f = (ETK_GLOBAL const float*)pk;
-    float3 v0 = make_float3(f[4 * ETK_PACKET_V0 + lane], f[4 * ETK_PACKET_V0 + 4 + lane],
-                            f[4 * ETK_PACKET_V0 + 8 + lane]);
-    float3 v1 = make_float3(f[4 * ETK_PACKET_V1 + lane], f[4 * ETK_PACKET_V1 + 4 + lane],
-                            f[4 * ETK_PACKET_V1 + 8 + lane]);
-    float3 v2 = make_float3(f[4 * ETK_PACKET_V2 + lane], f[4 * ETK_PACKET_V2 + 4 + lane],
-                            f[4 * ETK_PACKET_V2 + 8 + lane]);
-    float3 n = cross(v1 - v0, v2 - v0);
-    float t = dot(v0 - r.org, n) / dot(r.dir, n);
-    if (!(t > 0.0f && t < hit->t))
-        return 0;
-    float inv = 1.0f / det;
-    float b1 = v * inv, b2 = w * inv;
-    hit->t = t;
-    hit->prim = (int)as_uint(prim);
-    hit->b1 = b1;
-    hit->b2 = b2;
-    return 1;
-}
-
 // The vertices of the triangle in `slot` (packet index x 4 + lane) of the packets.
 ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, float3* v0, float3* v1,
                                 float3* v2) {
@@ -154,6 +123,32 @@ ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, floa
                       pk[4 * ETK_PACKET_V1 + 8 + lane]);
     *v2 = make_float3(pk[4 * ETK_PACKET_V2 + lane], pk[4 * ETK_PACKET_V2 + 4 + lane],
                       pk[4 * ETK_PACKET_V2 + 8 + lane]);
+}
+
+// One lane of a packet test: the hit is taken when closer than hit->t (so of two triangles at
+// the same distance the one tested first keeps it). Its distance is the ray's to the triangle's
+// plane, from the edges in the scene's coordinates (as Moller-Trumbore has it): the edge
+// functions' t, from vertices relative to the ray's origin, loses the digits of the distance
+// over the triangle's size (a triangle 1e-6 the size of its distance is placed ~10% off), which
+// the sign tests tolerate but the closest hit's choice and the boxes' culling do not.
+ETK_FORCE_INLINE_FN int etk_triangle_lane(ETK_GLOBAL const float4* pk, int lane, EtkShearedRay r,
+                                          float u, float v, float w, float det, float t0,
+                                          float prim, EtkHit* hit) {
+    if (!ETK_TRIANGLE_HIT(u, v, w, det, t0, hit->t * 2.0f, 0.0f))
+        return 0;
+    float3 v0, v1, v2;
+    etk_packet_triangle(pk, lane, &v0, &v1, &v2); // slot `lane` of this packet
+    float3 n = cross(v1 - v0, v2 - v0);
+    float t = dot(v0 - r.org, n) / dot(r.dir, n);
+    if (!(t > 0.0f && t < hit->t))
+        return 0;
+    float inv = 1.0f / det;
+    float b1 = v * inv, b2 = w * inv;
+    hit->t = t;
+    hit->prim = (int)as_uint(prim);
+    hit->b1 = b1;
+    hit->b2 = b2;
+    return 1;
 }
 
 // The watertight test (top) on the four triangles of a packet at once: each step one vector
