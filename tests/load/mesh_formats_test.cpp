@@ -462,6 +462,20 @@ TEST_F(MeshFormats, GltfHostileFilesAreErrors) {
                  "not a tree");
     expect_error("nonode.gltf", tet_gltf(uri, R"([{"mesh": 0}])", "[5]"), "node 5 does not exist");
     expect_error("nobin.gltf", tet_gltf("absent.bin"), "cannot read glTF");
+    // Offsets, counts and indices that tinygltf would read as 0 or truncate without a word.
+    std::string offset = tet_gltf(uri);
+    offset.replace(offset.find("\"byteOffset\": 48"), 16, "\"byteOffset\": -4");
+    expect_error("offset.gltf", offset,
+                 "bufferViews[1].byteOffset: expected a whole number >= 0, got -4");
+    std::string fraction = tet_gltf(uri);
+    fraction.replace(fraction.find("\"count\": 12"), 11, "\"count\": 11.5");
+    expect_error("fraction.gltf", fraction, "accessors[1].count: expected a whole number >= 0");
+    expect_error("negnode.gltf", tet_gltf(uri, R"([{"mesh": -1}])"),
+                 "nodes[0].mesh: expected a whole number >= 0, got -1");
+    std::string attribute = tet_gltf(uri);
+    attribute.replace(attribute.find("\"POSITION\": 0"), 13, "\"POSITION\": \"0\"");
+    expect_error("attribute.gltf", attribute,
+                 "meshes[0].primitives[0].attributes.POSITION: expected a whole number >= 0");
     expect_error("json.gltf", tet_gltf(uri).substr(0, 100), ":1:101: malformed JSON");
     const std::string g = glb(tet_gltf(""), tet_buffer());
     expect_error("trunc.glb", g.substr(0, g.size() - 30), "truncated");

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <initializer_list>
 #include <limits>
 #include <map>
 #include <vector>
@@ -91,10 +92,66 @@ void put_le32(std::string& b, uint32_t v) {
 // allocates every buffer, and a GLB's buffers without a uri each copy the BIN chunk), and the
 // "images" removed, so that tinygltf neither reads image files nor decodes images (textures are
 // not mapped yet; the no-op image loader below is a second guard).
+// The sizes, offsets and indices that tinygltf reads into unsigned or int fields: a negative or
+// fractional value there is taken as 0 (or truncated) without a word, which reads the wrong
+// bytes or the wrong accessor, so each must be a whole number >= 0 where it is given.
+void check_indices_and_sizes(const std::string& name, const nlohmann::json& j) {
+    auto check = [&](const nlohmann::json& value, const std::string& where) {
+        const bool whole =
+            value.is_number_unsigned() || (value.is_number_float() && value.get<double>() >= 0.0 &&
+                                           value.get<double>() <= 9007199254740992.0 &&
+                                           std::floor(value.get<double>()) == value.get<double>());
+        if (!whole)
+            throw Error(name + ": glTF: " + where + ": expected a whole number >= 0, got " +
+                        json_excerpt(value));
+    };
+    auto each = [&](const char* array, std::initializer_list<const char*> keys) {
+        const auto a = j.find(array);
+        if (a == j.end() || !a->is_array())
+            return;
+        for (size_t i = 0; i < a->size(); ++i) {
+            const auto& item = (*a)[i];
+            if (!item.is_object())
+                continue;
+            const std::string at = std::string(array) + "[" + std::to_string(i) + "]";
+            for (const char* key : keys)
+                if (item.contains(key))
+                    check(item[key], at + "." + key);
+            if (std::string(array) == "meshes" && item.contains("primitives") &&
+                item["primitives"].is_array())
+                for (size_t k = 0; k < item["primitives"].size(); ++k) {
+                    const auto& p = item["primitives"][k];
+                    if (!p.is_object())
+                        continue;
+                    const std::string pat = at + ".primitives[" + std::to_string(k) + "]";
+                    for (const char* key : {"indices", "material", "mode"})
+                        if (p.contains(key))
+                            check(p[key], pat + "." + key);
+                    if (p.contains("attributes") && p["attributes"].is_object())
+                        for (const auto& [attr, v] : p["attributes"].items())
+                            check(v, pat + ".attributes." + attr);
+                }
+            for (const char* list : {"children", "nodes"})
+                if (item.contains(list) && item[list].is_array())
+                    for (size_t k = 0; k < item[list].size(); ++k)
+                        check(item[list][k], at + "." + list + "[" + std::to_string(k) + "]");
+        }
+    };
+    each("buffers", {"byteLength"});
+    each("bufferViews", {"buffer", "byteOffset", "byteLength", "byteStride"});
+    each("accessors", {"bufferView", "byteOffset", "count", "componentType"});
+    each("meshes", {});
+    each("nodes", {"mesh"});
+    each("scenes", {});
+    if (j.contains("scene"))
+        check(j["scene"], "scene");
+}
+
 std::string prepare_json(const std::string& name, const std::string& text) {
     nlohmann::json j = parse_json_text(name, text);
     if (!j.is_object())
         throw Error(name + ": glTF: the JSON is not an object");
+    check_indices_and_sizes(name, j);
     const auto buffers = j.find("buffers");
     if (buffers != j.end() && buffers->is_array()) {
         double total = 0.0;
