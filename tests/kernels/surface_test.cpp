@@ -94,6 +94,45 @@ TEST_P(SurfaceOffset, ImageIndependentOfUnitAndPlace) {
     }
 }
 
+// A closed box 2 wide, its inside seen from inside and its outside lit by a sun, moved far from
+// the origin by exact amounts (its coordinates stay representable). Before preparation moved such
+// geometry back next to the origin (prepare/device_scene.cpp, recentre), the inside leaked light
+// along its edges from 1e3 away (hit points rounded to ulps of the coordinates landed past the
+// neighbouring face) and was lit all over from 2.5e5 (offsets larger than the box); now the
+// images are the same bits wherever the box is.
+TEST_P(SurfaceOffset, FarFromTheOriginAsAtIt) {
+    et::RgbImage map = ett::constant_image(64, 32, 0.5f);
+    for (int c = 0; c < 3; ++c)
+        map.at(40, 8)[c] = 2000.0f;
+    et::Scene box = ett::base_scene(24, 16, et::make_envmap("sun", std::move(map), {}));
+    box.materials.push_back(ett::diffuse(0.8f));
+    for (int axis = 0; axis < 3; ++axis)
+        for (float side : {-1.0f, 1.0f}) {
+            glm::vec3 n(0.0f);
+            n[axis] = side;
+            ett::add_square(box.triangles, n, n, 1.0f, 0);
+        }
+    box.settings.max_depth = 2;
+    for (const bool inside : {true, false}) {
+        SCOPED_TRACE(inside ? "inside" : "outside");
+        box.camera.eye = inside ? glm::vec3(0.5f, 0.25f, 0.25f) : glm::vec3(3.0f, 2.5f, 4.0f);
+        box.camera.target = inside ? glm::vec3(-1.0f, -0.5f, -0.75f) : glm::vec3(0.0f);
+        box.camera.fov_deg = inside ? 90.0f : 40.0f;
+        const ett::RenderResult at_origin = ett::render(box, GetParam(), 8, false);
+        if (inside)
+            EXPECT_EQ(ett::image_mean(at_origin.mean), 0.0);
+        else
+            ASSERT_GT(ett::image_mean(at_origin.mean), 0.0);
+        for (const float far : {1024.0f, 131072.0f, 1048576.0f}) {
+            SCOPED_TRACE("moved by " + std::to_string(far));
+            const ett::RenderResult r = ett::render(
+                transformed(box, 1.0f, glm::vec3(far, -far, far)), GetParam(), 8, false);
+            EXPECT_TRUE(r.mean == at_origin.mean) << "image mean " << ett::image_mean(r.mean)
+                                                  << " against " << ett::image_mean(at_origin.mean);
+        }
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, SurfaceOffset, ::testing::Values("cpu", "opencl"));
 
 // The hit point is rebuilt from the triangle's vertices (etk_hit_point), so the secondary ray's
@@ -104,13 +143,14 @@ INSTANTIATE_TEST_SUITE_P(Backends, SurfaceOffset, ::testing::Values("cpu", "open
 TEST(SurfaceOffset, OriginOffTheTriangleWhateverTheRayStart) {
     et::Scene s = sphere_on_ground();
     s.triangles = et::TriangleSoup{};
-    const glm::vec3 tri[3] = {{-0.3f, 0.2f, -0.4f}, {0.7f, 0.25f, -0.3f}, {0.1f, 0.3f, 0.6f}};
+    // Straddling the origin on every axis, so that preparation keeps its coordinates (recentre).
+    const glm::vec3 tri[3] = {{-0.3f, -0.05f, -0.4f}, {0.7f, 0.0f, -0.3f}, {0.1f, 0.05f, 0.6f}};
     et::add_triangle(s.triangles, tri, nullptr, 0);
     et::RenderSettings st = s.settings;
     st.backend = et::Backend::cpu;
     const et::DeviceScene ds = et::prepare_device_scene(s, st);
     const glm::vec3 n = et::unit_face_normal(tri);
-    const glm::vec3 target(0.15f, 0.25f, 0.0f);          // inside the triangle
+    const glm::vec3 target(0.15f, 0.0f, 0.0f);           // inside the triangle
     const float expected = ds.params.ray_epsilon * 0.7f; // the largest vertex coordinate
     for (double dist : {10.0, 1e3, 1e5, 1e6}) {
         for (const glm::vec3 from : {glm::vec3(0.3f, 1.0f, 0.2f), glm::vec3(-0.8f, -0.2f, 0.5f)}) {

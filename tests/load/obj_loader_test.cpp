@@ -169,6 +169,50 @@ TEST(ObjLoader, VertexNormalsUsedWhenPresentGeometricOtherwise) {
         EXPECT_NEAR(glm::length(n), 1.0f, 1e-6f);
 }
 
+// A normal need not be unit length in the file; its length in float can under- or overflow
+// (1e-30 squared), which dropped it for the geometric normal.
+TEST(ObjLoader, NormalsOfAnyLengthAreUsed) {
+    const std::string dir = ett::scratch_dir("obj-normal-length");
+    write_file(dir + "/n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                               "vn 0 1e-30 1e-30\nvn 0 1e30 1e30\nvn 0 3e-39 0\n"
+                               "f 1//1 2//2 3//3\n");
+    const Loaded l = load(dir + "/n.obj");
+    ASSERT_EQ(l.soup.size(), 1u);
+    const glm::vec3 diagonal = glm::normalize(glm::vec3(0, 1, 1));
+    expect_vec_near(l.soup.normals[0], diagonal, 1e-6f, "1e-30");
+    expect_vec_near(l.soup.normals[1], diagonal, 1e-6f, "1e30");
+    expect_vec_near(l.soup.normals[2], glm::vec3(0, 1, 0), 1e-6f, "denormal");
+}
+
+// A mirroring transform (negative determinant) turns the winding around, and the winding says
+// which side is a dielectric's outside: load_mesh turns it back, so that the front face of every
+// triangle is the mirror image of its front face before.
+TEST(ObjLoader, MirroringTransformKeepsTheFrontFace) {
+    const std::string dir = ett::scratch_dir("obj-mirror");
+    write_file(dir + "/tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                 "f 1/1 2/2 3/3\n");
+    for (const glm::vec3 scale :
+         {glm::vec3(-1, 1, 1), glm::vec3(1, 1, -2), glm::vec3(-1, -1, -1), glm::vec3(-1, -1, 1)}) {
+        SCOPED_TRACE(std::to_string(scale.x) + " " + std::to_string(scale.y) + " " +
+                     std::to_string(scale.z));
+        const glm::mat4 m = glm::scale(glm::mat4(1.0f), scale);
+        std::vector<et::Material> materials;
+        et::TriangleSoup soup;
+        et::load_mesh(dir + "/tri.obj", m, -1, materials, soup, nullptr);
+        ASSERT_EQ(soup.size(), 1u);
+        const glm::vec3 p[3] = {soup.positions[0], soup.positions[1], soup.positions[2]};
+        // The front (+z) mirrored: its normal transforms by the inverse transpose.
+        const glm::vec3 front =
+            glm::normalize(glm::transpose(glm::inverse(glm::mat3(m))) * glm::vec3(0, 0, 1));
+        expect_vec_near(et::unit_face_normal(p), front, 1e-6f, "front face");
+        // Each corner keeps its texture coordinate.
+        for (int k = 0; k < 3; ++k) {
+            const glm::vec3 v = glm::vec3(glm::inverse(m) * glm::vec4(p[k], 1.0f));
+            EXPECT_EQ(soup.uvs[k], glm::vec2(v.x, v.y)) << k;
+        }
+    }
+}
+
 TEST(ObjLoader, MtlMaterialsMappedAsDocumented) {
     const std::string dir = ett::scratch_dir("obj-mtl");
     write_file(dir + "/m.mtl", "newmtl red\nKd 0.8 0.1 0.1\nKs 0 0 0\nNs 10\n"

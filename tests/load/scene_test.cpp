@@ -327,6 +327,27 @@ TEST(Scene, SphereShapeIsClosed) {
     }
 }
 
+// A sphere below float's resolution at its centre collapsed to nothing (or lost some triangles)
+// without a word, rendering the map where the scene put an object.
+TEST(SceneBadInput, SphereTooSmallForItsCentreIsAnError) {
+    const std::string dir = ett::scratch_dir("scene-sphere-collapse");
+    write_file(dir + "/s.json", scene_json(dir, R"([{"type": "sphere", "center": [1e6, 0, 0],
+                                                   "radius": 0.001}])"));
+    try {
+        et::load_scene(dir + "/s.json");
+        ADD_FAILURE() << "a sphere of radius 0.001 at 1e6 loaded";
+    } catch (const et::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("shapes[0].radius"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("too small to be resolved in float"),
+                  std::string::npos)
+            << e.what();
+    }
+    // Where it is resolved, nothing is said and nothing dropped (the poles' fans included).
+    write_file(dir + "/ok.json", scene_json(dir, R"([{"type": "sphere", "center": [1e6, 0, 0],
+                                                    "radius": 100, "segments": 8}])"));
+    EXPECT_EQ(et::load_scene(dir + "/ok.json").triangles.size(), 8u * 4u * 2u - 2u * 8u);
+}
+
 TEST(SceneBadInput, BadOutputPathsLeaveNothing) {
     const std::string dir = ett::scratch_dir("scene-output");
     write_file(dir + "/s.json", scene_json(dir, "[]"));

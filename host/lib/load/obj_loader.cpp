@@ -37,9 +37,11 @@ bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3]
         return false;
     for (int k = 0; k < 3; ++k) {
         soup.positions.push_back(p[k]);
-        glm::vec3 nk = n ? n[k] : ng;
-        float l = glm::length(nk);
-        soup.normals.push_back(l > 0.0f && std::isfinite(l) ? nk / l : ng);
+        // In double: a normal's squared length under- or overflows in float (1e-30, 1e30),
+        // and a file need not write unit normals.
+        const glm::dvec3 nk(n ? n[k] : ng);
+        const double l = glm::length(nk);
+        soup.normals.push_back(l > 0.0 && std::isfinite(l) ? glm::vec3(nk / l) : ng);
     }
     soup.material.push_back(material);
     // Kept parallel to the triangles even when a caller filled them without this function.
@@ -49,6 +51,15 @@ bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3]
         soup.uvs.push_back(std::isfinite(t.x) && std::isfinite(t.y) ? t : glm::vec2(0.0f));
     }
     return true;
+}
+
+void reverse_winding(TriangleSoup& soup, size_t from) {
+    for (size_t t = from; t < soup.size(); ++t) {
+        std::swap(soup.positions[3 * t + 1], soup.positions[3 * t + 2]);
+        std::swap(soup.normals[3 * t + 1], soup.normals[3 * t + 2]);
+        if (soup.uvs.size() >= 3 * t + 3)
+            std::swap(soup.uvs[3 * t + 1], soup.uvs[3 * t + 2]);
+    }
 }
 
 namespace {

@@ -112,7 +112,9 @@ glm::mat4 read_transform(const json& s, const JsonReader& r) {
     return glm::scale(m, sc);
 }
 
-void add_sphere(TriangleSoup& soup, glm::vec3 c, float radius, int segments, int material) {
+// Returns the triangles dropped as degenerate (a sphere too small for float at its centre).
+size_t add_sphere(TriangleSoup& soup, glm::vec3 c, float radius, int segments, int material) {
+    size_t dropped = 0;
     const int rings = std::max(2, segments / 2);
     // A closed surface: the last column is the first one again and the poles are single points
     // (in float, sin(pi) and sin(2 pi) are not 0, which left a slit along the seam and a ring at
@@ -137,9 +139,13 @@ void add_sphere(TriangleSoup& soup, glm::vec3 c, float radius, int segments, int
                       tb[3] = {uv(i, j), uv(i + 1, j + 1), uv(i + 1, j)};
             glm::vec3 pa[3] = {c + radius * a[0], c + radius * a[1], c + radius * a[2]},
                       pb[3] = {c + radius * b[0], c + radius * b[1], c + radius * b[2]};
-            add_triangle(soup, pa, a, material, ta);
-            add_triangle(soup, pb, b, material, tb);
+            // The first ring's a and the last's b have two corners at a pole: not triangles.
+            if (i > 0)
+                dropped += !add_triangle(soup, pa, a, material, ta);
+            if (i < rings - 1)
+                dropped += !add_triangle(soup, pb, b, material, tb);
         }
+    return dropped;
 }
 
 // The coordinate range the kernels' float arithmetic holds, for messages: "[-1e+12, 1e+12]".
@@ -368,8 +374,36 @@ Scene load_scene(const std::string& path) {
                 float radius = read_float(s, "radius", 1.0f, 1e-6f, 1e9f, rs);
                 int segments = read_int(s, "segments", 96, 4, 4096, rs);
                 const bool smooth = rs.boolean(s, "smooth", true);
+                // Vertices are floats in the scene's coordinates: at a centre far from the
+                // origin they are rounded to its ulp, and a small sphere flattens or collapses.
+                const float far = std::max({std::fabs(c.x), std::fabs(c.y), std::fabs(c.z)});
+                const double steps =
+                    far > 0.0f ? radius / (std::nextafter(far, 2.0f * far) - far) : 1e30;
+                if (steps < 8.0)
+                    rs.at("radius").fail(
+                        "the sphere is too small to be resolved in float at its centre (its "
+                        "vertices round to steps of " +
+                        std::to_string(radius / steps) +
+                        "); scale the scene or move it towards the origin");
+                if (steps < 1024.0)
+                    warn(rs.where() + ": the sphere's vertices round to 1/" +
+                         std::to_string(int(steps)) +
+                         " of its radius at its centre: a faceted surface (scale the scene or "
+                         "move it towards the origin)");
                 TriangleSoup sphere;
-                add_sphere(sphere, c, radius, segments, mat < 0 ? default_material() : mat);
+                const size_t dropped =
+                    add_sphere(sphere, c, radius, segments, mat < 0 ? default_material() : mat);
+                // Triangles collapse where float cannot tell their corners apart: all of them
+                // for a radius below float's resolution at the centre.
+                if (sphere.size() == 0)
+                    rs.at("radius").fail(
+                        "the sphere is too small to be resolved in float at its centre (every "
+                        "triangle collapses); scale the scene or move it towards the origin");
+                if (dropped)
+                    warn(rs.where() + ": " + std::to_string(dropped) + " of " +
+                         std::to_string(sphere.size() + dropped) +
+                         " triangles collapse in float (radius too small for its centre) and "
+                         "are skipped");
                 if (!smooth)
                     for (size_t t = 0; t < sphere.size(); ++t) {
                         glm::vec3 ng = glm::normalize(
@@ -407,10 +441,17 @@ Scene load_scene(const std::string& path) {
                 for (auto& v : q)
                     v = glm::vec3(m * glm::vec4(c + v, 1.0f));
                 glm::vec3 a[3] = {q[0], q[2], q[1]}, b[3] = {q[0], q[3], q[2]};
+
                 // Texture coordinates: u along +x, v along -z (the image upright seen from above
                 // with -z up), [0, 1] over the quad.
                 const glm::vec2 t[4] = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
-                const glm::vec2 ta[3] = {t[0], t[2], t[1]}, tb[3] = {t[0], t[3], t[2]};
+                glm::vec2 ta[3] = {t[0], t[2], t[1]}, tb[3] = {t[0], t[3], t[2]};
+                if (glm::determinant(glm::mat3(m)) < 0.0f) { // mirrored: the same front face
+                    std::swap(a[1], a[2]);
+                    std::swap(b[1], b[2]);
+                    std::swap(ta[1], ta[2]);
+                    std::swap(tb[1], tb[2]);
+                }
                 int qm = mat < 0 ? default_material() : mat;
                 if (!add_triangle(scene.triangles, a, nullptr, qm, ta) ||
                     !add_triangle(scene.triangles, b, nullptr, qm, tb))

@@ -94,4 +94,8 @@ glm::vec3 unit_face_normal(const glm::vec3 p[3]);
 bool add_triangle(TriangleSoup& soup, const glm::vec3 p[3], const glm::vec3 n[3], int material,
                   const glm::vec2 uv[3] = nullptr);
 
+// Turns triangles from..end of the soup around (corners 1 and 2 swapped, with their normals and
+// texture coordinates): the other side becomes the front.
+void reverse_winding(TriangleSoup& soup, size_t from);
+
 } // namespace et

@@ -28,6 +28,41 @@ constexpr float kRayEpsilon = 1e-5f;
 // the visibility strategy's alpha: a light sample weighs at most 10x the map's own).
 constexpr float kCosineAlpha = 0.1f;
 
+// Geometry far from the origin against its size is moved next to it, with the camera: the ray
+// offsets and the hit points' rounding are relative to the coordinates' magnitude, so a box 2
+// wide at 1e4-1e5 leaked light along its inner edges (hit points rounded to ulps of 1e5, 0.008,
+// landed past the neighbouring face) and at 2.5e5 was lit inside (offsets of 2.5). Per axis where
+// every vertex lies farther from the origin than the geometry is wide, the shift is the middle
+// rounded to a multiple of the farthest coordinate's ulp: every vertex is then within a factor
+// of two of it and moves exactly, so the scene renders as it would at the origin. Geometry that
+// straddles the origin, or lies near it, is left as it is (bit for bit).
+void recentre(Scene& scene) {
+    auto& pos = scene.triangles.positions;
+    if (pos.empty())
+        return;
+    glm::vec3 lo = pos[0], hi = pos[0];
+    for (const glm::vec3& v : pos) {
+        lo = glm::min(lo, v);
+        hi = glm::max(hi, v);
+    }
+    glm::vec3 shift(0.0f);
+    for (int k = 0; k < 3; ++k) {
+        const double a = lo[k], b = hi[k], width = b - a;
+        if (!((a > 0.0 && a > width) || (b < 0.0 && -b > width)))
+            continue;
+        int e = 0;
+        std::frexp(std::max(std::fabs(a), std::fabs(b)), &e);
+        const double ulp = std::ldexp(1.0, e - 24); // of the farthest coordinate, as a float
+        shift[k] = static_cast<float>(std::round(0.5 * (a + b) / ulp) * ulp);
+    }
+    if (shift == glm::vec3(0.0f))
+        return;
+    for (glm::vec3& v : pos)
+        v -= shift;
+    scene.camera.eye -= shift;
+    scene.camera.target -= shift;
+}
+
 void set_camera(const Scene& scene, etk::EtkParams& p) {
     const Camera& c = scene.camera;
     glm::vec3 f = glm::normalize(c.target - c.eye);
@@ -238,6 +273,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     d.scene_path = scene.path;
     etk::EtkParams& p = d.params;
     p.env = scene.env.desc();
+    recentre(scene);
     set_camera(scene, p);
     p.width = scene.width;
     p.height = scene.height;
