@@ -2,6 +2,7 @@
 // decoding of 8-bit images, channel selection (grey replicated, RGBA and named channels), the
 // write-to-temporary-then-rename promise and one-line et::Error messages naming the file.
 #include "image/image_io.h"
+#include "image/image_library.h"
 #include "util/error.h"
 #include "test_data.h"
 
@@ -591,6 +592,27 @@ TEST(ImageIo, FailedWriteLeavesTargetAndNoTemporary) {
 
     EXPECT_EQ(read_all(path), before);
     EXPECT_EQ(files_in(dir), (std::vector<std::string>{"keep.exr", "taken.exr"}));
+}
+
+// A full disk while the 8-bit preview is written: OpenImageIO's PNG writer reported success and
+// a truncated preview was committed with exit status 0. /dev/full fails every write (ENOSPC).
+TEST(ImageIo, PreviewWriteErrorsAreReported) {
+    if (!et::have_image_library())
+        GTEST_SKIP() << "no image library in this build";
+    const std::string dir = ett::scratch_dir("image-io-full");
+    const std::vector<float> px(8 * 8 * 3, 0.5f);
+    for (const char* name : {"preview.png", "preview.jpg"}) {
+        const std::string full = dir + "/full-" + name; // the temporary's name, on a full disk
+        fs::remove(full);
+        fs::create_symlink("/dev/full", full);
+        const std::string e = ett::error_of([&] {
+            et::image_detail::write_with_library(name, full, 8, 8, 3, px.data(), false, {},
+                                                 nullptr);
+        });
+        EXPECT_NE(e.find(std::string(name) + ": cannot write: No space left on device"),
+                  std::string::npos)
+            << "'" << e << "'";
+    }
 }
 
 TEST(ImageIo, AttributesAreStored) {

@@ -109,6 +109,57 @@ TEST(OutputBatch, AFailingWriterLeavesEveryOldOutput) {
     EXPECT_EQ(entries(dir), 2u);
 }
 
+// A rename that fails after others have been made (here the second file's temporary is gone;
+// a target turned into a folder mid-run did it before) puts the ones made back: every previous
+// output as it was, a new name removed again.
+TEST(OutputBatch, AFailedRenameLeavesEveryOldOutput) {
+    const std::string dir = ett::scratch_dir("batch_rename_fails");
+    put(dir + "/a.exr", "old a");
+    put(dir + "/c.json", "old c");
+    const std::string e = error_of([&] {
+        et::OutputBatch batch({dir + "/a.exr", dir + "/b.png", dir + "/c.json"});
+        batch.write(dir + "/a.exr", writes("new a"));
+        batch.write(dir + "/b.png", writes("new b"));
+        batch.write(dir + "/c.json", writes("new c"));
+        fs::remove(et::temporary_path(dir + "/c.json", ::getpid()));
+        batch.commit();
+    });
+    EXPECT_NE(e.find("c.json: cannot write"), std::string::npos) << e;
+    EXPECT_EQ(get(dir + "/a.exr"), "old a");
+    EXPECT_FALSE(fs::exists(dir + "/b.png"));
+    EXPECT_EQ(get(dir + "/c.json"), "old c");
+    EXPECT_EQ(entries(dir), 2u) << "a temporary or a kept file was left";
+    // A target that became a folder after the batch was made: refused before anything moves.
+    const std::string e2 = error_of([&] {
+        et::OutputBatch batch({dir + "/a.exr", dir + "/d.png"});
+        batch.write(dir + "/a.exr", writes("new a"));
+        batch.write(dir + "/d.png", writes("new d"));
+        fs::create_directory(dir + "/d.png");
+        batch.commit();
+    });
+    EXPECT_NE(e2.find("d.png: cannot write: it is a folder"), std::string::npos) << e2;
+    EXPECT_EQ(get(dir + "/a.exr"), "old a");
+}
+
+// Names too long for a temporary's are cut, and two targets that differ only past the cut had
+// one temporary: the second write replaced the first's, and the first output got its bytes.
+TEST(OutputBatch, LongNamesGetDistinctTemporaries) {
+    const std::string dir = ett::scratch_dir("batch_long_names");
+    const std::string stem(238, 'A');
+    const std::string a = dir + "/" + stem + "_1.png", b = dir + "/" + stem + "_2.png";
+    EXPECT_NE(et::temporary_path(a, 123), et::temporary_path(b, 123));
+    EXPECT_LE(fs::path(et::temporary_path(a, 4294967)).filename().string().size(), 255u);
+    {
+        et::OutputBatch batch({a, b});
+        batch.write(a, writes("one"));
+        batch.write(b, writes("two"));
+        batch.commit();
+    }
+    EXPECT_EQ(get(a), "one");
+    EXPECT_EQ(get(b), "two");
+    EXPECT_EQ(entries(dir), 2u);
+}
+
 TEST(OutputBatch, RefusesInputsFoldersAndTwins) {
     const std::string dir = ett::scratch_dir("batch_refuse");
     put(dir + "/map.exr", "texels");

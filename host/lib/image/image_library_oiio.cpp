@@ -529,6 +529,29 @@ std::unique_ptr<RowSource> open_with_library(const std::string& path, uint64_t f
     return std::make_unique<OiioSource>(path, file_bytes, colour);
 }
 
+// The bytes into `file`, every write() and the close() checked (a full disk is an error).
+static void write_bytes_checked(const std::string& path, const std::string& file,
+                                const std::vector<unsigned char>& bytes) {
+    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    auto fail = [&](int err) { throw Error(path + ": cannot write: " + std::strerror(err)); };
+    if (fd < 0)
+        fail(errno);
+    size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0) {
+            const int err = n < 0 ? errno : ENOSPC;
+            ::close(fd);
+            fail(err);
+        }
+        done += static_cast<size_t>(n);
+    }
+    if (::close(fd) != 0)
+        fail(errno);
+}
+
 void check_library_writer(const std::string& path, const std::string& ext) {
     auto out = ImageOutput::create(ext.substr(1));
     if (!out)
@@ -556,10 +579,18 @@ void write_with_library(const std::string& path, const std::string& file, int wi
     }
     for (const auto& [k, v] : attributes)
         spec.attribute(k, v);
-    const bool ok =
-        out->open(file, spec) && out->write_image(TypeDesc::FLOAT, pixels) && out->close();
+    // 8-bit previews are encoded in memory and written here: OpenImageIO's PNG writer reports
+    // no error when the disk fills (libpng's fwrite results go unchecked), and committed a
+    // truncated preview with exit status 0. The float formats' writers report it.
+    std::vector<unsigned char> encoded;
+    Filesystem::IOVecOutput memory(encoded);
+    const bool in_memory = !floating && out->supports("ioproxy") && out->set_ioproxy(&memory);
+    const bool ok = out->open(in_memory ? path : file, spec) &&
+                    out->write_image(TypeDesc::FLOAT, pixels) && out->close();
     if (!ok)
         throw Error(path + ": cannot write: " + one_line(out->geterror()));
+    if (in_memory)
+        write_bytes_checked(path, file, encoded);
 }
 
 } // namespace et::image_detail

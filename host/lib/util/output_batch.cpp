@@ -4,6 +4,8 @@
 #include "util/input_files.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <cstdio>
 #include <cerrno>
 #include <csignal>
 #include <fcntl.h>
@@ -62,10 +64,18 @@ std::string temporary_prefix(const fs::path& p) {
     std::string stem = p.stem().string();
     const size_t room = 255 - std::min<size_t>(255, 1 + 4 + 10 + p.extension().string().size());
     if (stem.size() > room) {
-        size_t cut = room;
+        // Cut names end with 8 hex digits of the whole name's hash (FNV-1a): two targets that
+        // differ only past the cut had one temporary, and one output's bytes went to the other.
+        uint32_t h = 2166136261u;
+        for (unsigned char c : stem)
+            h = (h ^ c) * 16777619u;
+        char tag[10];
+        std::snprintf(tag, sizeof tag, "~%08x", h);
+        size_t cut = room > 9 ? room - 9 : 0;
         while (cut > 0 && (static_cast<unsigned char>(stem[cut]) & 0xC0) == 0x80)
             --cut;
         stem.resize(cut);
+        stem += tag;
     }
     return "." + stem + ".tmp";
 }
@@ -211,12 +221,52 @@ void OutputBatch::commit() {
             throw Error(e.target + ": was not written (a bug)");
     SignalHold hold;
     FolderLocks locks(entries_);
+    // All or nothing: a target that became a folder is refused before anything moves, and the
+    // files a failed rename would leave replaced are kept aside (hard links) and put back, so a
+    // failed run leaves the previous outputs as they were.
     for (const auto& e : entries_) {
         std::error_code ec;
-        fs::rename(e.temporary, e.target, ec);
-        if (ec)
-            throw Error(e.target + ": cannot write: " + ec.message());
+        if (fs::is_directory(fs::symlink_status(e.target, ec)))
+            throw Error(e.target + ": cannot write: it is a folder");
     }
+    std::vector<std::string> kept(entries_.size());
+    std::vector<bool> existed(entries_.size(), false);
+    for (size_t i = 0; i < entries_.size(); ++i) {
+        std::error_code ec;
+        existed[i] = fs::exists(fs::symlink_status(entries_[i].target, ec));
+        if (!existed[i])
+            continue;
+        const std::string aside = entries_[i].temporary + ".previous";
+        fs::remove(aside, ec);
+        fs::create_hard_link(entries_[i].target, aside, ec);
+        if (!ec)
+            kept[i] = aside; // else no hard links here: that one cannot be put back
+    }
+    auto drop_kept = [&] {
+        for (const auto& k : kept)
+            if (!k.empty()) {
+                std::error_code ec;
+                fs::remove(k, ec);
+            }
+    };
+    for (size_t i = 0; i < entries_.size(); ++i) {
+        std::error_code ec;
+        fs::rename(entries_[i].temporary, entries_[i].target, ec);
+        if (!ec)
+            continue;
+        for (size_t j = 0; j < i; ++j) { // back as they were
+            std::error_code back;
+            if (!kept[j].empty()) {
+                fs::rename(kept[j], entries_[j].target, back);
+                kept[j].clear();
+            } else if (!existed[j]) {
+                fs::remove(entries_[j].target, back);
+            }
+        }
+        drop_kept();
+        throw Error(entries_[i].target + ": cannot write: " + ec.message());
+    }
+    drop_kept();
     committed_ = true;
 }
 
