@@ -173,7 +173,8 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.max_depth = 1;
     }
     check_split(st);
-    if (st.strategy == Strategy::sis && st.time_limit <= 0 && st.spp % st.sis_samples != 0)
+    if (st.strategy == Strategy::sis && st.time_limit <= 0 && a.sample_range.empty() &&
+        st.spp % st.sis_samples != 0)
         throw Error("--strategy sis visits one stratum per sample: --spp (" +
                     std::to_string(st.spp) + ") must be a multiple of --sis-samples (" +
                     std::to_string(st.sis_samples) + ")");
@@ -358,6 +359,12 @@ void run(const RenderArgs& a, Globals& g) {
         }
         scene.emplace(load_scene(a.scene));
         st = settings_for(a, g, scene->settings);
+        // A farm task of SIS: whole rounds of its strata, so that the merged tasks are too.
+        if (partial && st.strategy == Strategy::sis &&
+            (range.first % st.sis_samples != 0 || range.second % st.sis_samples != 0))
+            throw Error("--strategy sis visits one stratum per sample: --sample-range (" +
+                        a.sample_range + ") must start and end at multiples of --sis-samples (" +
+                        std::to_string(st.sis_samples) + ")");
         const std::string out = !a.output.empty() ? a.output
                                 : !scene->output.empty()
                                     ? scene->output
@@ -432,10 +439,16 @@ void run(const RenderArgs& a, Globals& g) {
                             std::to_string(state.first) + ", this render starts at " +
                             std::to_string(range.first));
             const int asked = partial ? range.second - range.first : st.spp;
-            if ((st.time_limit <= 0 || a.spp > 0) && state.spp > asked)
+            // Uncapped: --time-limit or --noise-target without --spp (the scene's spp is no cap
+            // then, as for the render itself below).
+            const bool uncapped =
+                !partial && (st.time_limit > 0 || a.noise_target > 0) && a.spp <= 0;
+            if (!uncapped && state.spp > asked)
                 throw Error(state_path + ": the render state has " + std::to_string(state.spp) +
                             " spp, more than the " + std::to_string(asked) +
-                            (partial ? " of --sample-range" : " of --spp") +
+                            (partial     ? " of --sample-range"
+                             : a.spp > 0 ? " of --spp"
+                                         : " of the scene's render.spp") +
                             " asked for; samples cannot be taken away");
         }
         state.key = render_key(ds);

@@ -197,6 +197,28 @@ TEST(RenderCommand, ForeignStatesAreRefused) {
     expect_exit(ett::run_envtrace(
                     args(scene, dir + "/out.exr", {"--spp", "8", "--seed", "1", "--resume"}), dir),
                 0);
+    // The scene's spp is no cap on a render to a noise target or a time limit without --spp
+    // (the render itself ignores it then): its state resumes; a plain render refuses it.
+    std::string text = read_file(scene);
+    const size_t at = text.find("\"max_depth\": 4");
+    ASSERT_NE(at, std::string::npos);
+    text.insert(at, "\"spp\": 2, ");
+    std::ofstream(scene) << text;
+    const std::string saved = read_file(state);
+    const ett::CliRun capped =
+        ett::run_envtrace(args(scene, dir + "/out.exr", {"--seed", "1", "--resume"}), dir);
+    expect_exit(capped, 1);
+    EXPECT_NE(capped.err.find("more than the 2 of the scene's render.spp"), std::string::npos)
+        << capped.err;
+    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr",
+                                       {"--seed", "1", "--resume", "--noise-target", "0.9"}),
+                                  dir),
+                0);
+    std::ofstream(state, std::ios::binary) << saved;
+    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr",
+                                       {"--seed", "1", "--resume", "--time-limit", "0.01"}),
+                                  dir),
+                0);
     const std::string missing = dir + "/none.envtrace-state";
     const ett::CliRun r = ett::run_envtrace(
         args(scene, dir + "/out.exr", {"--spp", "8", "--resume", "--state", missing}), dir);

@@ -430,6 +430,20 @@ TEST(Merge, RefusesForeignOverlappingAndMissingParts) {
     r = ett::run_envtrace(render_args(scene, dir + "/x.exr", {"--sample-range", "4:4"}), dir);
     expect_exit(r, 1);
     EXPECT_NE(r.err.find("--sample-range '4:4'"), std::string::npos) << r.err;
+    // SIS tasks: whole rounds of its strata, whatever the scene's spp (it was checked instead).
+    const std::vector<std::string> sis = {"--strategy",  "sis", "--sis-samples", "4",
+                                          "--max-depth", "1",   "--spp",         "2"};
+    auto sis_task = [&](const std::string& range) {
+        std::vector<std::string> more = sis;
+        more.insert(more.end(), {"--sample-range", range, "--state", dir + "/sis.state"});
+        return ett::run_envtrace(render_args(scene, dir + "/sis.exr", more), dir);
+    };
+    expect_exit(sis_task("4:12"), 0);
+    r = sis_task("4:10");
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("--sample-range (4:10) must start and end at multiples of --sis-samples"),
+              std::string::npos)
+        << r.err;
 }
 
 } // namespace
