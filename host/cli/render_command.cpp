@@ -465,6 +465,26 @@ void run(const RenderArgs& a, Globals& g) {
                        "0's (render key " +
                        std::to_string(state.key) + ", rank 0 has " + std::to_string(root_key) +
                        "): the ranks would not render one film");
+    // And how many samples, which and until when: options outside the render key, which ranks
+    // started with different command lines (MPMD) could disagree on, rendering a wrong film or
+    // ending in an MPI error without a word.
+    char limits[96];
+    std::snprintf(limits, sizeof limits, ", time limit %g, noise target %g", st.time_limit,
+                  a.noise_target);
+    const std::string control = "range " + std::to_string(range.first) + ":" +
+                                std::to_string(range.second) + ", spp " + std::to_string(st.spp) +
+                                (a.spp > 0 ? " (--spp)" : "") + limits +
+                                (a.resume ? ", resumed" : "");
+    uint64_t control_key = 1469598103934665603ull;
+    for (unsigned char c : control)
+        control_key = (control_key ^ c) * 1099511628211ull;
+    const uint64_t root_control =
+        static_cast<uint64_t>(cl.broadcast(static_cast<int64_t>(control_key)));
+    cl.check(root_control == control_key
+                 ? ""
+                 : a.scene + ": this rank's samples (" + control +
+                       ") differ from rank 0's: --spp, --sample-range, --time-limit, "
+                       "--noise-target and --resume must be the same on every rank");
 
     if (st.backend == Backend::opencl)
         std::printf("OpenCL program build %.3f s (%s)\n", build.seconds,

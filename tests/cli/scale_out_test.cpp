@@ -232,6 +232,21 @@ TEST(MpiRender, FailingRankIsNamedAndNothingIsWritten) {
     EXPECT_NE(r.err.find("rank 2 of 3"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("differ from rank 0's"), std::string::npos) << r.err;
     EXPECT_TRUE(written_in(dir).empty()) << written_in(dir)[0];
+    // Options outside the render key: which samples and until when. A rank with another range
+    // rendered a wrong partial film without a word; one with a noise target alone ended in an
+    // MPI error.
+    r = mpirun(
+        dir,
+        {app(1, render_args(scene, out, {"--sample-range", "0:2", "--state", dir + "/a.state"})),
+         app(1, render_args(scene, out, {"--sample-range", "2:4", "--state", dir + "/b.state"}))});
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("rank 1 of 2"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("this rank's samples (range 2:4"), std::string::npos) << r.err;
+    r = mpirun(dir, {app(1, render_args(scene, out, {"--spp", "8", "--noise-target", "0.05"})),
+                     app(1, render_args(scene, out, {"--spp", "8"}))});
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("must be the same on every rank"), std::string::npos) << r.err;
+    EXPECT_TRUE(written_in(dir).empty()) << written_in(dir)[0];
 }
 
 // The pids of envtrace processes whose environment holds `tag` and rank `rank`.
