@@ -25,6 +25,7 @@
 #ifndef ETK_BSDF_H
 #define ETK_BSDF_H
 #include "color.h"
+#include "base_albedo_table.h"
 #include "compat.h"
 #include "dielectric.h"
 #include "ggx.h"
@@ -149,6 +150,54 @@ ETK_FN float etk_base_share(EtkMaterial m) {
     return m.type == ETK_MAT_CONDUCTOR ? 0.0f : 1.0f - etk_max3(m.specular);
 }
 
+// The GGX lobe's directional albedo with Schlick's Fresnel of reflectance f0 (at least F0 of
+// every channel), from the tabulated E = f0 A + B (base_albedo_table.h; bilinear in the square
+// roots of the cosine and of alpha).
+ETK_FN float etk_lobe_albedo(float cos_o, float alpha, float f0) {
+    float x = sqrt(clamp(cos_o, 0.0f, 1.0f)) * (float)(ETK_BASE_TABLE_MU - 1);
+    float y = sqrt(clamp(alpha, 0.0f, 1.0f)) * (float)(ETK_BASE_TABLE_ALPHA - 1);
+    int i = (int)x, j = (int)y;
+    i = i > ETK_BASE_TABLE_MU - 2 ? ETK_BASE_TABLE_MU - 2 : i;
+    j = j > ETK_BASE_TABLE_ALPHA - 2 ? ETK_BASE_TABLE_ALPHA - 2 : j;
+    float fx = x - (float)i, fy = y - (float)j;
+    int k = j * ETK_BASE_TABLE_MU + i;
+    float a0 = etk_base_table_a[k] + (etk_base_table_a[k + 1] - etk_base_table_a[k]) * fx;
+    float b0 = etk_base_table_b[k] + (etk_base_table_b[k + 1] - etk_base_table_b[k]) * fx;
+    k += ETK_BASE_TABLE_MU;
+    float a1 = etk_base_table_a[k] + (etk_base_table_a[k + 1] - etk_base_table_a[k]) * fx;
+    float b1 = etk_base_table_b[k] + (etk_base_table_b[k + 1] - etk_base_table_b[k]) * fx;
+    return f0 * (a0 + (a1 - a0) * fy) + (b0 + (b1 - b0) * fy);
+}
+
+// Its cosine-weighted mean over the hemisphere, 2 int E(mu) mu dmu.
+ETK_FN float etk_lobe_mean_albedo(float alpha, float f0) {
+    float y = sqrt(clamp(alpha, 0.0f, 1.0f)) * (float)(ETK_BASE_TABLE_ALPHA - 1);
+    int j = (int)y;
+    j = j > ETK_BASE_TABLE_ALPHA - 2 ? ETK_BASE_TABLE_ALPHA - 2 : j;
+    float fy = y - (float)j;
+    float a =
+        etk_base_table_avg_a[j] + (etk_base_table_avg_a[j + 1] - etk_base_table_avg_a[j]) * fy;
+    float b =
+        etk_base_table_avg_b[j] + (etk_base_table_avg_b[j + 1] - etk_base_table_avg_b[j]) * fy;
+    return f0 * a + b;
+}
+
+// The Lambertian base under the lobe receives what the lobe does not reflect, going in and
+// coming out (Kelemen and Szirmay-Kalos 2001): (1 - E(cos_i)) (1 - E(cos_o)) / (1 - Eavg), so
+// that its directional albedo is albedo (1 - E(cos_o)) and base plus lobe reflect exactly what
+// a white base receives, at every angle and roughness (a constant 1 - F0 reflected 1.61 at 85
+// degrees, smooth, F0 0.04, albedo 1; Fresnel's 1 - F in place of 1 - E lost half at grazing
+// angles under rough lobes, whose shadowing reflects less than F). Reciprocal. The lobe's
+// Fresnel is taken at the largest F0 of the three channels: no channel gains energy.
+ETK_FN float etk_base_coupling(EtkMaterial m, float cos_i, float cos_o) {
+    float f0 = etk_max3(m.specular);
+    float rest = 1.0f - etk_lobe_mean_albedo(m.alpha, f0);
+    if (!(rest > 1e-4f))
+        return 0.0f; // the lobe reflects (nearly) everything: no base
+    float ei = etk_lobe_albedo(cos_i, m.alpha, f0), eo = etk_lobe_albedo(cos_o, m.alpha, f0);
+    return fmax(0.0f, 1.0f - ei) * fmax(0.0f, 1.0f - eo) / rest;
+}
+
 // Probability of choosing the specular lobe of a microfacet material with a diffuse base.
 ETK_FN float etk_specular_weight(EtkMaterial m) {
     float ws = etk_luma(m.specular);
@@ -179,7 +228,9 @@ ETK_CL_INLINE_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
     float g = etk_smith_g1(wo.z, m.alpha) * etk_smith_g1(wi.z, m.alpha);
     float3 f = etk_microfacet_fresnel(m, dot(wi, h));
     float3 spec = f * (d * g / (4.0f * wo.z * wi.z));
-    return spec + m.albedo * (ETK_INV_PI * etk_base_share(m));
+    if (m.type == ETK_MAT_CONDUCTOR) // its albedo slot holds eta: no base
+        return spec;
+    return spec + m.albedo * (ETK_INV_PI * etk_base_coupling(m, wi.z, wo.z));
 }
 
 ETK_CL_INLINE_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {

@@ -54,6 +54,8 @@
 #define ETK_CL_NOINLINE_FN ETK_FN
 #endif
 #define ETK_GLOBAL __global
+// A table of numbers at program scope (kernels/base_albedo_table.h).
+#define ETK_TABLE __constant
 #define make_float2(a, b) ((float2)((a), (b)))
 #define make_float3(a, b, c) ((float3)((a), (b), (c)))
 #define ETK_UINT_MAX 0xffffffffu
@@ -118,6 +120,7 @@ static inline float3 etk_normalize3(float3 a) {
 #define ETK_CL_INLINE_FN inline   // forced in OpenCL C only (above)
 #define ETK_CL_NOINLINE_FN inline // a call in OpenCL C only (above)
 #define ETK_GLOBAL
+#define ETK_TABLE static const
 #define ETK_UINT_MAX 0xffffffffu
 #define ETK_ATOMIC_INC(p) __atomic_fetch_add((p), 1u, __ATOMIC_RELAXED)
 #define ETK_ATOMIC_ADD(p, v) __atomic_fetch_add((p), (v), __ATOMIC_RELAXED)

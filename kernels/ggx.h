@@ -18,6 +18,11 @@ ETK_BEGIN
 #define ETK_GGX_VNDF 1
 #define ETK_GGX_MIX 2
 
+// The nodes of the lobe's directional albedo table (base_albedo_table.h): square roots of the
+// cosine and of alpha, evenly spaced.
+#define ETK_BASE_TABLE_MU 64
+#define ETK_BASE_TABLE_ALPHA 32
+
 ETK_FN float etk_ggx_d(float cos_h, float alpha) {
     float a2 = alpha * alpha;
     float c2 = cos_h * cos_h;
