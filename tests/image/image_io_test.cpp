@@ -325,6 +325,23 @@ TEST(ImageIo, RadianceXyzeIsRefusedByName) {
         << e;
 }
 
+// Radiance's EXPOSURE= says the stored pixels were multiplied by it: read as stored (as
+// OpenImageIO and Blender read them), and said, since the map's radiance is off by that factor.
+TEST(ImageIo, RadianceExposureIsSaid) {
+    const std::string dir = ett::scratch_dir("image-io-exposure");
+    for (const char* exposure : {"", "EXPOSURE=2.0\nEXPOSURE=1.5\n", "EXPOSURE=1\n"}) {
+        const std::string path = dir + "/e.hdr";
+        std::ofstream(path, std::ios::binary) << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n"
+                                              << exposure << "\n-Y 1 +X 2\n"
+                                              << std::string(8, char(128));
+        ett::WarningCapture warnings;
+        EXPECT_EQ(et::read_rgb_image(path).rgb[0], 0.5f); // 128 x 2^(128 - 136): as stored
+        EXPECT_EQ(warnings.count_containing("e.hdr: the header's EXPOSURE (3) is not applied"),
+                  std::string(exposure).find("2.0") != std::string::npos ? 1u : 0u)
+            << exposure;
+    }
+}
+
 TEST(ImageIo, PfmRoundTripIsExact) {
     const std::string dir = ett::scratch_dir("image-io-pfm");
     const int w = 19, h = 11;
@@ -544,6 +561,33 @@ TEST(ImageIo, ChannelsChosenByNameElseTheFirstThree) {
     for (int i = 0; i < w * h; ++i)
         for (int c = 0; c < 3; ++c)
             EXPECT_EQ(plain.rgb[3 * i + c], raw[4 * i + c]) << i << "," << c;
+
+    // A layer's colour ("Image.R", as Blender writes): by name, after a layer without colour.
+    // In file order (sorted by name) the first three were Image.B, Image.G, Image.R: swapped.
+    std::vector<float> layered;
+    for (int i = 0; i < w * h; ++i)
+        for (float v : {9.0f, 3.0f, 2.0f, 1.0f}) // Depth.Z, Image.B, Image.G, Image.R
+            layered.push_back(v * (i + 1));
+    write_named_channels(dir + "/layered.exr", w, h, {"Depth.Z", "Image.B", "Image.G", "Image.R"},
+                         layered);
+    {
+        ett::WarningCapture warnings;
+        const et::RgbImage img = et::read_rgb_image(dir + "/layered.exr");
+        for (int i = 0; i < w * h; ++i)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_EQ(img.rgb[3 * i + c], float(c + 1) * (i + 1)) << i << "," << c;
+        EXPECT_TRUE(warnings.messages().empty()) << warnings.messages()[0];
+    }
+    // Channels without colour names are read, and said so (a depth pass would light the scene).
+    {
+        ett::WarningCapture warnings;
+        write_named_channels(dir + "/depth.exr", w, h, {"Z"}, std::vector<float>(w * h, 7.0f));
+        EXPECT_EQ(et::read_rgb_image(dir + "/depth.exr").rgb[0], 7.0f);
+        EXPECT_EQ(warnings.count_containing(
+                      "no channels named as colour (R, G, B) or luminance (Y) among Z; read Z as "
+                      "grey"),
+                  1u);
+    }
 }
 
 TEST(ImageIo, WriteLeavesNoTemporaryFiles) {

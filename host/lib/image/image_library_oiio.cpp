@@ -268,26 +268,49 @@ bool starts_with(const std::string& path, const char* magic) {
     return ok;
 }
 
-// The FORMAT= value of a Radiance header ("" when absent), from its first 64 kB: OpenImageIO
-// reports an XYZE file as having no FORMAT at all.
-std::string radiance_format(const std::string& path) {
+// The lines of a Radiance header, from its first 64 kB, up to the blank line that ends it.
+std::vector<std::string> radiance_header(const std::string& path) {
+    std::vector<std::string> lines;
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (!f)
-        return "";
+        return lines;
     std::string head(65536, '\0');
     head.resize(std::fread(&head[0], 1, head.size(), f));
     std::fclose(f);
     for (size_t at = 0; at < head.size();) {
         size_t end = head.find('\n', at);
         end = end == std::string::npos ? head.size() : end;
-        if (end == at) // the blank line that ends the header
+        if (end == at)
             break;
-        const std::string line = head.substr(at, end - at);
-        if (line.rfind("FORMAT=", 0) == 0)
-            return line.substr(7, line.find_last_not_of(" \t\r") - 6);
+        lines.push_back(head.substr(at, end - at));
         at = end + 1;
     }
+    return lines;
+}
+
+// The FORMAT= value ("" when absent): OpenImageIO reports an XYZE file as having no FORMAT.
+std::string radiance_format(const std::vector<std::string>& header) {
+    for (const std::string& line : header)
+        if (line.rfind("FORMAT=", 0) == 0)
+            return line.substr(7, line.find_last_not_of(" \t\r") - 6);
     return "";
+}
+
+// The product of the EXPOSURE= values, which Radiance says were applied to the stored pixels
+// (radiance = pixel / exposure). Read as stored, as OpenImageIO and Blender read such files,
+// and said when it is not 1.
+void warn_radiance_exposure(const std::string& path, const std::vector<std::string>& header) {
+    double exposure = 1.0;
+    for (const std::string& line : header)
+        if (line.rfind("EXPOSURE=", 0) == 0)
+            exposure *= std::strtod(line.c_str() + 9, nullptr);
+    if (exposure != 1.0) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%g", exposure);
+        warn(path + ": the header's EXPOSURE (" + buf +
+             ") is not applied: pixels are read as stored (radiance would be pixels / exposure; "
+             "set the map's intensity to undo it)");
+    }
 }
 
 // "R, G" (at most 8 names) for messages.
@@ -373,7 +396,9 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
         check_declared_size(path, exr.width, exr.height, 1, exr.stored_bytes, file_bytes);
     }
     if (starts_with(path, "#?")) { // Radiance HDR, read through our buffered proxy
-        if (radiance_format(path) == "32-bit_rle_xyze")
+        const std::vector<std::string> header = radiance_header(path);
+        warn_radiance_exposure(path, header);
+        if (radiance_format(header) == "32-bit_rle_xyze")
             throw Error(path + ": Radiance XYZE pixels (CIE XYZ) are not read; write the map as "
                                "RGBE (Radiance's ra_xyze -r IN OUT) or as OpenEXR");
         proxy = std::make_unique<BufferedFileProxy>(path, file_bytes);
@@ -413,11 +438,64 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
     idx[2] = nch > 2 ? 2 : 0;
     if (nch == 2)
         idx[1] = idx[2] = 0; // grey + alpha
-    const int r = spec.channelindex("R"), g = spec.channelindex("G"), b = spec.channelindex("B");
+    int r = spec.channelindex("R"), g = spec.channelindex("G"), b = spec.channelindex("B");
+    // A layered EXR's colour (Blender's "Image.R", "Image.G", "Image.B"): the first layer that
+    // has all three. EXR stores channels sorted by name, so the first three in file order were B,
+    // G and R: the map's colours swapped without a word.
+    if (exr && !(r >= 0 && g >= 0 && b >= 0))
+        for (int c = 0; c < nch; ++c) {
+            const std::string& n = spec.channelnames[static_cast<size_t>(c)];
+            if (n.size() < 2 || n.compare(n.size() - 2, 2, ".R"))
+                continue;
+            const std::string layer = n.substr(0, n.size() - 1);
+            const int lg = spec.channelindex(layer + "G"), lb = spec.channelindex(layer + "B");
+            if (lg >= 0 && lb >= 0) {
+                r = c;
+                g = lg;
+                b = lb;
+                break;
+            }
+        }
     if (r >= 0 && g >= 0 && b >= 0) {
         idx[0] = r;
         idx[1] = g;
         idx[2] = b;
+    }
+    if (exr) {
+        // An EXR names what its channels hold: one without colour or luminance names (depth,
+        // alpha, XYZ, a vector) is read as colour from the first channels, and said so.
+        const int y = spec.channelindex("Y");
+        if (!(r >= 0 && g >= 0 && b >= 0) && r < 0 && g < 0 && b < 0) {
+            if (y >= 0 && nch > 1 && spec.channelindex("X") < 0) {
+                idx[0] = idx[1] = idx[2] = y; // luminance with others (alpha): grey from Y
+            } else if (y < 0 || nch > 1) {
+                std::string used;
+                for (int k = 0; k < (nch > 2 ? 3 : 1); ++k)
+                    used += (k ? ", " : "") + spec.channelnames[static_cast<size_t>(idx[k])];
+                warn(path + ": no channels named as colour (R, G, B) or luminance (Y) among " +
+                     channel_list(spec) + "; read " + used + " as " +
+                     (nch > 2 ? "red, green and blue" : "grey"));
+            }
+        }
+        for (int k = 0; k < 3; ++k) {
+            const TypeDesc t = spec.channelformat(idx[k]);
+            if (t.basetype == TypeDesc::UINT32 || t.basetype == TypeDesc::INT32) {
+                warn(path + ": channel '" + spec.channelnames[static_cast<size_t>(idx[k])] +
+                     "' holds integers (an EXR's ids, not light); read scaled to [0, 1]");
+                break;
+            }
+        }
+        // A multi-part EXR: the first part is read, and said (a render's passes may come first).
+        if (in->seek_subimage(1, 0)) {
+            int parts = 2;
+            while (parts < 64 && in->seek_subimage(parts, 0))
+                ++parts;
+            warn(path + ": " + std::to_string(parts) + (parts == 64 ? " or more" : "") +
+                 " parts; the first (channels " + channel_list(spec) +
+                 ") is read, the others ignored");
+            if (!in->seek_subimage(0, 0))
+                throw Error(path + ": cannot read image: " + one_line(in->geterror()));
+        }
     }
     // An EXR's channels named as colour but not all three ("R, G"): read as grey from the first,
     // which is not the picture -- said once, not silently. (Other readers name unnamed channels
