@@ -472,9 +472,9 @@ OiioSource::OiioSource(const std::string& path, uint64_t file_bytes, bool colour
                 std::string used;
                 for (int k = 0; k < (nch > 2 ? 3 : 1); ++k)
                     used += (k ? ", " : "") + spec.channelnames[static_cast<size_t>(idx[k])];
-                warn(path + ": no channels named as colour (R, G, B) or luminance (Y) among " +
-                     channel_list(spec) + "; read " + used + " as " +
-                     (nch > 2 ? "red, green and blue" : "grey"));
+                warn(path + ": no channels named as colour (R, G, B)" +
+                     (y < 0 ? " or luminance (Y)" : "") + " among " + channel_list(spec) +
+                     "; read " + used + " as " + (nch > 2 ? "red, green and blue" : "grey"));
             }
         }
         for (int k = 0; k < 3; ++k) {
