@@ -325,6 +325,28 @@ TEST(ImageIo, RadianceXyzeIsRefusedByName) {
         << e;
 }
 
+// A PNM's maxval of 0 read as "full scale": a black file lit the scene as a white furnace.
+// A truncated one says what may be wrong instead of "unknown error".
+TEST(ImageIo, PnmMaxvalAndTruncationAreSaid) {
+    if (!et::have_image_library())
+        GTEST_SKIP() << "no image library in this build";
+    const std::string dir = ett::scratch_dir("image-io-pnm");
+    std::ofstream(dir + "/zero.ppm", std::ios::binary) << "P6\n# a comment\n4 2\n0\n"
+                                                       << std::string(4 * 2 * 3, '\0');
+    std::ofstream(dir + "/short.ppm", std::ios::binary) << "P6\n4 2\n255\n" << std::string(5, '\0');
+    std::ofstream(dir + "/fine.pgm", std::ios::binary) << "P5 4 2 65535\n"
+                                                       << std::string(16, '\x7f');
+    EXPECT_NE(ett::error_of([&] {
+                  et::read_rgb_image(dir + "/zero.ppm");
+              }).find("zero.ppm: PNM header: maxval 0 is not in 1..65535"),
+              std::string::npos);
+    EXPECT_NE(ett::error_of([&] {
+                  et::read_rgb_image(dir + "/short.ppm");
+              }).find("the file may be truncated or damaged"),
+              std::string::npos);
+    EXPECT_EQ(et::read_rgb_image(dir + "/fine.pgm").width, 4);
+}
+
 // Radiance's EXPOSURE= says the stored pixels were multiplied by it: read as stored (as
 // OpenImageIO and Blender read them), and said, since the map's radiance is off by that factor.
 TEST(ImageIo, RadianceExposureIsSaid) {

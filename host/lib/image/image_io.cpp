@@ -29,7 +29,8 @@ std::string one_line(std::string s) {
     std::replace(s.begin(), s.end(), '\n', ' ');
     while (!s.empty() && s.back() == ' ')
         s.pop_back();
-    return s.empty() ? "unknown error" : s;
+    // The library gave no reason (OpenImageIO's PNM reader on a truncated file says nothing).
+    return s.empty() ? "the decoder gave no reason; the file may be truncated or damaged" : s;
 }
 
 } // namespace image_detail
