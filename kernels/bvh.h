@@ -105,12 +105,14 @@ ETK_FN EtkShearedRay etk_sheared_ray(float3 org, float3 dir) {
 
 // Whether a triangle test hit: the edge functions u, v, w all of one sign (a zero counts as
 // either: the ray passes through the edge, and both triangles there take it), a non-degenerate
-// triangle (det = u + v + w non-zero and finite), t in (0, tmax). One expression for a lane
-// (floats: 0 or 1) and for four lanes at once (etk_lanes: a mask per lane), so the two can never
-// disagree.
-#define ETK_TRIANGLE_HIT(u, v, w, det, t, tmax, zero)                                              \
+// triangle (det = u + v + w non-zero and finite), t in (0, tmax) up to its rounding error terr
+// (the estimate's sum cancels for triangles far larger than their distance: a ground quad 1e9
+// wide seen from 1 unit lost most of its hits; the hit lane computes the distance it keeps). One
+// expression for a lane (floats: 0 or 1) and for four lanes at once (etk_lanes: a mask per lane),
+// so the two can never disagree.
+#define ETK_TRIANGLE_HIT(u, v, w, det, t, terr, tmax, zero)                                        \
     ((((u >= zero) & (v >= zero) & (w >= zero)) | ((u <= zero) & (v <= zero) & (w <= zero))) &     \
-     (det != zero) & (det - det == zero) & (t > zero) & (t < tmax))
+     (det != zero) & (det - det == zero) & (t + terr > zero) & (t - terr < tmax))
 
 // The vertices of the triangle in `slot` (packet index x 4 + lane) of the packets.
 ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, float3* v0, float3* v1,
@@ -133,8 +135,8 @@ ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, floa
 // the sign tests tolerate but the closest hit's choice and the boxes' culling do not.
 ETK_FORCE_INLINE_FN int etk_triangle_lane(ETK_GLOBAL const float4* pk, int lane, EtkShearedRay r,
                                           float u, float v, float w, float det, float t0,
-                                          float prim, EtkHit* hit) {
-    if (!ETK_TRIANGLE_HIT(u, v, w, det, t0, hit->t * 2.0f, 0.0f))
+                                          float terr, float prim, EtkHit* hit) {
+    if (!ETK_TRIANGLE_HIT(u, v, w, det, t0, terr, hit->t * 2.0f, 0.0f))
         return 0;
     float3 v0, v1, v2;
     etk_packet_triangle(pk, lane, &v0, &v1, &v2); // slot `lane` of this packet
@@ -176,19 +178,25 @@ ETK_FORCE_INLINE_FN int etk_packet_hit(ETK_GLOBAL const float4* pk, EtkShearedRa
     float4 w = bx * ay - by * ax;
     float4 det = u + v + w;
     float4 t = (u * az + v * bz + w * cz) * make_float4(r.sz, r.sz, r.sz, r.sz) / det;
+    // Its rounding error: a few ulps of the sum's largest terms, over det.
+    float4 terr = (fabs(u * az) + fabs(v * bz) + fabs(w * cz)) *
+                  (make_float4(1e-6f, 1e-6f, 1e-6f, 1e-6f) * fabs(r.sz)) / fabs(det);
     // Most packets are missed by every lane: one vector test decides that, without a branch
     // per lane. Its distance is a first estimate, taken with slack: etk_triangle_lane computes
     // the one the hit keeps.
     etk_lanes zero = etk_lanes_splat(0.0f);
     if (!etk_any_lane(ETK_TRIANGLE_HIT(etk_lanes_of(u), etk_lanes_of(v), etk_lanes_of(w),
-                                       etk_lanes_of(det), etk_lanes_of(t),
+                                       etk_lanes_of(det), etk_lanes_of(t), etk_lanes_of(terr),
                                        etk_lanes_splat(hit->t * 2.0f), zero)))
         return 0;
     float4 prim = pk[ETK_PACKET_PRIM];
-    return (etk_triangle_lane(pk, 0, r, u.x, v.x, w.x, det.x, t.x, prim.x, hit) && any_hit) ||
-           (etk_triangle_lane(pk, 1, r, u.y, v.y, w.y, det.y, t.y, prim.y, hit) && any_hit) ||
-           (etk_triangle_lane(pk, 2, r, u.z, v.z, w.z, det.z, t.z, prim.z, hit) && any_hit) ||
-           (etk_triangle_lane(pk, 3, r, u.w, v.w, w.w, det.w, t.w, prim.w, hit) && any_hit);
+    return (etk_triangle_lane(pk, 0, r, u.x, v.x, w.x, det.x, t.x, terr.x, prim.x, hit) &&
+            any_hit) ||
+           (etk_triangle_lane(pk, 1, r, u.y, v.y, w.y, det.y, t.y, terr.y, prim.y, hit) &&
+            any_hit) ||
+           (etk_triangle_lane(pk, 2, r, u.z, v.z, w.z, det.z, t.z, terr.z, prim.z, hit) &&
+            any_hit) ||
+           (etk_triangle_lane(pk, 3, r, u.w, v.w, w.w, det.w, t.w, terr.w, prim.w, hit) && any_hit);
 }
 
 ETK_FN float3 etk_safe_inverse(float3 d) {

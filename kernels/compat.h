@@ -255,6 +255,10 @@ inline float4 fmax(float4 a, float4 b) {
     etk_v4 x = etk_to_v4(a), y = etk_to_v4(b);
     return etk_from_v4(x > y ? x : y);
 }
+inline float4 fabs(float4 a) { // lane-wise: the sign bits cleared
+    etk_v4 x = etk_to_v4(a);
+    return etk_from_v4(x < 0.0f ? -x : x);
+}
 inline float dot(float3 a, float3 b) {
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }

@@ -178,7 +178,7 @@ ETK_FN EtkSurface etk_path_surface(EtkScene S, EtkPaths P, EtkParams p, int slot
     h.prim = (int)as_uint(h4.y);
     h.b1 = h4.z;
     h.b2 = h4.w;
-    return etk_surface_at(S, p, etk_xyz(P.ray_d[slot]), h);
+    return etk_surface_at(S, p, etk_xyz(P.ray_o[slot]), etk_xyz(P.ray_d[slot]), h);
 }
 
 // Splitting (the mis strategy with p.light_samples = nl, p.bsdf_samples = nb, as in a branched

@@ -62,19 +62,61 @@ ETK_FN int etk_light_side_ok(EtkMaterial m, float wz, float dwg) {
     return etk_same_side(wz, dwg) && (wz > 0.0f || etk_bsdf_is_dielectric(m));
 }
 
-// The hit point from the triangle's vertices and the hit's barycentrics, read back from its
-// packet (bvh.h): on the triangle's plane up to a few ulps of the vertices' coordinates, where
-// o + d t is off it by ulps of the ray origin's and of t (a camera far away would then need
-// offsets the size of the scene). extent: the largest coordinate magnitude of each axis over
-// the three vertices.
-ETK_FN float3 etk_hit_point(EtkScene S, EtkHit h, float3* extent) {
+// Where a hit is, and how large the coordinates its rounding is relative to. Two ways: from
+// the triangle's vertices and the hit's barycentrics (read back from its packet, bvh.h), on the
+// triangle's plane up to a few ulps of the vertices' coordinates, whatever the ray's origin (a
+// camera far away would need offsets the size of the scene from o + d t); or o + d t, with t
+// from the plane (etk_triangle_lane), off it by ulps of the origin's and the point's coordinates
+// and of the plane's own terms, which is the smaller for a large triangle seen from near: a
+// ground quad 1e6 wide placed its hits to ulps of 5e5, and the offsets (below) lifted shadow
+// rays 5 units off it, so a unit sphere on it cast no shadow. *scale: the magnitude the chosen
+// point's error is relative to.
+ETK_FN float3 etk_hit_point(EtkScene S, float3 o, float3 d, EtkHit h, float* scale) {
     float3 v0, v1, v2;
     etk_packet_triangle(S.packets, S.packet_slot[h.prim], &v0, &v1, &v2);
     float3 e1 = v1 - v0, e2 = v2 - v0;
-    *extent = make_float3(fmax(fmax(fabs(v0.x), fabs(v1.x)), fabs(v2.x)),
-                          fmax(fmax(fabs(v0.y), fabs(v1.y)), fabs(v2.y)),
-                          fmax(fmax(fabs(v0.z), fabs(v1.z)), fabs(v2.z)));
+    float3 ext = make_float3(fmax(fmax(fabs(v0.x), fabs(v1.x)), fabs(v2.x)),
+                             fmax(fmax(fabs(v0.y), fabs(v1.y)), fabs(v2.y)),
+                             fmax(fmax(fabs(v0.z), fabs(v1.z)), fabs(v2.z)));
+    float vertex_scale = fmax(fmax(ext.x, ext.y), ext.z);
+    float3 pr = o + d * h.t;
+    float3 n = etk_xyz(S.face_normals[h.prim]), a = v0 - o;
+    float ray_scale = fmax(
+        fmax(fmax(fabs(o.x), fabs(o.y)), fmax(fabs(o.z), fabs(pr.x))),
+        fmax(fmax(fabs(pr.y), fabs(pr.z)), fabs(a.x * n.x) + fabs(a.y * n.y) + fabs(a.z * n.z)));
+    if (ray_scale < vertex_scale && isfinite(ray_scale)) {
+        *scale = ray_scale;
+        return pr;
+    }
+    *scale = vertex_scale;
     return v0 + e1 * h.b1 + e2 * h.b2;
+}
+
+// The shading normal bent, where needed, so that it reflects wo above the geometric surface.
+// Interpolated normals tilt away from the viewer near silhouettes: the mirror reflection of wo
+// then points into the surface and is lost, and where wo itself is below the shading normal's
+// hemisphere the BSDF sees nothing at all (a smooth mirror sphere's rim lost up to 5% in a
+// furnace, and an index-1 glass sphere showed a dark ring). There the reflected direction is
+// raised to a small elevation t above the geometric plane, keeping its azimuth, and the normal
+// becomes the half vector of wo and it. Elsewhere the normal is returned as it is.
+ETK_FN float3 etk_reflecting_normal(float3 ns, float3 ng, float3 wo) {
+    float wg = dot(wo, ng);
+    float3 r = ns * (2.0f * dot(ns, wo)) - wo;
+    float t = fmin(0.9f * wg, 0.01f);
+    if (!(wg > 0.0f) || dot(r, ng) >= t)
+        return ns;
+    float3 rt = r - ng * dot(r, ng);
+    float lt = length(rt);
+    if (!(lt > 1e-6f)) { // straight down: the azimuth of wo's reflection in the true surface
+        rt = ng * wg - wo;
+        lt = length(rt);
+        if (!(lt > 1e-6f))
+            return ng;
+    }
+    float3 r2 = rt * (sqrt(fmax(0.0f, 1.0f - t * t)) / lt) + ng * t;
+    float3 h = wo + r2;
+    float lh = length(h);
+    return lh > 0.0f ? h / lh : ng;
 }
 
 // The normals at barycentrics (b1, b2) of triangle prim hit by a ray in direction d: the
@@ -94,16 +136,16 @@ ETK_FN float3 etk_shading_normal(EtkScene S, int prim, float b1, float b2, float
     if (dot(ns, g) < 0.0f)
         ns = -ns;
     *ng = g;
-    return ns;
+    return etk_reflecting_normal(ns, g, -d);
 }
 
 // The surface at the closest hit h of a ray in direction d. Surfaces are two-sided; the shading
 // normal is flipped to the geometric normal's side.
-ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 d, EtkHit h) {
+ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, EtkHit h) {
     EtkSurface s;
     int prim = h.prim;
-    float3 extent;
-    float3 pos = etk_hit_point(S, h, &extent);
+    float extent;
+    float3 pos = etk_hit_point(S, o, d, h, &extent);
     float3 ng;
     int front;
     float3 ns = etk_shading_normal(S, prim, h.b1, h.b2, d, &ng, &front);
@@ -120,11 +162,11 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 d, EtkHit h) {
     if (!front && etk_bsdf_is_dielectric(s.m))
         s.m.eta = 1.0f / s.m.eta;
     // The offset follows the hit point's rounding error off the triangle's plane, a few ulps of
-    // its vertices' coordinates (etk_hit_point): relative to them, with no absolute floor and
-    // whatever the ray's origin, so a scene renders alike at any unit, position and camera
-    // distance (tests/kernels/surface_test.cpp). The tiny floor keeps a triangle at the origin
-    // off zero.
-    float scale = fmax(fmax(extent.x, extent.y), fmax(extent.z, 1.0e-30f));
+    // the coordinates etk_hit_point names (the vertices', or the ray's where those are smaller):
+    // relative, with no absolute floor, so a scene renders alike at any unit, position and
+    // camera distance, and however large its triangles (tests/kernels/surface_test.cpp). The
+    // tiny floor keeps a triangle at the origin off zero.
+    float scale = fmax(extent, 1.0e-30f);
     s.origin = pos + ng * (p.ray_epsilon * scale);
     s.origin_back = pos - ng * (p.ray_epsilon * scale);
     return s;

@@ -133,6 +133,43 @@ TEST_P(SurfaceOffset, FarFromTheOriginAsAtIt) {
     }
 }
 
+// A sphere on a ground quad seen from above, the ground 6 units wide and then 2e6 and 2e9 (an
+// "infinite" ground, as scenes write it), under a map black below the horizon: nothing beyond 3
+// units is seen or lights anything, so the images must agree. The 2e6 ground placed its hits to
+// ulps of 1e6 and started shadow rays 5 units above it, above the sphere, and rendered 10%
+// brighter without the sphere's shadow; the 2e9 one lost most of its hits to the triangle test's
+// distance estimate (etk_packet_hit's terr) and showed the map through it.
+TEST_P(SurfaceOffset, LargeGroundSeenFromNear) {
+    et::RgbImage map = ett::constant_image(64, 32, 0.5f);
+    for (int y = 16; y < 32; ++y)
+        for (int x = 0; x < 64; ++x)
+            for (int c = 0; c < 3; ++c)
+                map.at(x, y)[c] = 0.0f;
+    for (int c = 0; c < 3; ++c)
+        map.at(40, 8)[c] = 2000.0f;
+    auto scene = [&](float half) {
+        et::Scene s = ett::base_scene(48, 32, et::make_envmap("sun", map, {}));
+        s.camera.eye = {0.0f, 3.0f, 1.5f};
+        s.camera.target = {0.0f, 0.0f, 0.0f};
+        s.camera.fov_deg = 40.0f;
+        s.materials.push_back(ett::diffuse(0.6f));
+        s.materials.push_back(ett::diffuse(0.8f));
+        ett::add_square(s.triangles, glm::vec3(0.0f), glm::vec3(0, 1, 0), half, 0);
+        ett::add_sphere(s.triangles, glm::vec3(0.0f, 0.5f, 0.0f), 0.5f, 32, true, 1);
+        s.settings.max_depth = 1;
+        s.settings.sampler = et::SamplerKind::sobol;
+        return s;
+    };
+    const ett::RenderResult ref = ett::render(scene(3.0f), GetParam(), 16, false);
+    for (const float half : {1e6f, 1e9f}) {
+        SCOPED_TRACE("ground half-size " + std::to_string(half));
+        const Difference d =
+            difference(ref.mean, ett::render(scene(half), GetParam(), 16, false).mean);
+        EXPECT_NEAR(d.mean_ratio, 1.0, 2e-3);
+        EXPECT_LT(d.rms, 0.02);
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, SurfaceOffset, ::testing::Values("cpu", "opencl"));
 
 // The hit point is rebuilt from the triangle's vertices (etk_hit_point), so the secondary ray's
@@ -162,7 +199,7 @@ TEST(SurfaceOffset, OriginOffTheTriangleWhateverTheRayStart) {
             etk::EtkHit h;
             const etk::EtkScene S = ds.view();
             ASSERT_TRUE(etk::etk_bvh_traverse(S.nodes, S.packets, eo, ed, 3e38f, 0, &h));
-            const etk::EtkSurface surf = etk::etk_surface_at(S, ds.params, ed, h);
+            const etk::EtkSurface surf = etk::etk_surface_at(S, ds.params, eo, ed, h);
             // Signed distance of the origin from the plane, on the ray's side.
             const glm::vec3 org(surf.origin.x, surf.origin.y, surf.origin.z);
             const float side = glm::dot(dir, n) > 0.0f ? 1.0f : -1.0f;

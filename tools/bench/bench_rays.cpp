@@ -388,7 +388,7 @@ Rays make_shadow_rays(const et::DeviceScene& ds, const Rays& cam, int spp) {
         if (!etk::etk_bvh_traverse(ds.nodes.data(), ds.packets.data(), xyz(cam.org[i]),
                                    xyz(cam.dir[i]), 3.0e38f, 0, &h))
             continue;
-        const etk::EtkSurface s = etk::etk_surface_at(S, p, xyz(cam.dir[i]), h);
+        const etk::EtkSurface s = etk::etk_surface_at(S, p, xyz(cam.org[i]), xyz(cam.dir[i]), h);
         if (etk::etk_bsdf_is_delta(s.m))
             continue;
         const etk::EtkEnvSample ls =
