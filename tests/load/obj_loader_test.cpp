@@ -169,6 +169,35 @@ TEST(ObjLoader, VertexNormalsUsedWhenPresentGeometricOtherwise) {
         EXPECT_NEAR(glm::length(n), 1.0f, 1e-6f);
 }
 
+// Face lines as tinyobjloader reads them took 4294967299 as index 3, a 23-digit number as some
+// other vertex and "3abc" as 3, without a word; a polygon of 500,000 corners took ~20 minutes to
+// triangulate. Each is an error naming its line; the valid forms load.
+TEST(ObjLoader, FaceIndicesAndCornersAreChecked) {
+    const std::string dir = ett::scratch_dir("obj-face-check");
+    const std::string verts = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0.5 0.5 -1\nvn 0 0 1\nvt 0 0\n";
+    auto error = [&](const std::string& face) {
+        write_file(dir + "/f.obj", verts + face + "\n");
+        try {
+            load(dir + "/f.obj");
+        } catch (const et::Error& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_NE(error("f 1 2 4294967299").find("f.obj: line 7: index 4294967299 of face corner"),
+              std::string::npos);
+    EXPECT_NE(error("f 1 2 99999999999999999999999").find("is beyond any vertex list"),
+              std::string::npos);
+    EXPECT_NE(error("f 1 2 3abc").find("line 7: face corner '3abc' is not v, v/vt, v/vt/vn"),
+              std::string::npos);
+    EXPECT_NE(error("f 1 2 3/1/1/1").find("has more than three indices"), std::string::npos);
+    EXPECT_EQ(error("f 1/1/1 2//1 -2"), "");
+    std::string big = "f";
+    for (int k = 0; k < 16385; ++k)
+        big += " " + std::to_string(1 + k % 4);
+    EXPECT_NE(error(big).find("a face of more than 16384 corners"), std::string::npos);
+}
+
 // A normal need not be unit length in the file; its length in float can under- or overflow
 // (1e-30 squared), which dropped it for the geometric normal.
 TEST(ObjLoader, NormalsOfAnyLengthAreUsed) {

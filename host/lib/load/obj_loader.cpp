@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -141,6 +142,62 @@ int mtl_texture(const std::string& obj_path, const tinyobj::material_t& m, const
     return textures.add_file(p.string(), use, scale, offset, where);
 }
 
+// The corners a face may have: tinyobjloader's triangulation of a polygon takes time that
+// grows with the square of its corners (40,000: 8 s; 500,000 in a 15 MB file: ~20 minutes).
+constexpr size_t kMaxObjFaceCorners = 16384;
+
+// An "f" line (from `p` to `end`, line `line` starting at `pos`): each corner's indices are
+// integers within int's range, as tinyobjloader reads them (it took 4294967299 as 3, a number of
+// 23 digits as another vertex, "3abc" as 3, without a word), and a face has at most
+// kMaxObjFaceCorners corners.
+void check_obj_face(const std::string& path, const std::string& text, size_t line, size_t pos,
+                    size_t p, size_t end) {
+    auto fail = [&](const std::string& problem) {
+        throw Error(path + ": line " + std::to_string(line) + ": " + problem + " ('" +
+                    excerpt(text.substr(pos, std::min<size_t>(end - pos, 80)), 60) + "')");
+    };
+    size_t corners = 0;
+    while (p < end) {
+        while (p < end && std::isspace(static_cast<unsigned char>(text[p])))
+            ++p;
+        if (p >= end || text[p] == '#')
+            break;
+        size_t q = p;
+        while (q < end && !std::isspace(static_cast<unsigned char>(text[q])))
+            ++q;
+        const std::string corner = text.substr(p, q - p);
+        // v, v/vt, v/vt/vn or v//vn: up to three fields, the first one required.
+        size_t at = 0;
+        for (int field = 0; field < 3 && at <= corner.size(); ++field) {
+            size_t stop = corner.find('/', at);
+            if (stop == std::string::npos)
+                stop = corner.size();
+            const std::string number = corner.substr(at, stop - at);
+            if (!(number.empty() && field > 0)) {
+                size_t k = number.size() > 0 && number[0] == '-' ? 1 : 0;
+                bool digits = k < number.size();
+                for (; k < number.size(); ++k)
+                    digits = digits && std::isdigit(static_cast<unsigned char>(number[k]));
+                if (!digits)
+                    fail("face corner '" + excerpt(corner, 24) +
+                         "' is not v, v/vt, v/vt/vn or v//vn");
+                if (number.size() > 11 || std::llabs(std::stoll(number)) > 2147483647LL)
+                    fail("index " + excerpt(number, 24) + " of face corner '" +
+                         excerpt(corner, 24) + "' is beyond any vertex list");
+            }
+            if (stop == corner.size())
+                break;
+            at = stop + 1;
+            if (field == 2)
+                fail("face corner '" + excerpt(corner, 24) + "' has more than three indices");
+        }
+        if (++corners > kMaxObjFaceCorners)
+            fail("a face of more than " + std::to_string(kMaxObjFaceCorners) +
+                 " corners (split the polygon)");
+        p = q;
+    }
+}
+
 // tinyobjloader reads a vertex coordinate it cannot parse ("nan", "inf", a word) and a missing
 // one ("v 1 2") as 0, which moves the vertex without a word. Every "v" line is checked here
 // first: a word or a missing coordinate is an error naming the line; a coordinate that is not a
@@ -157,6 +214,9 @@ std::vector<size_t> check_obj_vertices(const std::string& path, const std::strin
         size_t p = pos;
         while (p < end && (text[p] == ' ' || text[p] == '\t'))
             ++p;
+        if (p < end && text[p] == 'f' &&
+            (p + 1 == end || std::isspace(static_cast<unsigned char>(text[p + 1]))))
+            check_obj_face(path, text, line, pos, p + 1, end);
         if (p < end && text[p] == 'v' &&
             (p + 1 == end || std::isspace(static_cast<unsigned char>(text[p + 1])))) {
             auto fail = [&](const std::string& problem) {
