@@ -52,7 +52,8 @@ int main(int argc, char** argv) {
                   << " failed: " << et::cl_error_name(e.err()) << "\n";
         return 1;
     } catch (const std::bad_alloc&) {
-        std::cerr << "envtrace: error: out of memory\n";
+        std::cerr << "envtrace: error: out of memory (a smaller film, fewer --paths or a smaller "
+                     "scene needs less)\n";
         return 1;
     } catch (const std::exception& e) {
         // Not one of ours: a library or standard exception a loader did not turn into

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <string>
+#include <cstdio>
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace et {
@@ -20,19 +22,56 @@ namespace {
 // Per pixel, what the host allocates whatever the back end: the exact sums (and their AOVs), the
 // film's fields (all four, AOVs or not) and the image written at the end (mean and preview). A
 // device's own copy is the device's to check (executor_cl.cpp: its global memory).
+// Memory this process may still take: the kernel's MemAvailable (free memory and what it can
+// reclaim), below the address-space limit (ulimit -v) less what is mapped already; 0 if unknown.
+uint64_t memory_available() {
+    uint64_t have = 0;
+    if (std::FILE* f = std::fopen("/proc/meminfo", "r")) {
+        char line[128];
+        unsigned long long kb = 0;
+        while (std::fgets(line, sizeof line, f))
+            if (std::sscanf(line, "MemAvailable: %llu kB", &kb) == 1) {
+                have = uint64_t(kb) * 1024;
+                break;
+            }
+        std::fclose(f);
+    }
+    if (have == 0) {
+        const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+        have = pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) : 0;
+    }
+    struct rlimit rl {};
+    if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
+        uint64_t mapped = 0;
+        if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+            unsigned long long vm_pages = 0;
+            if (std::fscanf(f, "%llu", &vm_pages) == 1)
+                mapped = uint64_t(vm_pages) * uint64_t(sysconf(_SC_PAGE_SIZE));
+            std::fclose(f);
+        }
+        const uint64_t room = rl.rlim_cur > mapped ? uint64_t(rl.rlim_cur) - mapped : 0;
+        have = have == 0 ? room : std::min(have, room);
+    }
+    return have;
+}
+
 int checked_film_width(const DeviceScene& scene) {
     const uint64_t pixels = uint64_t(scene.width()) * uint64_t(scene.height());
+    // The film's sums and device buffers, and the outputs' copies of the image (the mean, its
+    // preview and the encoders' buffers: 111 bytes a pixel of an RGB image measured, peak 319 in
+    // all at 8192 x 8192, where 208 were counted and the film passed, to run out of memory
+    // after rendering); AOV layers take 13 channels where the image takes 3.
+    const uint64_t channels = scene.settings.aovs ? 13 : 3;
     const uint64_t per_pixel = sizeof(FilmSums::Pixel) +
                                (scene.settings.aovs ? sizeof(AovPixel) : 0) +
-                               4 * sizeof(etk::float4) + 8 * sizeof(float);
+                               4 * sizeof(etk::float4) + 8 * sizeof(float) + 37 * channels;
     const uint64_t need = pixels * per_pixel;
-    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-    const uint64_t have = pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) : 0;
+    const uint64_t have = memory_available();
     if (have > 0 && need > have)
         throw Error("film " + std::to_string(scene.width()) + " x " +
                     std::to_string(scene.height()) + " (film.width, film.height) needs about " +
-                    byte_text(need) + " for its sums and buffers, more than this machine's " +
-                    byte_text(have) + " of memory: render a smaller film");
+                    byte_text(need) + " for its sums, buffers and outputs, more than the " +
+                    byte_text(have) + " of memory available: render a smaller film");
     return scene.width();
 }
 
