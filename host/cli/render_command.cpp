@@ -162,6 +162,11 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     // Options this render does not use: said, not silently dropped.
     if (a.sis_samples_given && st.strategy != Strategy::sis)
         warn("--sis-samples applies to --strategy sis only: ignored");
+    if (st.light_share >= 0.0f && st.strategy != Strategy::adaptive)
+        warn("a light share (--light-share, render.light_share) applies to --strategy adaptive "
+             "only: ignored");
+    if (!a.guide_verdict.empty() && st.strategy != Strategy::visibility)
+        warn("--guide-verdict applies to --strategy visibility only: ignored");
     if (st.backend == Backend::cpu && a.device_given)
         warn("--device picks an OpenCL device: ignored with --backend cpu");
     if (st.backend == Backend::cpu && a.paths_given)
@@ -306,7 +311,7 @@ std::string error_text() {
     } catch (const cl::Error& e) {
         return std::string("OpenCL call ") + e.what() + " failed: " + cl_error_name(e.err());
     } catch (const std::bad_alloc&) {
-        return "out of memory";
+        return "out of memory (a smaller film, fewer --paths or a smaller scene needs less)";
     } catch (const std::exception& e) {
         return e.what();
     } catch (...) {
@@ -345,6 +350,7 @@ void run(const RenderArgs& a, Globals& g) {
     RenderState state;
     std::unique_ptr<OutputBatch> outputs;
     std::optional<DeviceScene> ds_store;
+    std::vector<std::pair<std::string, std::string>> env_meta; // the scene's environment settings
     ProgramBuildInfo build;
     std::unique_ptr<Renderer> renderer_ptr;
 
@@ -424,6 +430,10 @@ void run(const RenderArgs& a, Globals& g) {
                 std::printf(" %d", n);
             std::printf(") precomputed in %.3f s\n", sis.seconds);
         }
+        env_meta = {
+            {"envtrace:environment_rotation_degrees", std::to_string(scene->env.rotation_degrees)},
+            {"envtrace:environment_convention", name_of(scene->env.convention)},
+            {"envtrace:environment_intensity", std::to_string(scene->env.scale)}};
         ds_store.emplace(
             prepare_device_scene(std::move(*scene), st, &light_set.lights, &sis.strata));
         const DeviceScene& ds = *ds_store;
@@ -604,8 +614,8 @@ void run(const RenderArgs& a, Globals& g) {
     s.nonfinite_samples = counts[3];
     s.shaded_hits = counts[4];
     const int spp = static_cast<int>(done);
-    if (cl.root() && !partial && (noise || st.aovs))
-        noise_error = relative_error(sums); // of the image written
+    if (cl.root() && !partial) // of the image written (metadata said "inf" where not asked)
+        noise_error = relative_error(sums);
     cl.check(attempt([&] {
         if (!cl.root())
             return;
@@ -629,6 +639,12 @@ void run(const RenderArgs& a, Globals& g) {
                 {"envtrace:seed", std::to_string(st.seed)},
                 {"envtrace:max_depth", std::to_string(st.max_depth)},
                 {"envtrace:rr_depth", std::to_string(st.rr_depth)},
+                {"envtrace:light_samples", std::to_string(st.light_samples)},
+                {"envtrace:bsdf_samples", std::to_string(st.bsdf_samples)},
+                {"envtrace:light_share", st.strategy != Strategy::adaptive ? std::string("none")
+                                         : st.light_share < 0.0f           ? std::string("auto")
+                                                                 : std::to_string(st.light_share)},
+                {"envtrace:environment", ds.map_name},
                 {"envtrace:render_seconds", std::to_string(render_s)},
                 {"envtrace:backend", renderer.name()},
                 {"envtrace:lights", st.lights},
@@ -636,6 +652,7 @@ void run(const RenderArgs& a, Globals& g) {
                 {"envtrace:ranks", std::to_string(cl.size())},
                 {"Software", "envtrace " ENVTRACE_VERSION},
             };
+            meta.insert(meta.end(), env_meta.begin(), env_meta.end());
             if (sums.has_aovs()) {
                 const FilmLayers layers = film_layers(sums);
                 write_image_channels(*outputs, exr_name, ds.width(), ds.height(), layers.names,

@@ -59,6 +59,29 @@ TEST(DeviceScene, FloatVectorsHoldNoIntBits) {
         EXPECT_NE(std::find(types.begin(), types.end(), static_cast<float>(t)), types.end()) << t;
 }
 
+// A light set comes from the map alone (envtrace lights MAP): the scene's environment turns and
+// scales it as it turns and scales the map. They were used as read, so a turned or brighter
+// environment lit --lights renders from the unturned map's side at intensity 1.
+TEST(DeviceScene, LightSetsTurnAndScaleWithTheEnvironment) {
+    et::Scene s;
+    s.env = et::make_envmap("sky", ett::constant_image(32, 16, 1.0f), {});
+    s.env.rotation_degrees = 90.0f; // what the map shows towards -Z moves towards +X
+    s.env.scale = 2.0f;
+    s.settings.strategy = et::Strategy::lights;
+    et::DirectionalLight l;
+    l.direction = glm::vec3(0.0f, 0.0f, -1.0f);
+    l.power = glm::dvec3(1.0, 2.0, 3.0);
+    const std::vector<et::DirectionalLight> lights = {l};
+    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings, &lights);
+    ASSERT_EQ(ds.lights.size(), 2u);
+    EXPECT_NEAR(ds.lights[0].x, 1.0f, 1e-6f);
+    EXPECT_NEAR(ds.lights[0].y, 0.0f, 1e-6f);
+    EXPECT_NEAR(ds.lights[0].z, 0.0f, 1e-6f);
+    EXPECT_FLOAT_EQ(ds.lights[1].x, 2.0f);
+    EXPECT_FLOAT_EQ(ds.lights[1].y, 4.0f);
+    EXPECT_FLOAT_EQ(ds.lights[1].z, 6.0f);
+}
+
 } // namespace
 
 // The visibility strategy's learning passes follow the film: enough passes to learn from about

@@ -224,6 +224,18 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
     for (const char* key : {"eta", "k"})
         if (m.type != ETK_MAT_CONDUCTOR && j.contains(key))
             r.at(key).fail(std::string("only a conductor material has \"") + key + "\"");
+    // Keys the type has no use for: a "diffuse" given a specular colour or a roughness, a mirror
+    // given a roughness or an albedo, rendered as if they were absent, without a word.
+    for (const char* key : {"specular", "roughness"})
+        if (m.type == ETK_MAT_DIFFUSE && j.contains(key))
+            r.at(key).fail(std::string("a diffuse material has no \"") + key +
+                           "\" (a glossy lobe over a diffuse base is \"plastic\" or "
+                           "\"microfacet\" with an \"albedo\")");
+    for (const char* key : {"albedo", "roughness"})
+        if (m.type == ETK_MAT_MIRROR && j.contains(key))
+            r.at(key).fail(std::string("a mirror has no \"") + key +
+                           "\" (its colour is \"specular\"; a rough mirror is \"conductor\" or "
+                           "\"microfacet\" with a \"roughness\")");
     // Each may be a texture instead of a constant (load/texture.h).
     m.albedo_tex = read_texture_param(j, "albedo", TextureUse::colour, dir, r, textures);
     m.specular_tex = read_texture_param(j, "specular", TextureUse::colour, dir, r, textures);

@@ -199,11 +199,19 @@ void add_materials(const Scene& scene, DeviceScene& d) {
         d.material_names.push_back(m.name);
 }
 
+// A light set is made from the map alone (envtrace lights MAP), in envtrace's convention, unturned
+// and at intensity 1: the scene's environment turns and scales it as it turns and scales the map
+// (rotation, convention, intensity were ignored, so --lights lit a turned scene from the wrong
+// side).
 void add_lights(const std::vector<DirectionalLight>& lights, DeviceScene& d) {
+    const etk::EtkEnvMap& env = d.params.env;
     for (const auto& l : lights) {
-        d.lights.push_back(etk::make_float4(l.direction.x, l.direction.y, l.direction.z, 0.0f));
-        d.lights.push_back(
-            etk::make_float4(float(l.power.x), float(l.power.y), float(l.power.z), 0.0f));
+        const etk::float3 w = etk::etk_env_to_world(
+            env, etk::make_float3(l.direction.x, l.direction.y, l.direction.z));
+        d.lights.push_back(etk::make_float4(w.x, w.y, w.z, 0.0f));
+        d.lights.push_back(etk::make_float4(float(l.power.x * env.scale),
+                                            float(l.power.y * env.scale),
+                                            float(l.power.z * env.scale), 0.0f));
     }
     d.params.light_count = static_cast<int>(lights.size());
 }
