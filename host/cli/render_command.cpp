@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <xxhash.h>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -485,9 +486,7 @@ void run(const RenderArgs& a, Globals& g) {
                                 std::to_string(range.second) + ", spp " + std::to_string(st.spp) +
                                 (a.spp > 0 ? " (--spp)" : "") + limits +
                                 (a.resume ? ", resumed" : "");
-    uint64_t control_key = 1469598103934665603ull;
-    for (unsigned char c : control)
-        control_key = (control_key ^ c) * 1099511628211ull;
+    const uint64_t control_key = XXH3_64bits(control.data(), control.size());
     const uint64_t root_control =
         static_cast<uint64_t>(cl.broadcast(static_cast<int64_t>(control_key)));
     cl.check(root_control == control_key

@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 #include <vector>
+#include <xxhash.h>
 
 namespace fs = std::filesystem;
 
@@ -64,13 +65,11 @@ std::string temporary_prefix(const fs::path& p) {
     std::string stem = p.stem().string();
     const size_t room = 255 - std::min<size_t>(255, 1 + 4 + 10 + p.extension().string().size());
     if (stem.size() > room) {
-        // Cut names end with 8 hex digits of the whole name's hash (FNV-1a): two targets that
-        // differ only past the cut had one temporary, and one output's bytes went to the other.
-        uint32_t h = 2166136261u;
-        for (unsigned char c : stem)
-            h = (h ^ c) * 16777619u;
+        // Cut names end with 8 hex digits of the whole name's hash: two targets that differ
+        // only past the cut had one temporary, and one output's bytes went to the other.
         char tag[10];
-        std::snprintf(tag, sizeof tag, "~%08x", h);
+        std::snprintf(tag, sizeof tag, "~%08x",
+                      static_cast<unsigned>(XXH3_64bits(stem.data(), stem.size())));
         size_t cut = room > 9 ? room - 9 : 0;
         while (cut > 0 && (static_cast<unsigned char>(stem[cut]) & 0xC0) == 0x80)
             --cut;
