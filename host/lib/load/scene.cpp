@@ -405,13 +405,7 @@ Scene load_scene(const std::string& path) {
                 TriangleSoup sphere;
                 const size_t dropped =
                     add_sphere(sphere, c, radius, segments, mat < 0 ? default_material() : mat);
-                // Triangles collapse where float cannot tell their corners apart: all of them
-                // for a radius below float's resolution at the centre.
-                if (sphere.size() == 0)
-                    rs.at("radius").fail(
-                        "the sphere is too small to be resolved in float at its centre (every "
-                        "triangle collapses); scale the scene or move it towards the origin");
-                if (dropped)
+                if (dropped) // corners float cannot tell apart
                     warn(rs.where() + ": " + std::to_string(dropped) + " of " +
                          std::to_string(sphere.size() + dropped) +
                          " triangles collapse in float (radius too small for its centre) and "
@@ -453,7 +447,6 @@ Scene load_scene(const std::string& path) {
                 for (auto& v : q)
                     v = glm::vec3(m * glm::vec4(c + v, 1.0f));
                 glm::vec3 a[3] = {q[0], q[2], q[1]}, b[3] = {q[0], q[3], q[2]};
-
                 // Texture coordinates: u along +x, v along -z (the image upright seen from above
                 // with -z up), [0, 1] over the quad.
                 const glm::vec2 t[4] = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
