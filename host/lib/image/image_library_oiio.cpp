@@ -278,7 +278,7 @@ void check_pnm_maxval(const std::string& path) {
     char head[512] = {};
     const size_t n = std::fread(head, 1, sizeof head - 1, f);
     std::fclose(f);
-    if (n < 2 || head[0] != 'P' || !std::strchr("2356", head[1]))
+    if (n < 2 || head[0] != 'P' || head[1] == '\0' || !std::strchr("2356", head[1]))
         return;
     // Three numbers after the magic (width, height, maxval), '#' comments to the line's end.
     long values[3] = {};
