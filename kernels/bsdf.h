@@ -150,17 +150,31 @@ ETK_FN float etk_base_share(EtkMaterial m) {
     return m.type == ETK_MAT_CONDUCTOR ? 0.0f : 1.0f - etk_max3(m.specular);
 }
 
-// The GGX lobe's directional albedo with Schlick's Fresnel of reflectance f0 (at least F0 of
-// every channel), from the tabulated E = f0 A + B (base_albedo_table.h; bilinear in the square
-// roots of the cosine and of alpha).
-ETK_FN float etk_lobe_albedo(float cos_o, float alpha, float f0) {
-    float x = sqrt(clamp(cos_o, 0.0f, 1.0f)) * (float)(ETK_BASE_TABLE_MU - 1);
+// A row of the lobe's albedo table (base_albedo_table.h): alpha's node j and the fraction fy
+// towards the next, found once per evaluation and shared by its three lookups.
+typedef struct {
+    int j;
+    float fy;
+} EtkLobeRow;
+
+ETK_FN EtkLobeRow etk_lobe_row(float alpha) {
     float y = sqrt(clamp(alpha, 0.0f, 1.0f)) * (float)(ETK_BASE_TABLE_ALPHA - 1);
-    int i = (int)x, j = (int)y;
+    EtkLobeRow r;
+    r.j = (int)y;
+    r.j = r.j > ETK_BASE_TABLE_ALPHA - 2 ? ETK_BASE_TABLE_ALPHA - 2 : r.j;
+    r.fy = y - (float)r.j;
+    return r;
+}
+
+// The GGX lobe's directional albedo with Schlick's Fresnel of reflectance f0 (at least F0 of
+// every channel), from the tabulated E = f0 A + B (bilinear in the square roots of the cosine
+// and of alpha).
+ETK_FN float etk_lobe_albedo(float cos_o, EtkLobeRow r, float f0) {
+    float x = sqrt(clamp(cos_o, 0.0f, 1.0f)) * (float)(ETK_BASE_TABLE_MU - 1);
+    int i = (int)x;
     i = i > ETK_BASE_TABLE_MU - 2 ? ETK_BASE_TABLE_MU - 2 : i;
-    j = j > ETK_BASE_TABLE_ALPHA - 2 ? ETK_BASE_TABLE_ALPHA - 2 : j;
-    float fx = x - (float)i, fy = y - (float)j;
-    int k = j * ETK_BASE_TABLE_MU + i;
+    float fx = x - (float)i, fy = r.fy;
+    int k = r.j * ETK_BASE_TABLE_MU + i;
     float a0 = etk_base_table_a[k] + (etk_base_table_a[k + 1] - etk_base_table_a[k]) * fx;
     float b0 = etk_base_table_b[k] + (etk_base_table_b[k + 1] - etk_base_table_b[k]) * fx;
     k += ETK_BASE_TABLE_MU;
@@ -170,15 +184,12 @@ ETK_FN float etk_lobe_albedo(float cos_o, float alpha, float f0) {
 }
 
 // Its cosine-weighted mean over the hemisphere, 2 int E(mu) mu dmu.
-ETK_FN float etk_lobe_mean_albedo(float alpha, float f0) {
-    float y = sqrt(clamp(alpha, 0.0f, 1.0f)) * (float)(ETK_BASE_TABLE_ALPHA - 1);
-    int j = (int)y;
-    j = j > ETK_BASE_TABLE_ALPHA - 2 ? ETK_BASE_TABLE_ALPHA - 2 : j;
-    float fy = y - (float)j;
+ETK_FN float etk_lobe_mean_albedo(EtkLobeRow r, float f0) {
+    int j = r.j;
     float a =
-        etk_base_table_avg_a[j] + (etk_base_table_avg_a[j + 1] - etk_base_table_avg_a[j]) * fy;
+        etk_base_table_avg_a[j] + (etk_base_table_avg_a[j + 1] - etk_base_table_avg_a[j]) * r.fy;
     float b =
-        etk_base_table_avg_b[j] + (etk_base_table_avg_b[j + 1] - etk_base_table_avg_b[j]) * fy;
+        etk_base_table_avg_b[j] + (etk_base_table_avg_b[j + 1] - etk_base_table_avg_b[j]) * r.fy;
     return f0 * a + b;
 }
 
@@ -191,10 +202,11 @@ ETK_FN float etk_lobe_mean_albedo(float alpha, float f0) {
 // Fresnel is taken at the largest F0 of the three channels: no channel gains energy.
 ETK_FN float etk_base_coupling(EtkMaterial m, float cos_i, float cos_o) {
     float f0 = etk_max3(m.specular);
-    float rest = 1.0f - etk_lobe_mean_albedo(m.alpha, f0);
+    EtkLobeRow row = etk_lobe_row(m.alpha);
+    float rest = 1.0f - etk_lobe_mean_albedo(row, f0);
     if (!(rest > 1e-4f))
         return 0.0f; // the lobe reflects (nearly) everything: no base
-    float ei = etk_lobe_albedo(cos_i, m.alpha, f0), eo = etk_lobe_albedo(cos_o, m.alpha, f0);
+    float ei = etk_lobe_albedo(cos_i, row, f0), eo = etk_lobe_albedo(cos_o, row, f0);
     return fmax(0.0f, 1.0f - ei) * fmax(0.0f, 1.0f - eo) / rest;
 }
 
