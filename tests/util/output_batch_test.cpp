@@ -201,13 +201,17 @@ TEST(OutputBatch, StaleTemporariesOfDeadProcessesAreRemoved) {
     const std::string other = et::temporary_path(dir + "/other.exr", child);
     EXPECT_EQ(dead, dir + "/.out.tmp" + std::to_string(child) + ".exr");
     put(dead, "half");
+    put(dead + ".previous", "an old output a killed commit kept aside");
+    put(live + ".previous", "kept aside by a commit in progress");
     put(live, "in progress elsewhere");
     put(other, "not ours");
     put(dir + "/.out.tmpabc.exr", "not a pid");
     {
         et::OutputBatch batch({dir + "/out.exr"});
         EXPECT_FALSE(fs::exists(dead));
+        EXPECT_FALSE(fs::exists(dead + ".previous"));
         EXPECT_TRUE(fs::exists(live));
+        EXPECT_TRUE(fs::exists(live + ".previous"));
         EXPECT_TRUE(fs::exists(other));
         EXPECT_TRUE(fs::exists(dir + "/.out.tmpabc.exr"));
     }

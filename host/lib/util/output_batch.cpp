@@ -126,6 +126,9 @@ class FolderLocks {
 
 } // namespace
 
+// What an old output kept aside during a commit is named: its target's temporary + this.
+const std::string kAside = ".previous";
+
 std::string temporary_path(const std::string& target, long pid) {
     const fs::path p(target);
     return (fs::path(folder_of(target)) /
@@ -140,7 +143,12 @@ int remove_stale_temporaries(const std::string& target) {
     fs::directory_iterator it(folder_of(target), ec), end;
     int removed = 0;
     for (; !ec && it != end; it.increment(ec)) {
-        const std::string name = it->path().filename().string();
+        std::string name = it->path().filename().string();
+        // A commit killed between keeping an old output aside and dropping it leaves the aside
+        // link (temporary + ".previous"): the dead process's too.
+        if (name.size() > kAside.size() &&
+            !name.compare(name.size() - kAside.size(), kAside.size(), kAside))
+            name.resize(name.size() - kAside.size());
         if (name.size() <= prefix.size() + suffix.size() ||
             name.compare(0, prefix.size(), prefix) ||
             name.compare(name.size() - suffix.size(), suffix.size(), suffix))
@@ -235,7 +243,7 @@ void OutputBatch::commit() {
         existed[i] = fs::exists(fs::symlink_status(entries_[i].target, ec));
         if (!existed[i])
             continue;
-        const std::string aside = entries_[i].temporary + ".previous";
+        const std::string aside = entries_[i].temporary + kAside;
         fs::remove(aside, ec);
         fs::create_hard_link(entries_[i].target, aside, ec);
         if (!ec)
