@@ -527,14 +527,23 @@ void run(const RenderArgs& a, Globals& g) {
         cl.size() > 1 ? (", " + std::to_string(cl.size()) + " MPI ranks").c_str() : "");
     std::fflush(stdout);
 
-    // From here on a first SIGINT/SIGTERM keeps the samples: the round in flight ends, the
-    // outputs are written, and the status tells the signal. At least one round is always
-    // rendered (a --time-limit shorter than a pass still gives one).
+    // From here on a first SIGINT/SIGTERM keeps the samples: the round in flight is abandoned
+    // between two bounces (a pass of a deep scene can take minutes), the outputs are written
+    // with the rounds before it, and the status tells the signal. The --time-limit stops a
+    // round the same way. The first round is always finished (a signal or a --time-limit
+    // shorter than a pass still gives an image of one sample).
     InterruptHandler interrupts;
     Progress progress(static_cast<int>(end - first), st.time_limit);
     Timer render, since_checkpoint;
     std::string render_error;
     int sig = 0;
+    bool stopped = false; // a round was abandoned (on some rank): stop, keeping none of it
+    renderer.set_stop([&] {
+        return done > 0 && (InterruptHandler::signal() != 0 ||
+                            (st.time_limit > 0 && render.seconds() >= st.time_limit));
+    });
+    // MPI ranks keep a round only where no rank abandoned its part (a film of rounds whole).
+    renderer.set_hold(cl.size() > 1);
     // The noise target is checked on the summed film (every rank's, reduced to rank 0) at spp
     // counts every rank knows (kNoiseFirstCheck, then where the error is predicted to meet the
     // target, at most doubling), so that the few reductions cost little.
@@ -544,7 +553,7 @@ void run(const RenderArgs& a, Globals& g) {
     if (noise && a.spp <= 0)
         progress.set_total(static_cast<int>(std::min(end, next_check)));
     for (;;) {
-        if (noise && !noise_reached && done >= next_check && first + done < end) {
+        if (noise && !noise_reached && !stopped && done >= next_check && first + done < end) {
             const FilmSums all = cl.reduce(renderer.sums());
             int64_t next = next_check, reached = 0;
             if (cl.root()) {
@@ -566,7 +575,7 @@ void run(const RenderArgs& a, Globals& g) {
         // What the ranks agree on before each round: stop (a signal on any rank, the time limit
         // by rank 0's clock, or the range done), save a checkpoint (rank 0's clock), a failure.
         int64_t f[4] = {0, 0, render_error.empty() ? 0 : 1, InterruptHandler::signal()};
-        if (f[3] != 0 || (done > 0 && first + done >= end) || noise_reached ||
+        if (f[3] != 0 || stopped || (done > 0 && first + done >= end) || noise_reached ||
             (cl.root() && done > 0 && st.time_limit > 0 && render.seconds() >= st.time_limit))
             f[0] = 1;
         if (cl.root() && a.checkpoint >= 0 && done > resumed_from &&
@@ -588,13 +597,34 @@ void run(const RenderArgs& a, Globals& g) {
         if (f[0])
             break;
         const int64_t index = first + done + cl.rank();
+        bool whole = true;
         if (index < end)
-            render_error = attempt([&] { renderer.render_sample(static_cast<uint32_t>(index)); });
+            render_error =
+                attempt([&] { whole = renderer.render_sample(static_cast<uint32_t>(index)); });
+        if (cl.size() > 1) {
+            int64_t g[2] = {whole ? 0 : 1, renderer.abandoned() ? 1 : 0};
+            cl.max_all(g, 2);
+            whole = g[0] == 0;
+            stopped = g[1] != 0;
+            if (whole)
+                renderer.keep_held();
+            else
+                renderer.drop_held();
+        } else {
+            stopped = renderer.abandoned();
+        }
+        if (!whole)
+            continue; // the next agreement stops, with the rounds before this one
         done += std::min<int64_t>(cl.size(), end - (first + done));
         if (cl.root())
             progress.update(static_cast<int>(done), render.seconds());
     }
     progress.finish();
+    if (stopped && !sig && cl.root())
+        std::fprintf(stderr,
+                     "envtrace: time limit of %g s reached inside a pass: that pass is dropped, "
+                     "the image holds the %d spp before it\n",
+                     st.time_limit, static_cast<int>(done));
     if (sig && cl.root())
         std::fprintf(stderr,
                      "envtrace: %s: stopped at %d spp; writing the %s (a second "
@@ -668,6 +698,8 @@ void run(const RenderArgs& a, Globals& g) {
                                           static_cast<int>(resumed_from), sig, render_s, cl.size(),
                                           static_cast<int>(first), renderer);
             j["aovs"] = st.aovs;
+            // A pass abandoned at a signal or the time limit: its time and rays are counted.
+            j["stopped_inside_a_pass"] = stopped;
             if (noise)
                 j["noise_target"] = {{"target", a.noise_target},
                                      {"reached", noise_reached},
@@ -684,11 +716,12 @@ void run(const RenderArgs& a, Globals& g) {
     const double mrays = s.rays() / render_s * 1e-6;
     std::printf(
         "rendered %d spp in %.2f s: %.2f Mrays/s (%llu camera, %llu continuation, %llu shadow), "
-        "%.3g samples/s, %.4f s/spp\n",
+        "%.3g samples/s, %.4f s/spp%s\n",
         static_cast<int>(rendered), render_s, mrays, (unsigned long long)s.camera_rays,
         (unsigned long long)s.continuation_rays, (unsigned long long)s.shadow_rays,
         double(rendered) * ds.width() * ds.height() / render_s,
-        render_s / std::max<int64_t>(1, rendered));
+        render_s / std::max<int64_t>(1, rendered),
+        stopped ? " (the time and rays include the pass abandoned at the stop)" : "");
     if (s.nonfinite_samples > 0 && cl.root())
         warn(a.scene + ": " + std::to_string(s.nonfinite_samples) +
              " samples were not finite and counted as zero (a renderer bug: please "

@@ -1,9 +1,11 @@
 // `envtrace render` under interruption and resumption, from the command line: SIGINT / SIGTERM
-// keep the samples so far (exit 130 / 143, metadata saying so); a render killed with SIGKILL and
+// keep the samples so far (exit 130 / 143, metadata saying so), and they and the time limit
+// abandon a pass in flight; a render killed with SIGKILL and
 // resumed from its state equals the uninterrupted render bit for bit; a state of another render
 // is refused; a time limit shorter than a pass still renders a sample; no output replaces an
 // input of the run.
 #include "cli_run.h"
+#include "deep_scene.h"
 #include "image/image_io.h"
 #include "render/render_state.h"
 #include "util/output_batch.h"
@@ -237,6 +239,55 @@ TEST(RenderCommand, TinyTimeLimitStillRendersASample) {
     for (float v : img.rgb)
         sum += v;
     EXPECT_GT(sum, 0.0);
+}
+
+// A signal inside a pass that takes seconds (1000 mirror bounces a path) stops at the pass's next
+// bounce: the image holds the passes before it (the pass in flight would have made 2 spp).
+TEST(RenderCommand, SignalAbandonsThePassInFlight) {
+    const std::string dir = ett::scratch_dir("render_signal_mid_pass");
+    const std::string scene = ett::write_deep_scene(dir, 64);
+    const ett::CliProcess p = ett::start_envtrace(
+        args(scene, dir + "/out.exr",
+             {"--spp", "1000", "--checkpoint", "0", "--stats", dir + "/stats.json"}),
+        dir);
+    ASSERT_TRUE(wait_for(dir + "/out.envtrace-state")); // the first pass is whole
+    kill(p.pid, SIGINT);
+    const ett::CliRun r = ett::finish_envtrace(p, 120);
+    expect_exit(r, 130);
+    EXPECT_EQ(metadata(dir + "/out.exr", "spp"), "1") << r.err;
+    EXPECT_EQ(metadata(dir + "/out.exr", "interrupted"), "SIGINT");
+    EXPECT_EQ(et::read_render_state(dir + "/out.envtrace-state").spp, 1);
+    EXPECT_NE(read_file(dir + "/stats.json").find("\"stopped_inside_a_pass\": true"),
+              std::string::npos);
+    EXPECT_TRUE(temporaries_in(dir).empty()) << temporaries_in(dir)[0];
+}
+
+// --time-limit stops inside a pass too, dropping it: with a limit of 1.5 passes the image holds
+// one (finishing the second pass would have made 2 spp, past the limit by half a pass).
+TEST(RenderCommand, TimeLimitAbandonsThePassInFlight) {
+    const std::string dir = ett::scratch_dir("render_time_limit_mid_pass");
+    const std::string scene = ett::write_deep_scene(dir, 64);
+    const std::string stats = dir + "/stats.json";
+    expect_exit(ett::run_envtrace(args(scene, dir + "/one.exr", {"--spp", "1", "--stats", stats}),
+                                  dir, 120),
+                0);
+    const std::string text = read_file(stats);
+    const size_t at = text.find("\"render_seconds\": ");
+    ASSERT_NE(at, std::string::npos) << text;
+    const double pass = std::stod(text.substr(at + 18));
+    const ett::CliRun r =
+        ett::run_envtrace(args(scene, dir + "/out.exr",
+                               {"--time-limit", std::to_string(1.5 * pass), "--stats", stats}),
+                          dir, 120);
+    expect_exit(r, 0);
+    EXPECT_EQ(metadata(dir + "/out.exr", "spp"), "1") << r.err;
+    EXPECT_NE(r.err.find("reached inside a pass"), std::string::npos) << r.err;
+    EXPECT_NE(read_file(stats).find("\"stopped_inside_a_pass\": true"), std::string::npos);
+    // The one pass kept is the whole first sample: the same pixels as the 1 spp render.
+    const et::RgbImage a = et::read_rgb_image(dir + "/one.exr");
+    const et::RgbImage b = et::read_rgb_image(dir + "/out.exr");
+    ASSERT_EQ(a.rgb.size(), b.rgb.size());
+    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0);
 }
 
 // The roulette's depth: the scene's unless --rr-depth gives one (0 included), in the image's

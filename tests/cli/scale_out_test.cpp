@@ -6,6 +6,7 @@
 // of another render, overlapping parts and gaps. mpirun runs on loopback only
 // (--oversubscribe, TCP over lo); the MPI tests skip when envtrace was built without MPI.
 #include "cli_run.h"
+#include "deep_scene.h"
 #include "image/image_io.h"
 #include "render/render_state.h"
 #include "test_data.h"
@@ -210,6 +211,31 @@ TEST(MpiRender, TimeLimitCheckpointAndResume) {
     EXPECT_NE(r.code, 0);
     EXPECT_NE(r.err.find("rank 0 of 2"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("samples cannot be taken away"), std::string::npos) << r.err;
+}
+
+// The time limit inside a round (a pass of seconds, 1000 mirror bounces a path): every rank
+// drops the round, the image holds the whole rounds before it -- here the first, the one round
+// a render always finishes -- the same pixels as that round rendered alone.
+TEST(MpiRender, TimeLimitInsideARoundDropsTheRoundOnEveryRank) {
+    REQUIRE_MPI();
+    const std::string dir = ett::scratch_dir("mpi_time_limit_mid_pass");
+    const std::string scene = ett::write_deep_scene(dir, 32);
+    const std::string stats = dir + "/stats.json";
+    MpiRun r = mpirun(
+        dir, {app(2, render_args(scene, dir + "/one.exr", {"--spp", "2", "--stats", stats}))});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string text = read_file(stats);
+    const size_t at = text.find("\"render_seconds\": ");
+    ASSERT_NE(at, std::string::npos) << text;
+    const double round = std::stod(text.substr(at + 18));
+    r = mpirun(dir, {app(2, render_args(scene, dir + "/out.exr",
+                                        {"--time-limit", std::to_string(1.5 * round), "--stats",
+                                         stats, "--checkpoint", "0"}))});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(metadata(dir + "/out.exr", "spp"), "2") << r.err;
+    EXPECT_NE(r.err.find("reached inside a pass"), std::string::npos) << r.err;
+    EXPECT_EQ(et::read_render_state(dir + "/out.envtrace-state").spp, 2);
+    expect_same_pixels(dir + "/one.exr", dir + "/out.exr");
 }
 
 // Bad input on one rank, or another scene there: the job ends, the message names the rank and

@@ -143,10 +143,14 @@ void Renderer::give_verdict() {
         p.sample_index = kVerdictMisBase + static_cast<uint32_t>(k);
         set_guide_pass(p, p.sample_index);
         device_->clear_film(sums_.has_aovs());
-        const RayCounts c = run_pass(*device_, p, nullptr, nullptr);
+        const RayCounts c = run_pass(*device_, p, nullptr, nullptr, stop_);
+        count(c);
+        if (c.abandoned) {
+            abandoned_ = true;
+            return;
+        }
         device_->download_film(film_, sums_.has_aovs());
         verdict_->add(0, k, &film_.film_sum[0].x);
-        count(c);
     }
     guide_dropped_ = !verdict_->tables_win();
     stats_.guide_verdict = guide_dropped_ ? 0 : 1;
@@ -163,22 +167,38 @@ void Renderer::count(const RayCounts& c) {
     stats_.shaded_hits += c.shaded;
 }
 
-void Renderer::render_sample(uint32_t sample_index) {
+bool Renderer::render_sample(uint32_t sample_index) {
+    if (abandoned_)
+        throw Error("render_sample after an abandoned pass (a bug)");
+    if (held_)
+        throw Error("render_sample with a held sample neither kept nor dropped (a bug)");
     Timer timer;
     // Learning needs samples 0 .. L-1 in order; rendered first, and kept only by the process
     // whose first sample is 0.
     // (learning_pass_count() shrinks when the visibility strategy's verdict ends its learning.)
     while (next_learning_pass_ < learning_pass_count() &&
            sample_index != static_cast<uint32_t>(next_learning_pass_)) {
-        run(static_cast<uint32_t>(next_learning_pass_), true, false);
+        if (!run(static_cast<uint32_t>(next_learning_pass_), true, false)) {
+            stats_.seconds += timer.seconds();
+            return false;
+        }
         ++stats_.learning_passes;
     }
-    run(sample_index, next_learning_pass_ < learning_pass_count(), true);
-    stats_.samples_per_pixel += 1;
+    // (A stop during the visibility verdict's passes after it leaves this sample whole.)
+    const bool whole = run(sample_index, next_learning_pass_ < learning_pass_count(), true);
+    if (whole)
+        stats_.samples_per_pixel += 1;
     stats_.seconds += timer.seconds();
+    return whole;
 }
 
-void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
+void Renderer::keep_held() {
+    if (held_)
+        sums_.add_pass(held_film_, scene_.settings.threads);
+    held_ = false;
+}
+
+bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     etk::EtkParams p = scene_.params;
     p.sample_index = sample_index;
     p.light_batch = light_batch_ ? 1 : 0;
@@ -203,11 +223,20 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     // The pass renders into a zeroed film, whose one sample per pixel is then added exactly to
     // the sums.
     device_->clear_film(sums_.has_aovs());
-    const RayCounts c = run_pass(*device_, p, learner, p.guide_learn ? cache_.get() : nullptr);
+    const RayCounts c =
+        run_pass(*device_, p, learner, p.guide_learn ? cache_.get() : nullptr, stop_);
     stats_.guide_record_seconds += c.guide_record_seconds;
     stats_.guide_record_threads = std::max(stats_.guide_record_threads, c.guide_record_threads);
+    if (c.abandoned) { // an incomplete film: neither kept nor learnt from
+        abandoned_ = true;
+        count(c);
+        return false;
+    }
     device_->download_film(film_, sums_.has_aovs());
-    if (keep)
+    if (keep && hold_) { // a copy: the verdict's passes below render into film_
+        held_film_ = film_;
+        held_ = true;
+    } else if (keep)
         sums_.add_pass(film_, scene_.settings.threads); // the render's cores, idle now
     if (learn && guide_ && p.guide_learn) {
         // The tables for the passes that follow: rebuilt after passes 1, 2, 4, ... L.
@@ -254,6 +283,7 @@ void Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     if (learn)
         ++next_learning_pass_;
     count(c);
+    return true;
 }
 
 void Renderer::resume(const FilmSums& sums) {

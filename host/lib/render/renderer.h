@@ -61,7 +61,20 @@ class Renderer {
     // Adds one sample to every pixel (index `sample_index` of each pixel's sequence). The
     // adaptive strategy learns from samples 0 .. L-1; a render that starts past them (a resume,
     // a sample range, an MPI rank) first renders them to learn, without adding them to its sums.
-    void render_sample(uint32_t sample_index);
+    // Returns false where the stop request (set_stop) abandoned it: nothing was added, and the
+    // renderer renders no more (its learning may be half done); its sums stay whole.
+    bool render_sample(uint32_t sample_index);
+    // Asked between waves and bounces of every pass from now on (schedule.h).
+    void set_stop(StopRequest stop) { stop_ = std::move(stop); }
+    // Whether a stop request abandoned a pass (a whole sample may still have been added: the
+    // visibility verdict's measuring passes come after it); render_sample may not be called again.
+    bool abandoned() const { return abandoned_; }
+    // With hold, render_sample keeps its sample aside until keep_held() adds it to the sums or
+    // drop_held() discards it (MPI ranks keep a round only if no rank abandoned theirs); the
+    // next render_sample needs one of the two first.
+    void set_hold(bool hold) { hold_ = hold; }
+    void keep_held();
+    void drop_held() { held_ = false; }
     // Adaptive strategy: light share and ETK_BIN_* flags per material bin for the passes to come,
     // and the learned candidate per bin (-1 before or without learning).
     const std::array<float, ETK_SHARE_BINS>& light_shares() const { return shares_; }
@@ -80,8 +93,9 @@ class Renderer {
     std::string name() const { return device_->name(); }
 
   private:
-    // One pass into the zeroed film; learning pass if `learn`; added to the sums if `keep`.
-    void run(uint32_t sample_index, bool learn, bool keep);
+    // One pass into the zeroed film; learning pass if `learn`; added to the sums (or held) if
+    // `keep`. False where the stop request abandoned it.
+    bool run(uint32_t sample_index, bool learn, bool keep);
     const DeviceScene& scene_;
     Film film_; // one pass; declared before device_: the native back end writes into it
     FilmSums sums_;
@@ -90,6 +104,10 @@ class Renderer {
     std::array<float, ETK_SHARE_BINS> shares_;
     std::array<int, ETK_SHARE_BINS> flags_, choices_;
     bool light_batch_ = false;
+    StopRequest stop_;
+    bool hold_ = false, held_ = false; // set_hold; a sample waits in held_film_
+    Film held_film_;
+    bool abandoned_ = false;     // a stop request ended a pass: no more rendering
     bool learning_ = false;      // adaptive strategy, configuration learned (not fixed)
     int next_learning_pass_ = 0; // the learning pass that comes next (L: learned)
     LightShareOptions options_;

@@ -147,11 +147,13 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
     nonfinite += o.nonfinite;
     guide_record_seconds += o.guide_record_seconds;
     guide_record_threads = std::max(guide_record_threads, o.guide_record_threads);
+    abandoned = abandoned || o.abandoned;
     return *this;
 }
 
-void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
-              LightShareLearner* learner, VisibilityCache* guide, int host_threads) {
+bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
+              LightShareLearner* learner, VisibilityCache* guide, int host_threads,
+              const StopRequest& stop) {
     p.first_pixel = first;
     std::vector<int> keys;
     std::vector<float> values;
@@ -210,6 +212,8 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
         }
         rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
         swapped = !swapped;
+        if (rays > 0 && stop && stop())
+            return false; // the path state is left as it is: the next wave starts afresh
     }
     if (recorder) {
         const Timer t;
@@ -222,26 +226,36 @@ void run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     if (learner && p.learn) {
         ex.read_learning(n, learner->bins_of_pass() + first);
     }
+    return true;
 }
 
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
-                   LightShareLearner* learner, VisibilityCache* guide) {
+                   LightShareLearner* learner, VisibilityCache* guide, const StopRequest& stop) {
     const int pixels = params.width * params.height, wave = device.wave_size();
     std::atomic<int> next{0};
+    std::atomic<bool> abandoned{false};
     std::vector<RayCounts> counts(device.lanes());
     device.run_lanes([&](int k) {
         for (;;) {
             const int first = next.fetch_add(wave);
             if (first >= pixels)
+                break; // (the pass may be whole: no stop asked for once every wave is out)
+            if (abandoned.load() || (stop && stop())) {
+                abandoned = true;
                 break;
-            run_wave(device.lane(k), params, first, std::min(wave, pixels - first), counts[k],
-                     learner, guide, device.host_threads());
+            }
+            if (!run_wave(device.lane(k), params, first, std::min(wave, pixels - first), counts[k],
+                          learner, guide, device.host_threads(), stop)) {
+                abandoned = true;
+                break;
+            }
         }
     });
     device.finish();
     RayCounts total;
     for (const RayCounts& c : counts)
         total += c;
+    total.abandoned = abandoned.load();
     return total;
 }
 

@@ -46,6 +46,7 @@ struct RayCounts {
     // them to its sums (summed over the lanes), the learning passes' host share.
     double guide_record_seconds = 0.0;
     int guide_record_threads = 0; // the most host threads one bounce's records were sliced over
+    bool abandoned = false;       // a stop request ended the pass early: its film is incomplete
     RayCounts& operator+=(const RayCounts& o);
 };
 
@@ -82,19 +83,27 @@ class WavefrontDevice {
     virtual int host_threads() const { return 1; }
 };
 
+// Asked between waves and between bounces (from any lane's thread): true abandons the pass in
+// flight, whose film is then incomplete and must not be kept. A pass of a deep scene can take
+// minutes; a signal or a time limit should not wait for it. Empty: never asked.
+using StopRequest = std::function<bool()>;
+
 // One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
 // the film. Adds the rays traced to `counts`.
 // With params.learn, hands the first-hit bins of the wave's pixels to `learner`; with
 // params.guide_learn, every bounce's shadow-ray records to `guide`.
 // host_threads: how many threads add the guide's records (the tables are the same bits with
 // any number: integer sums).
-void run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
+// Returns false where `stop` ended the wave before its film was written.
+bool run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
               LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr,
-              int host_threads = 1);
+              int host_threads = 1, const StopRequest& stop = {});
 
 // One pass: sample params.sample_index of every pixel, in waves of the device's size handed
-// to its lanes as they free up (learner: as run_wave).
+// to its lanes as they free up (learner: as run_wave). `stop` may abandon it (the result's
+// `abandoned`); the waiting lanes then take no more waves.
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
-                   LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr);
+                   LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr,
+                   const StopRequest& stop = {});
 
 } // namespace et

@@ -1,5 +1,6 @@
-// SIGINT and SIGTERM while a render runs. The first asks it to stop: the render finishes the
-// pass in flight and writes what it has. A second one (of either) ends the process at once with
+// SIGINT and SIGTERM while a render runs. The first asks it to stop: the render abandons the
+// pass in flight at its next bounce (but for the first, finished so that there is an image) and
+// writes the whole passes it has. A second one (of either) ends the process at once with
 // status 128 + signal, writing nothing more; outputs are written all-or-nothing
 // (util/output_batch.h), so none is ever left half-written.
 #pragma once
