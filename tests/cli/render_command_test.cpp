@@ -262,13 +262,14 @@ TEST(RenderCommand, SignalAbandonsThePassInFlight) {
     EXPECT_TRUE(temporaries_in(dir).empty()) << temporaries_in(dir)[0];
 }
 
-// --time-limit stops inside a pass too, dropping it: with a limit of 1.5 passes the image holds
-// one (finishing the second pass would have made 2 spp, past the limit by half a pass).
+// --time-limit stops inside a pass too, dropping it: with a limit of 2.5 passes (measured
+// first; the margin is for a loaded machine) the deadline falls inside one, which is dropped;
+// the image is the whole passes before it, the same pixels as a render of that many samples.
 TEST(RenderCommand, TimeLimitAbandonsThePassInFlight) {
     const std::string dir = ett::scratch_dir("render_time_limit_mid_pass");
     const std::string scene = ett::write_deep_scene(dir, 64);
     const std::string stats = dir + "/stats.json";
-    expect_exit(ett::run_envtrace(args(scene, dir + "/one.exr", {"--spp", "1", "--stats", stats}),
+    expect_exit(ett::run_envtrace(args(scene, dir + "/ref.exr", {"--spp", "1", "--stats", stats}),
                                   dir, 120),
                 0);
     const std::string text = read_file(stats);
@@ -277,14 +278,16 @@ TEST(RenderCommand, TimeLimitAbandonsThePassInFlight) {
     const double pass = std::stod(text.substr(at + 18));
     const ett::CliRun r =
         ett::run_envtrace(args(scene, dir + "/out.exr",
-                               {"--time-limit", std::to_string(1.5 * pass), "--stats", stats}),
+                               {"--time-limit", std::to_string(2.5 * pass), "--stats", stats}),
                           dir, 120);
     expect_exit(r, 0);
-    EXPECT_EQ(metadata(dir + "/out.exr", "spp"), "1") << r.err;
     EXPECT_NE(r.err.find("reached inside a pass"), std::string::npos) << r.err;
     EXPECT_NE(read_file(stats).find("\"stopped_inside_a_pass\": true"), std::string::npos);
-    // The one pass kept is the whole first sample: the same pixels as the 1 spp render.
-    const et::RgbImage a = et::read_rgb_image(dir + "/one.exr");
+    const std::string spp = metadata(dir + "/out.exr", "spp");
+    ASSERT_GE(std::stoi("0" + spp), 1);
+    if (spp != "1")
+        expect_exit(ett::run_envtrace(args(scene, dir + "/ref.exr", {"--spp", spp}), dir, 120), 0);
+    const et::RgbImage a = et::read_rgb_image(dir + "/ref.exr");
     const et::RgbImage b = et::read_rgb_image(dir + "/out.exr");
     ASSERT_EQ(a.rgb.size(), b.rgb.size());
     EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0);
