@@ -53,6 +53,16 @@ void run(const CompareArgs& args) {
     if (!args.json.empty())
         batch.emplace(std::vector<std::string>{args.json});
     const ImageErrors e = compare_images(a, b, mask);
+    // l2 divides by the reference's norm: against a black reference it is infinite, which the
+    // JSON could only write as null. Refused, like the other comparisons without a meaning.
+    if (!std::isfinite(e.l2)) {
+        char rmse[32];
+        std::snprintf(rmse, sizeof rmse, "%.6g", e.rmse);
+        throw Error(args.b + ": the reference is black" +
+                    (args.mask.empty() ? std::string() : " where " + args.mask + " selects") +
+                    ": the relative error l2 is undefined (rmse " + rmse +
+                    "); compare against a reference with light in it");
+    }
     std::printf("pixels %zu\nrmse %.6g\nrel_mse %.6g\nl2 %.6g\nmean %.6g (reference %.6g)\n",
                 e.pixels, e.rmse, e.rel_mse, e.l2, e.mean_a, e.mean_b);
     if (!args.json.empty()) {

@@ -2,6 +2,7 @@
 #include "cluster.h"
 #include "commands.h"
 #include "util/error.h"
+#include "util/signal_cleanup.h"
 #include "opencl/opencl_runtime.h"
 
 #include <csignal>
@@ -13,6 +14,9 @@ int main(int argc, char** argv) {
     std::signal(SIGPIPE, SIG_IGN);
     // Under mpirun: MPI starts here and ends when main returns (the ranks of `render`).
     et::cli::Cluster cluster(&argc, &argv);
+    // A signal that ends envtrace (convert, lights, merge ... or a render's second) removes the
+    // temporaries of the outputs it was writing.
+    et::install_signal_cleanup();
     CLI::App app{"envtrace " ENVTRACE_VERSION
                  ": renders scenes lit by HDR environment maps, importance-sampled as in\n"
                  "'Monte Carlo Rendering with Natural Illumination', on OpenCL devices."};

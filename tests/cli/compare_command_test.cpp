@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -68,6 +69,25 @@ TEST(CompareCli, NonFiniteImagesAreRefused) {
         << out;
     EXPECT_EQ(run_cli("compare " + dir + "/ok.exr " + dir + "/nan.exr", out), 1) << out;
     EXPECT_EQ(out.find("l2"), std::string::npos) << out;
+}
+
+// A black reference makes l2 infinite (the JSON wrote "l2": null with exit 0): refused, naming
+// the reference and giving the rmse; a black image against a black reference is a match.
+TEST(CompareCli, BlackReferenceIsRefused) {
+    const std::string dir = ett::scratch_dir("compare_black");
+    et::write_image(dir + "/grey.pfm", 4, 2, 3, std::vector<float>(24, 0.5f));
+    et::write_image(dir + "/black.pfm", 4, 2, 3, std::vector<float>(24, 0.0f));
+    std::string out;
+    EXPECT_EQ(
+        run_cli("compare " + dir + "/grey.pfm " + dir + "/black.pfm --json " + dir + "/m.json",
+                out),
+        1)
+        << out;
+    EXPECT_NE(out.find(dir + "/black.pfm: the reference is black"), std::string::npos) << out;
+    EXPECT_NE(out.find("rmse 0.5"), std::string::npos) << out;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/m.json"));
+    EXPECT_EQ(run_cli("compare " + dir + "/black.pfm " + dir + "/black.pfm", out), 0) << out;
+    EXPECT_NE(out.find("l2 0"), std::string::npos) << out;
 }
 
 } // namespace

@@ -47,6 +47,38 @@ TEST(ConvertCli, PfmThroughExrAndBackIsBitForBit) {
     EXPECT_NEAR(d.rgb[6], et::srgb_to_linear(128.0f / 255.0f), 1e-6f);
 }
 
+// To an 8-bit format the linear values are sRGB-encoded, so that envtrace reads back what it
+// wrote (within the 8-bit step), PNG to PNG is a copy, and values beyond [0, 1] are clipped with a
+// warning. Linear values were written as they were: 0.5 came back 0.214, and every pass darkened.
+TEST(ConvertCli, EightBitOutputsReadBackAsWritten) {
+    const std::string dir = ett::scratch_dir("convert-cli-8bit");
+    const std::vector<float> linear = {0.5f, 0.5f, 0.5f, 0.02f, 0.2f, 0.9f, 0.0f, 1.0f, 0.25f};
+    et::write_image(dir + "/a.pfm", 3, 1, 3, linear);
+    ett::CliRun r = ett::run_envtrace({"convert", dir + "/a.pfm", dir + "/a.png"}, dir);
+    ASSERT_EQ(r.code(), 0) << r.err;
+    EXPECT_EQ(r.err.find("clipped"), std::string::npos) << r.err;
+    const et::RgbImage back = et::read_rgb_image(dir + "/a.png");
+    ASSERT_EQ(back.rgb.size(), linear.size());
+    for (size_t i = 0; i < linear.size(); ++i) // half an 8-bit step of sRGB
+        EXPECT_NEAR(back.rgb[i], linear[i], 0.003f + 0.01f * linear[i]) << "value " << i;
+    // JPEG (lossy, colour subsampled): a grey 0.5 comes back 0.5, not the 0.214 of 128 decoded.
+    et::write_image(dir + "/grey.pfm", 8, 8, 3, std::vector<float>(192, 0.5f));
+    r = ett::run_envtrace({"convert", dir + "/grey.pfm", dir + "/grey.jpg"}, dir);
+    ASSERT_EQ(r.code(), 0) << r.err;
+    for (float v : et::read_rgb_image(dir + "/grey.jpg").rgb)
+        ASSERT_NEAR(v, 0.5f, 0.01f);
+    ASSERT_EQ(ett::run_envtrace({"convert", dir + "/a.png", dir + "/b.png"}, dir).code(), 0);
+    const et::RgbImage a = et::read_rgb_image(dir + "/a.png"),
+                       b = et::read_rgb_image(dir + "/b.png");
+    EXPECT_EQ(a.rgb, b.rgb) << "PNG to PNG changed the values";
+
+    et::write_image(dir + "/hdr.pfm", 2, 1, 3, {4.0f, 0.5f, -1.0f, 0.5f, 0.5f, 0.5f});
+    r = ett::run_envtrace({"convert", dir + "/hdr.pfm", dir + "/hdr.png"}, dir);
+    ASSERT_EQ(r.code(), 0) << r.err;
+    EXPECT_NE(r.err.find("2 of 6 values outside [0, 1] clipped"), std::string::npos) << r.err;
+    EXPECT_EQ(et::read_rgb_image(dir + "/hdr.png").rgb[0], 1.0f);
+}
+
 TEST(ConvertCli, RefusesItsOwnInputAndMissingFiles) {
     const std::string dir = ett::scratch_dir("convert-cli-refuse");
     et::write_image(dir + "/a.pfm", 2, 2, 3, std::vector<float>(12, 0.5f));

@@ -222,6 +222,35 @@ TEST(ImageIo, ExrRoundTripIsExact) {
     EXPECT_EQ(img.at(5, 17)[1], px[3 * (17 * w + 5) + 1]);
 }
 
+// Radiance RGBE keeps 8 bits per component under the pixel's shared exponent: written and read
+// back, every component is within half a step (2^(e-9), m = f 2^e the pixel's largest; twice
+// that where m rounds up to 2^e) of what was written, and the errors average out. Written by
+// truncation, as the encoders do, they were never above it and 0.28% below on average.
+TEST(ImageIo, HdrRoundTripRoundsToNearest) {
+    const std::string dir = ett::scratch_dir("image-io-hdr");
+    const int w = 64, h = 32;
+    const auto px = hdr_pixels(w, h, 3, 5);
+    et::write_image(dir + "/r.hdr", w, h, 3, px);
+    const et::RgbImage img = et::read_rgb_image(dir + "/r.hdr");
+    ASSERT_EQ(img.rgb.size(), px.size());
+    double bias = 0.0;
+    for (size_t p = 0; p < px.size(); p += 3) {
+        const float m = std::max({px[p], px[p + 1], px[p + 2]});
+        int e = 0;
+        std::frexp(m, &e);
+        float half = std::ldexp(1.0f, e - 9);
+        if (m + half >= std::ldexp(1.0f, e)) // rounded up into the next exponent
+            half *= 2.0f;
+        for (int c = 0; c < 3; ++c) {
+            ASSERT_LE(std::fabs(img.rgb[p + c] - px[p + c]), half * 1.0001f) << p + c;
+            bias += (img.rgb[p + c] - px[p + c]) / half;
+        }
+    }
+    // In units of half a step: truncation gives about -1; rounding about 0 (uniform errors,
+    // standard error of the mean sqrt(1/3 / 6144) = 0.007).
+    EXPECT_LT(std::fabs(bias / px.size()), 0.05) << bias / px.size();
+}
+
 // A PFM written by hand -- `header`, then little-endian floats, bottom row first -- reads as
 // the pixels written.
 static void expect_hand_written_pfm_reads(const std::string& path, const std::string& header, int w,
@@ -386,28 +415,6 @@ TEST(ImageIo, PfmRoundTripIsExact) {
     for (size_t i = 0; i < px.size(); ++i)
         ASSERT_EQ(img.rgb[i], px[i]) << "index " << i;
     EXPECT_EQ(files_in(dir), std::vector<std::string>{"round.pfm"});
-}
-
-TEST(ImageIo, HdrRoundTripWithinRgbePrecision) {
-    const std::string dir = ett::scratch_dir("image-io-hdr");
-    const int w = 29, h = 13;
-    const auto px = hdr_pixels(w, h, 3, 3);
-    const std::string path = dir + "/round.hdr";
-    et::write_image(path, w, h, 3, px);
-    const et::RgbImage img = et::read_rgb_image(path);
-    ASSERT_EQ(img.width, w);
-    ASSERT_EQ(img.height, h);
-    for (size_t p = 0; p < static_cast<size_t>(w) * h; ++p) {
-        // RGBE: an 8-bit mantissa per channel over the shared exponent of the largest channel.
-        const float m = std::max({px[3 * p], px[3 * p + 1], px[3 * p + 2]});
-        for (int c = 0; c < 3; ++c) {
-            const float a = px[3 * p + c], b = img.rgb[3 * p + c];
-            ASSERT_NEAR(b, a, 0.01f * m) << "pixel " << p << " channel " << c;
-            if (a == m) { // the largest channel keeps ~1% relative precision
-                ASSERT_NEAR(b / a, 1.0f, 0.01f) << "pixel " << p;
-            }
-        }
-    }
 }
 
 TEST(ImageIo, PngDecodesSrgbToLinear) {

@@ -1,4 +1,5 @@
 #include "util/interrupt.h"
+#include "util/signal_cleanup.h"
 
 #include <atomic>
 #include <csignal>
@@ -16,6 +17,7 @@ void on_signal(int sig) {
     if (g_first.compare_exchange_strong(expected, sig))
         return;
     // The second signal: only async-signal-safe calls from here.
+    remove_registered_temporaries();
     const char msg[] = "\nenvtrace: interrupted again: stopping now, nothing more is written\n";
     ssize_t ignored = ::write(2, msg, sizeof msg - 1);
     (void)ignored;

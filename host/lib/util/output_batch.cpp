@@ -2,6 +2,7 @@
 
 #include "util/error.h"
 #include "util/input_files.h"
+#include "util/signal_cleanup.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -195,6 +196,8 @@ OutputBatch::OutputBatch(const std::vector<std::string>& targets,
     }
     for (const auto& e : entries_)
         remove_stale_temporaries(e.target);
+    for (const auto& e : entries_) // a signal ending the process removes them too
+        register_temporary(e.temporary);
 }
 
 OutputBatch::~OutputBatch() {
@@ -203,6 +206,7 @@ OutputBatch::~OutputBatch() {
     for (const auto& e : entries_) {
         std::error_code ec;
         fs::remove(e.temporary, ec);
+        unregister_temporary(e.temporary);
     }
 }
 
@@ -275,6 +279,8 @@ void OutputBatch::commit() {
     }
     drop_kept();
     committed_ = true;
+    for (const auto& e : entries_)
+        unregister_temporary(e.temporary);
 }
 
 } // namespace et
