@@ -8,6 +8,7 @@
 // and the environment-sampling share of a frame are measured by tools/bench/render_probes.
 #include "commands.h"
 #include "util/json_file.h"
+#include "util/output_batch.h"
 #include "util/parallel.h"
 #include "util/error.h"
 #include "opencl/opencl_runtime.h"
@@ -26,6 +27,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sys/utsname.h>
 #include <thread>
 #include <unistd.h>
@@ -160,6 +162,11 @@ void print_row(const char* label, const char* unit, const Summary& s, int digits
 void run(const BenchArgs& a, const Globals& g) {
     const std::string load_before = load_average();
     DeviceScene ds = prepare(a, g);
+    // --json reserved before the runs (minutes of them): a missing folder or a name of an input
+    // fails first.
+    std::optional<OutputBatch> outputs;
+    if (!a.json_file.empty())
+        outputs.emplace(std::vector<std::string>{a.json_file});
     const RenderSettings& st = ds.settings;
     const int pixels = ds.width() * ds.height();
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
@@ -285,7 +292,8 @@ void run(const BenchArgs& a, const Globals& g) {
                                          {"per_pair", pair_ratios},
                                          {"per_pair_summary", to_json(pr)}};
         j["program_build"] = {{"warm_in_process", to_json(warm_build)}};
-        write_json_file(a.json_file, j, 2);
+        write_json_file(*outputs, a.json_file, j, 2);
+        outputs->commit();
         std::printf("wrote %s\n", a.json_file.c_str());
     }
 }

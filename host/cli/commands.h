@@ -13,6 +13,7 @@ class Cluster;
 
 struct Globals {
     int device = 0;
+    bool device_given = false;  // --device on the command line (set before any command runs)
     Cluster* cluster = nullptr; // the MPI ranks of this run, or a cluster of one (cluster.h)
     int exit_code = 0; // main's status when a command ends without an error (e.g. 130: SIGINT)
 };

@@ -1,6 +1,7 @@
 #include "commands.h"
 #include "opencl/opencl_runtime.h"
 #include "render/executor_cl.h"
+#include "util/error.h"
 #include "util/file_check.h"
 
 #include <cstdio>
@@ -9,15 +10,24 @@
 
 namespace et::cli {
 
-void add_devices_command(CLI::App& app, Globals&) {
+void add_devices_command(CLI::App& app, Globals& g) {
     auto* cmd = app.add_subcommand("devices", "List OpenCL platforms and devices");
     static bool kernels = false;
     cmd->add_flag("--kernels", kernels,
                   "Also build wavefront.cl on each device and list, per stage kernel, what the "
                   "device reports and the work-group size envtrace launches it with");
-    cmd->callback([] {
+    cmd->callback([&g] {
         auto devices = list_devices();
+        // With --device: that one only (it was ignored; --kernels builds on every device).
+        if (g.device_given && g.device >= static_cast<int>(devices.size()))
+            throw Error("--device " + std::to_string(g.device) + " does not exist: there " +
+                        (devices.size() == 1
+                             ? "is 1 device"
+                             : "are " + std::to_string(devices.size()) + " devices") +
+                        " (envtrace devices lists them)");
         for (size_t i = 0; i < devices.size(); ++i) {
+            if (g.device_given && static_cast<int>(i) != g.device)
+                continue;
             const auto& d = devices[i];
             std::cout << "[" << i << "] " << d.device_name << "\n"
                       << "    platform: " << d.platform_name << "\n"

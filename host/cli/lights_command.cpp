@@ -33,6 +33,11 @@ void run(const LightsArgs& a) {
     DistributionOptions opt;
     opt.blur_sigma = a.blur;
     EnvMap env = load_envmap(a.map, opt);
+    // Reserved before the selection (SIS takes seconds for thousands of lights): a missing folder
+    // or an output over the map fails first. After the map is read, so that it is known as an
+    // input.
+    OutputBatch outputs(a.plot.empty() ? std::vector<std::string>{a.output}
+                                       : std::vector<std::string>{a.output, a.plot});
     LightSet set;
     if (a.method == "ours") {
         set = make_lights_ours(env, a.count, a.seed, a.power == "voronoi");
@@ -41,8 +46,6 @@ void run(const LightsArgs& a) {
         o.levels = a.sis_levels;
         set = make_lights_sis(env, a.count, o);
     }
-    OutputBatch outputs(a.plot.empty() ? std::vector<std::string>{a.output}
-                                       : std::vector<std::string>{a.output, a.plot});
     write_lights(outputs, a.output, set);
     if (!a.plot.empty()) {
         std::vector<std::array<float, 3>> dirs;

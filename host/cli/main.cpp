@@ -7,6 +7,7 @@
 
 #include <csignal>
 #include <iostream>
+#include <vector>
 
 int main(int argc, char** argv) {
     // A reader that goes away (`envtrace render ... | head -1`) must not kill a render before
@@ -23,8 +24,9 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     et::cli::Globals globals;
     globals.cluster = &cluster;
-    app.add_option("--device", globals.device, "OpenCL device index (see 'envtrace devices')")
-        ->check(CLI::NonNegativeNumber);
+    CLI::Option* device_option =
+        app.add_option("--device", globals.device, "OpenCL device index (see 'envtrace devices')")
+            ->check(CLI::Range(0, 65535));
     app.set_version_flag("--version", ENVTRACE_VERSION);
     et::cli::add_devices_command(app, globals);
     et::cli::add_sample_command(app, globals);
@@ -34,6 +36,26 @@ int main(int argc, char** argv) {
     et::cli::add_convert_command(app, globals);
     et::cli::add_lights_command(app, globals);
     et::cli::add_merge_command(app, globals);
+    // An empty value (`--json ""`, `compare "" b.exr`) is never a name or a number envtrace
+    // takes: refused by the option's name before any command runs (it wrote no JSON, or said
+    // ": no such file").
+    app.parse_complete_callback([&app, &globals, device_option] {
+        globals.device_given = device_option->count() > 0;
+        std::vector<const CLI::App*> apps = {&app};
+        for (const CLI::App* sub : app.get_subcommands())
+            apps.push_back(sub);
+        for (const CLI::App* a : apps)
+            for (const CLI::Option* opt : a->get_options()) {
+                if (opt->count() == 0 || opt->get_type_size() == 0) // absent, or a flag
+                    continue;
+                for (const std::string& v : opt->results())
+                    if (v.empty())
+                        throw et::Error((opt->get_positional()
+                                             ? "the argument '" + opt->get_name() + "'"
+                                             : opt->get_name()) +
+                                        " is empty: name what to read or write");
+            }
+    });
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -65,7 +65,7 @@ struct RenderArgs {
     // Which options the command line gave (set by the callback from CLI11's counts): for
     // options whose every value means something, and those that only apply to some renders.
     bool light_samples_given = false, bsdf_samples_given = false, sis_samples_given = false;
-    bool output_given = false, stats_given = false, device_given = false, paths_given = false;
+    bool device_given = false, paths_given = false;
     int spp = 0, max_depth = 0, rr_depth = -1, paths = -1, threads = 0;
     long long seed = -1;
     double time_limit = -1.0;
@@ -147,10 +147,6 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     st.sis_samples = a.sis_samples;
     st.lights = a.lights;
     st.aovs = a.aovs;
-    if (a.output_given && a.output.empty())
-        throw Error(cli + ": -o/--output is empty: name the image to write");
-    if (a.stats_given && a.stats_file.empty())
-        throw Error(cli + ": --stats is empty: name the JSON file to write");
     if (!st.lights.empty()) {
         // A light set is its own estimator: a strategy asked for as well would be dropped.
         if (!a.strategy.empty())
@@ -842,8 +838,6 @@ void add_render_command(CLI::App& app, Globals& g) {
         a->light_samples_given = cmd->count("--light-samples") > 0;
         a->bsdf_samples_given = cmd->count("--bsdf-samples") > 0;
         a->sis_samples_given = cmd->count("--sis-samples") > 0;
-        a->output_given = cmd->count("--output") > 0;
-        a->stats_given = cmd->count("--stats") > 0;
         a->paths_given = cmd->count("--paths") > 0;
         a->device_given = app.count("--device") > 0;
         run(*a, g);

@@ -316,6 +316,27 @@ TEST(CliOptions, CommandLinesThatDoNotParseAreOneErrorLineAndStatusOne) {
     EXPECT_EQ(help.code(), 0) << help.err;
 }
 
+// Empty values are refused by the option's name (`compare --json ""` wrote nothing, status 0;
+// `compare "" b` said ": no such file"); an output under a file says it is not a folder; a
+// negative --device is one short line (CLI11's NonNegativeNumber printed ~300 digits of a range);
+// `devices` with a --device that does not exist says so (it was ignored).
+TEST(CliOptions, EmptyValuesFilesAsFoldersAndDevicesAreNamed) {
+    const std::string dir = ett::scratch_dir("cli-opt-empty");
+    const std::string scene = write_scene(dir);
+    expect_error(ett::run_envtrace({"compare", "", dir + "/sky.pfm"}, dir),
+                 "the argument 'image' is empty");
+    expect_error(
+        ett::run_envtrace({"compare", dir + "/sky.pfm", dir + "/sky.pfm", "--json", ""}, dir),
+        "--json is empty");
+    expect_error(ett::run_envtrace({"convert", dir + "/sky.pfm", dir + "/sky.pfm/x.exr"}, dir),
+                 "'" + dir + "/sky.pfm' is not a folder");
+    const ett::CliRun r = ett::run_envtrace({"--device", "-1", "devices"}, dir);
+    expect_error(r, "--device: Value -1 not in range 0 to 65535");
+    EXPECT_LT(r.err.size(), 120u) << r.err;
+    expect_error(ett::run_envtrace({"--device", "999", "devices"}, dir),
+                 "--device 999 does not exist");
+}
+
 // An 8 x 6 sphere under write_scene's map (written first), with the given render block.
 std::string write_sphere_scene(const std::string& dir, const std::string& name,
                                const std::string& render) {

@@ -289,8 +289,7 @@ RgbImage read_rgb_image(const std::string& path, bool colour) {
 }
 
 void check_writable_format(const std::string& path) {
-    fs::path target(path);
-    fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    const fs::path target(path);
     std::error_code ec;
     const std::string ext = lower_extension(path);
     if (!is_float_image_extension(path) && ext != ".png" && ext != ".jpg" && ext != ".jpeg")
@@ -298,8 +297,7 @@ void check_writable_format(const std::string& path) {
                     "' (use .exr, .hdr, .pfm, .png or .jpg)");
     if (fs::is_directory(target, ec))
         throw Error(path + ": cannot write: it is a folder");
-    if (!fs::is_directory(dir, ec))
-        throw Error(path + ": cannot write: folder '" + dir.string() + "' does not exist");
+    check_output_folder(path);
     if (ext != ".pfm") // PFM is written here, the rest by the library
         image_detail::check_library_writer(path, ext);
 }

@@ -127,6 +127,15 @@ class FolderLocks {
 
 } // namespace
 
+void check_output_folder(const std::string& target) {
+    const std::string dir = folder_of(target);
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec))
+        throw Error(target + ": cannot write: " +
+                    (fs::exists(dir, ec) ? "'" + dir + "' is not a folder"
+                                         : "folder '" + dir + "' does not exist"));
+}
+
 // What an old output kept aside during a commit is named: its target's temporary + this.
 const std::string kAside = ".previous";
 
@@ -178,9 +187,7 @@ OutputBatch::OutputBatch(const std::vector<std::string>& targets,
             throw Error("an output path is empty");
         if (fs::is_directory(t, ec))
             throw Error(t + ": cannot write: it is a folder");
-        const std::string dir = folder_of(t);
-        if (!fs::is_directory(dir, ec))
-            throw Error(t + ": cannot write: folder '" + dir + "' does not exist");
+        check_output_folder(t);
         bool replaceable = false;
         for (const auto& m : may_replace)
             replaceable = replaceable || same_file(t, m);

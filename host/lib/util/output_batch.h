@@ -39,6 +39,9 @@ class OutputBatch {
     bool committed_ = false;
 };
 
+// Throws et::Error naming `target` unless its folder exists (and is a folder).
+void check_output_folder(const std::string& target);
+
 // The temporary of `target` for process `pid`: "dir/.NAME.tmpPID.EXT".
 std::string temporary_path(const std::string& target, long pid);
 
