@@ -69,6 +69,15 @@ void run(const MergeArgs& a) {
               [](const Part* x, const Part* y) { return x->first() < y->first(); });
     std::vector<std::string> gaps;
     int64_t covered = 0;
+    // The whole render's samples as the parts' tasks were asked for (render_state.h): a part
+    // missing at the end, or a last task stopped early, is a gap too (it merged unnoticed).
+    int64_t total = 0;
+    const Part* asked = nullptr;
+    for (const Part& p : parts)
+        if (p.state.total > total) {
+            total = p.state.total;
+            asked = &p;
+        }
     for (size_t i = 0; i < order.size(); ++i) {
         const Part& p = *order[i];
         if (i > 0 && p.first() < order[i - 1]->end())
@@ -80,12 +89,16 @@ void run(const MergeArgs& a) {
             gaps.push_back(samples_text(covered, p.first()));
         covered = p.end();
     }
+    if (total > covered)
+        gaps.push_back(samples_text(covered, total) + " (" + asked->path + " is a part of " +
+                       std::to_string(total) + " samples)");
+    const int64_t last = std::max(covered, total);
     if (!gaps.empty()) {
         std::string list;
         for (const std::string& g : gaps)
             list += (list.empty() ? "" : ", ") + g;
         if (!a.allow_gaps)
-            throw Error("the parts do not cover samples 0.." + std::to_string(covered - 1) +
+            throw Error("the parts do not cover samples 0.." + std::to_string(last - 1) +
                         ": missing " + list +
                         " (render them with --sample-range, or merge anyway with --allow-gaps)");
         if (!a.state.empty())
@@ -94,12 +107,13 @@ void run(const MergeArgs& a) {
         warn("the parts leave gaps: missing " + list +
              "; the image is a valid estimate, but not "
              "the render of samples 0.." +
-             std::to_string(covered - 1));
+             std::to_string(last - 1));
     }
 
     const RenderState& ref = parts.front().state;
     RenderState merged{ref.key, 0, 0,
-                       FilmSums(ref.sums.width(), ref.sums.height(), ref.sums.has_aovs())};
+                       FilmSums(ref.sums.width(), ref.sums.height(), ref.sums.has_aovs()),
+                       static_cast<int>(total)};
     std::string ranges;
     for (const Part* p : order) {
         merged.sums.add(p->state.sums);

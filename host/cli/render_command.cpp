@@ -359,6 +359,11 @@ void run(const RenderArgs& a, Globals& g) {
             if (a.time_limit >= 0 || a.noise_target > 0)
                 throw Error("--sample-range renders a fixed range of sample indices: it excludes "
                             "--time-limit and --noise-target");
+            // --spp with a range: the whole render's samples, which merge checks are all there.
+            if (a.spp > 0 && range.second > a.spp)
+                throw Error("--sample-range " + a.sample_range + " reaches past --spp " +
+                            std::to_string(a.spp) +
+                            " (with a range, --spp is the whole render's samples)");
         }
         scene.emplace(load_scene(a.scene));
         st = settings_for(a, g, scene->settings);
@@ -505,6 +510,10 @@ void run(const RenderArgs& a, Globals& g) {
     const int64_t end = partial                                      ? range.second
                         : (st.time_limit > 0 || noise) && a.spp <= 0 ? int64_t(1) << 24
                                                                      : st.spp;
+    // The whole render's samples, kept in the state for merge (render_state.h).
+    const int whole_render = partial ? (a.spp > 0 ? a.spp : range.second)
+                             : (st.time_limit > 0 || noise) && a.spp <= 0 ? 0
+                                                                          : static_cast<int>(end);
     int64_t done = cl.broadcast(state.spp);
     if (a.resume && cl.root()) {
         renderer.resume(state.sums);
@@ -585,8 +594,9 @@ void run(const RenderArgs& a, Globals& g) {
             const FilmSums all = cl.reduce(renderer.sums());
             cl.check(attempt([&] {
                 if (cl.root())
-                    write_render_state(state_path, RenderState{state.key, static_cast<int>(done),
-                                                               static_cast<int>(first), all});
+                    write_render_state(state_path,
+                                       RenderState{state.key, static_cast<int>(done),
+                                                   static_cast<int>(first), all, whole_render});
             }));
             since_checkpoint = Timer();
         }
@@ -703,8 +713,9 @@ void run(const RenderArgs& a, Globals& g) {
             write_json_file(*outputs, a.stats_file, j, 2);
         }
         if (keep_state)
-            write_render_state(*outputs, state_path,
-                               RenderState{state.key, spp, static_cast<int>(first), sums});
+            write_render_state(
+                *outputs, state_path,
+                RenderState{state.key, spp, static_cast<int>(first), sums, whole_render});
         outputs->commit();
     }));
 
@@ -828,7 +839,8 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option("--sample-range", a->sample_range,
                     "FIRST:END: render sample indices FIRST .. END-1 only and write the partial "
                     "film (to --state, default OUTPUT.samples-FIRST-END.envtrace-state) for "
-                    "'envtrace merge' (farm tasks)");
+                    "'envtrace merge' (farm tasks); with --spp N, N is the whole render's samples "
+                    "and merge checks that none of 0 .. N-1 is missing");
     cmd->add_option("--backend", a->backend,
                     "opencl (default) or cpu (native C++, same kernels/ sources)")
         ->check(CLI::IsMember(backend_names()));

@@ -478,8 +478,8 @@ TEST(Merge, RefusesForeignOverlappingAndMissingParts) {
     expect_exit(r, 1);
     EXPECT_NE(r.err.find("--sample-range '4:4'"), std::string::npos) << r.err;
     // SIS tasks: whole rounds of its strata, whatever the scene's spp (it was checked instead).
-    const std::vector<std::string> sis = {"--strategy",  "sis", "--sis-samples", "4",
-                                          "--max-depth", "1",   "--spp",         "2"};
+    const std::vector<std::string> sis = {"--strategy", "sis",         "--sis-samples",
+                                          "4",          "--max-depth", "1"};
     auto sis_task = [&](const std::string& range) {
         std::vector<std::string> more = sis;
         more.insert(more.end(), {"--sample-range", range, "--state", dir + "/sis.state"});
@@ -491,6 +491,40 @@ TEST(Merge, RefusesForeignOverlappingAndMissingParts) {
     EXPECT_NE(r.err.find("--sample-range (4:10) must start and end at multiples of --sis-samples"),
               std::string::npos)
         << r.err;
+}
+
+// Tasks given --spp N (the whole render's samples) keep N in their states: merge refuses parts
+// that stop short of it -- a last task missing, which merged unnoticed -- naming the samples, and
+// --allow-gaps merges them anyway. A range past --spp is refused before rendering.
+TEST(Merge, AMissingLastTaskIsAGap) {
+    const std::string dir = ett::scratch_dir("merge_tail");
+    const std::string scene = write_scene(dir);
+    auto task = [&](const std::string& range, const std::string& part) {
+        expect_exit(ett::run_envtrace(render_args(scene, dir + "/farm.exr",
+                                                  {"--sample-range", range, "--spp", "8", "--state",
+                                                   dir + "/" + part}),
+                                      dir),
+                    0);
+        return dir + "/" + part;
+    };
+    const std::string a = task("0:2", "a.state"), b = task("2:4", "b.state");
+    EXPECT_EQ(et::read_render_state(a).total, 8);
+    const std::string out = dir + "/m.exr";
+    ett::CliRun r = ett::run_envtrace({"merge", "-o", out, a, b}, dir);
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("missing samples 4..7"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    r = ett::run_envtrace({"merge", "-o", out, "--allow-gaps", a, b}, dir);
+    expect_exit(r, 0);
+    EXPECT_EQ(metadata(out, "spp"), "4");
+    const std::string c = task("4:8", "c.state");
+    expect_exit(ett::run_envtrace({"merge", "-o", out, "--state", dir + "/m.state", a, c, b}, dir),
+                0);
+    EXPECT_EQ(et::read_render_state(dir + "/m.state").total, 8);
+    r = ett::run_envtrace(
+        render_args(scene, dir + "/x.exr", {"--sample-range", "6:10", "--spp", "8"}), dir);
+    expect_exit(r, 1);
+    EXPECT_NE(r.err.find("--sample-range 6:10 reaches past --spp 8"), std::string::npos) << r.err;
 }
 
 } // namespace

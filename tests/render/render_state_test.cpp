@@ -7,6 +7,7 @@
 #include "util/error.h"
 
 #include <gtest/gtest.h>
+#include <xxhash.h>
 
 #include <cstring>
 #include <filesystem>
@@ -199,7 +200,45 @@ TEST(RenderState, OlderFormatIsRefusedWithItsVersion) {
     const std::string p = dir + "/v2.envtrace-state";
     write_bytes(p, bytes);
     const std::string e = read_error(p);
-    EXPECT_NE(e.find("format version 2, this envtrace reads 3"), std::string::npos) << e;
+    EXPECT_NE(e.find("format version 2, this envtrace reads 3 to 4"), std::string::npos) << e;
+}
+
+// `bytes` with its trailing XXH3 checksum made right again.
+std::string with_checksum(std::string bytes) {
+    const uint64_t sum = XXH3_64bits(bytes.data(), bytes.size() - sizeof sum);
+    std::memcpy(&bytes[bytes.size() - sizeof sum], &sum, sizeof sum);
+    return bytes;
+}
+
+// Version 4 keeps the whole render's samples (`total`, merge's check) in version 3's reserved
+// field: a version 3 state still reads (total 0: unknown), a version 3 state with the field set
+// does not, nor a total short of the samples the state holds.
+TEST(RenderState, TotalSamplesAndTheFormatBeforeThem) {
+    const std::string dir = ett::scratch_dir("render_state_total");
+    et::RenderState st{1234, 3, 2, et::FilmSums(4, 2), 8};
+    const std::string path = dir + "/s.envtrace-state";
+    et::write_render_state(path, st);
+    EXPECT_EQ(et::read_render_state(path).total, 8);
+    const size_t total_at =
+        16 + 4 + 4 + 8 + 4 * 4 + 4; // magic, version, order, key, w h spp first, aovs
+    std::string bytes = read_bytes(path);
+    int32_t total = 0;
+    std::memcpy(&total, &bytes[total_at], sizeof total);
+    ASSERT_EQ(total, 8) << "the header layout changed";
+    bytes[16] = 3;
+    write_bytes(path, with_checksum(bytes));
+    EXPECT_NE(read_error(path).find("header does not match"), std::string::npos)
+        << read_error(path);
+    std::memset(&bytes[total_at], 0, 4);
+    write_bytes(path, with_checksum(bytes));
+    EXPECT_EQ(read_error(path), "");
+    EXPECT_EQ(et::read_render_state(path).total, 0);
+    bytes[16] = 4;
+    total = 4; // first 2 + spp 3 = 5 samples reached: a total of 4 cannot be
+    std::memcpy(&bytes[total_at], &total, sizeof total);
+    write_bytes(path, with_checksum(bytes));
+    EXPECT_NE(read_error(path).find("header does not match"), std::string::npos)
+        << read_error(path);
 }
 
 } // namespace

@@ -18,8 +18,10 @@ namespace {
 // AOVs), then an XXH3 checksum of everything before it.
 constexpr char kMagic[16] = {'e', 'n', 'v', 't', 'r', 'a', 'c',  'e',
                              '-', 's', 't', 'a', 't', 'e', '\n', 0};
-// 2: exact sums (film_sums.h) and the first sample index; 3: the AOV flag and sums (film_aovs.h)
-constexpr uint32_t kVersion = 3;
+// 2: exact sums (film_sums.h) and the first sample index; 3: the AOV flag and sums (film_aovs.h);
+// 4: the render's total samples (3's reserved field; read as 0 from a version 3 state)
+constexpr uint32_t kVersion = 4;
+constexpr uint32_t kOldestVersion = 3;
 constexpr uint32_t kByteOrder = 0x01020304;
 
 struct Header {
@@ -27,7 +29,7 @@ struct Header {
     uint32_t version, byte_order;
     uint64_t key;
     int32_t width, height, spp, first;
-    int32_t aovs, reserved; // aovs: 1 if AovPixel sums follow the film's; reserved: 0
+    int32_t aovs, total; // aovs: 1 if AovPixel sums follow the film's; total: RenderState's
     uint64_t film_bytes;
 };
 
@@ -106,6 +108,7 @@ void write_render_state(OutputBatch& batch, const std::string& path, const Rende
     hd.spp = state.spp;
     hd.first = state.first;
     hd.aovs = f.has_aovs() ? 1 : 0;
+    hd.total = state.total;
     hd.film_bytes = film_bytes(f.width(), f.height(), f.has_aovs());
     batch.write(path, [&](const std::string& file) {
         std::ofstream out(file, std::ios::binary);
@@ -146,12 +149,14 @@ RenderState read_render_state(const std::string& path) {
         throw Error(bad + "it does not start like one");
     if (hd.byte_order != kByteOrder)
         throw Error(bad + "written on a machine of the other byte order");
-    if (hd.version != kVersion)
+    if (hd.version < kOldestVersion || hd.version > kVersion)
         throw Error(bad + "format version " + std::to_string(hd.version) +
-                    ", this envtrace reads " + std::to_string(kVersion) +
-                    " (written by another envtrace: render it again)");
+                    ", this envtrace reads " + std::to_string(kOldestVersion) + " to " +
+                    std::to_string(kVersion) + " (written by another envtrace: render it again)");
+    const int64_t end = int64_t(hd.first) + hd.spp;
     if (hd.width <= 0 || hd.height <= 0 || hd.width > 65536 || hd.height > 65536 || hd.spp < 0 ||
-        hd.first < 0 || (hd.aovs != 0 && hd.aovs != 1) || hd.reserved != 0 ||
+        hd.first < 0 || (hd.aovs != 0 && hd.aovs != 1) ||
+        (hd.version == 3 ? hd.total != 0 : hd.total != 0 && hd.total < end) ||
         hd.film_bytes != film_bytes(hd.width, hd.height, hd.aovs == 1) ||
         size != sizeof hd + hd.film_bytes + sizeof(uint64_t))
         throw Error(bad + "its header does not match its size (" + byte_text(size) +
@@ -160,6 +165,7 @@ RenderState read_render_state(const std::string& path) {
     st.key = hd.key;
     st.spp = hd.spp;
     st.first = hd.first;
+    st.total = hd.total;
     st.sums = FilmSums(hd.width, hd.height, hd.aovs == 1);
     Hash h;
     h.add(&hd, sizeof hd);

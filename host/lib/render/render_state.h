@@ -26,6 +26,11 @@ struct RenderState {
     int spp = 0;   // samples per pixel in the film: sample indices first .. first + spp - 1
     int first = 0; // the first sample index (0 but for a part of a render, --sample-range)
     FilmSums sums;
+    // The samples of the whole render this film is part of (indices 0 .. total-1): what --spp
+    // asked for (a farm task's --spp, else the end of its range); 0 where no end was asked for
+    // (--time-limit, --noise-target) or the state is older than this field. merge checks that
+    // its parts cover it.
+    int total = 0;
 };
 
 // Writes the state as one file of `batch` (binary: header, film sums, checksum).
