@@ -236,6 +236,27 @@ TEST(EnvDistribution, DensityPositiveWhereverTheLookupIs) {
         }
 }
 
+// A float CDF near 1 cannot hold the width of a row or texel 1e-10 of the whole: under a sun
+// 1e12 x the sky every row after the sun's had zero width, so the map's density was zero over
+// half the sky and light sampling alone never saw it. Every cell with light keeps a width now
+// (at least 2^-21 of its CDF), and the table stays a valid distribution.
+TEST(EnvDistribution, EveryLitCellKeepsAWidthUnderASunOf1e12) {
+    et::RgbImage img = ett::constant_image(128, 64, 1.0f);
+    set_grey(img, 40, 20, 1e12f);
+    set_grey(img, 7, 50, 3e11f);
+    for (float blur : {0.0f, 0.5f}) {
+        const et::EnvDistribution d = build(img, blur);
+        expect_valid_table(d);
+        for (int r = 0; r < d.height; ++r)
+            for (int c = 0; c < d.width; ++c) {
+                const etk::float2 uv =
+                    etk::make_float2((c + 0.5f) / d.width, (r + 0.5f) / d.height);
+                ASSERT_GT(etk::etk_pdf_2d(d.table.data(), d.width, d.height, uv), 0.0f)
+                    << "blur " << blur << " cell " << c << ", " << r;
+            }
+    }
+}
+
 TEST(EnvDistribution, Blur0HasNoMassWhereTheLookupVanishes) {
     // The converse at blur 0 and map resolution: a cell whose lookup is zero everywhere (its own
     // texel and its 8 neighbours black) carries nothing, so samples never land in the dark.

@@ -51,8 +51,9 @@ inline GuideSamplingCheck check_guide_sampling(const etk::EtkScene& S, const etk
     for (int row = 0; row < h; ++row)
         for (int col = 0; col < w; ++col) {
             const etk::float2 uv = etk::make_float2((col + 0.5f) / w, (row + 0.5f) / h);
-            const double pmap = double(S.env_dist[row]) *
-                                S.env_dist[etk::etk_dist2d_conditional_pdf(h) + row * w + col];
+            // The map's density as the kernels sample it: from its CDFs' widths (the stored
+            // densities differ where a width is held at its least share, env_distribution.cpp).
+            const double pmap = etk::etk_pdf_2d(S.env_dist, w, h, uv);
             const double d = pmap * etk::etk_guide_factor(S, p, cell, uv) / (double(w) * h);
             r.integral += d;
             expected[static_cast<size_t>(row) * w + col] = n * d;

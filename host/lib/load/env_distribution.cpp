@@ -99,6 +99,20 @@ template <typename T> double build_1d(const T* f, int n, float* pdf, float* cdf,
     double seg_offset[kChains + 2];
     const double sum = prefix_sums(f, n, local, seg_offset);
     cdf[0] = 0.0f;
+    // Every interval with mass keeps at least kMinCdfShare of the CDF (env_distribution.h).
+    double floored_sum = sum;
+    std::vector<double> floored;
+    if (sum > 0.0) {
+        const double floor = sum * kMinCdfShare;
+        for (int i = 0; i < n && floored.empty(); ++i)
+            if (f[i] > 0 && f[i] < floor)
+                floored.assign(f, f + n);
+        if (!floored.empty()) {
+            for (double& v : floored)
+                v = v > 0.0 ? std::max(v, floor) : 0.0;
+            floored_sum = prefix_sums(floored.data(), n, local, seg_offset);
+        }
+    }
     if (!(sum > 0.0)) {
         // No mass: a linear CDF keeps the binary search well defined; densities stay zero.
         for (int i = 0; i < n; ++i) {
@@ -108,11 +122,11 @@ template <typename T> double build_1d(const T* f, int n, float* pdf, float* cdf,
         cdf[n] = 1.0f;
         return 0.0;
     }
-    const double inv = 1.0 / sum;
+    const double inv = 1.0 / floored_sum;
     // The densities f n / sum in double: n / sum alone overflows a float when the sum is below
     // n / FLT_MAX (1e-34 for n = 65536; texels of 1e-44 occur, fuzz finding F6), while each
     // density is at most n.
-    const double density_scale = n * inv;
+    const double density_scale = n / sum;
     const int len = n / kChains;
     for (int j = 0; j <= kChains; ++j) {
         const int begin = j * len, end = j < kChains ? begin + len : n;

@@ -79,8 +79,16 @@ inline float luminance(const float* rgb) {
     return etk::etk_luma(etk::make_float3(rgb[0], rgb[1], rgb[2]));
 }
 
-// The 1D building block: density and CDF (n+1 entries) of f, as in the paper's Figure 2.
-// Returns the sum of f.
+// The least share of a float CDF (0 ... 1) an interval with mass keeps: 2^-21, eight float
+// steps just below 1. A float CDF cannot hold widths near 1e-8 of the whole where it nears 1:
+// under a sun 1e10 x its sky the rows after the sun's had no width, and the kernels (which
+// sample and evaluate densities from the widths) never drew that sky. Intervals below the share
+// are raised to it; a table of ordinary range is unchanged.
+constexpr double kMinCdfShare = 0x1p-21;
+
+// The 1D building block: density and CDF (n+1 entries) of f, as in the paper's Figure 2, every
+// interval with mass at least kMinCdfShare of the CDF (the densities stay f's own). Returns the
+// sum of f.
 double build_piecewise_constant_1d(const float* f, int n, float* pdf, float* cdf);
 
 // The guide table (cutpoint method) of a CDF of n intervals: etk_guide_cells(n) + 1 entries,

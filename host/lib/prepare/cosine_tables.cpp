@@ -46,7 +46,9 @@ double bin_radius(int k) {
 
 std::vector<double> cosine_bin_weights(const std::vector<float>& dist, const etk::EtkEnvMap& env) {
     const int w = env.dist_w, h = env.dist_h;
-    const float* marginal = dist.data();
+    // Row densities from the marginal CDF's widths, as the kernels sample and evaluate them (the
+    // stored densities differ where the CDF cannot hold a row's width: guide_region_tables).
+    const float* mcdf = dist.data() + etk::etk_dist2d_marginal_cdf(h);
     const float* ccdf = dist.data() + etk::etk_dist2d_conditional_cdf(w, h);
     std::vector<Part> parts(static_cast<size_t>(K) * S * S);
     // Per column: its region column, part column and (sin, cos) of its longitude
@@ -69,7 +71,7 @@ std::vector<double> cosine_bin_weights(const std::vector<float>& dist, const etk
                       nr = etk::etk_guide_row_start(Rr + 1, h) - r0;
             const int sr = (r - r0) * S / std::max(nr, 1);
             const float* row = ccdf + static_cast<size_t>(r) * (w + 1);
-            const double pv = double(marginal[r]) / h;
+            const double pv = double(etk::etk_interval_density(mcdf, h, r)) / h;
             const etk::float2 theta = etk::etk_sincospi((r + 0.5f) / h);
             // Part index = ((Rr * COLS + Rc) * S + sr) * S + sc, with col_part = Rc * S + sc.
             const size_t base = static_cast<size_t>(Rr) * ETK_GUIDE_COLS * S * S;

@@ -14,7 +14,12 @@ constexpr int K = ETK_GUIDE_REGIONS;
 
 std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, int h) {
     std::vector<float> out(static_cast<size_t>(etk::etk_guide_regions_size(h)), 0.0f);
-    const float* marginal = dist.data();
+    // Row densities from the marginal CDF's widths, the densities the kernels sample and evaluate
+    // the map with (etk_pdf_2d). The stored densities f h / sum differ by the CDF's rounding, and
+    // entirely where the CDF cannot hold a row's width: rows the map never samples had mass here,
+    // and the guided strategies drew directions the map's density calls impossible (the cosine
+    // strategy lost 9% of an image under a sun 1e11 x its sky).
+    const float* mcdf = dist.data() + etk::etk_dist2d_marginal_cdf(h);
     const float* ccdf = dist.data() + etk::etk_dist2d_conditional_cdf(w, h);
     for (int r = 0; r < h; ++r)
         for (int j = 0; j <= ETK_GUIDE_SUBBANDS; ++j)
@@ -31,7 +36,8 @@ std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, in
             for (int r = r0; r < r1; ++r) {
                 const float* row = ccdf + static_cast<size_t>(r) * (w + 1);
                 const double m = std::max(0.0, double(row[c1]) - double(row[c0]));
-                cum[r - r0 + 1] = cum[r - r0] + double(marginal[r]) / h * m;
+                cum[r - r0 + 1] =
+                    cum[r - r0] + double(etk::etk_interval_density(mcdf, h, r)) / h * m;
             }
             const double total = cum.back();
             mass[Rr * ETK_GUIDE_COLS + Rc] = total;
@@ -69,10 +75,17 @@ void write_guide_cdf(const std::vector<double>& prob, float* cdf) {
     double total = 0.0;
     for (double x : prob)
         total += x;
+    // Every region with mass keeps at least kMinCdfShare of the CDF, as the map's rows do: a
+    // region 1e-8 of the table had no width after a sun's region, and no density.
+    const double least = total * kMinCdfShare;
+    auto kept = [least](double x) { return x > 0.0 ? std::max(x, least) : 0.0; };
+    total = 0.0;
+    for (double x : prob)
+        total += kept(x);
     double run = 0.0;
     cdf[0] = 0.0f;
     for (int R = 0; R < K; ++R) {
-        run += prob[R];
+        run += kept(prob[R]);
         cdf[R + 1] = total > 0.0 ? static_cast<float>(run / total) : float(R + 1) / K;
     }
     cdf[K] = 1.0f;
