@@ -83,7 +83,8 @@ inline float luminance(const float* rgb) {
 // steps just below 1. A float CDF cannot hold widths near 1e-8 of the whole where it nears 1:
 // under a sun 1e10 x its sky the rows after the sun's had no width, and the kernels (which
 // sample and evaluate densities from the widths) never drew that sky. Intervals below the share
-// are raised to it; a table of ordinary range is unchanged.
+// are raised to it (the maps of ../shared/data have up to 3 such rows and 76 such texels, near
+// black or at a pole: their densities rise to the share, a shift below 1e-4 of the table).
 constexpr double kMinCdfShare = 0x1p-21;
 
 // The 1D building block: density and CDF (n+1 entries) of f, as in the paper's Figure 2, every
