@@ -113,7 +113,7 @@ void run(const MergeArgs& a) {
     const RenderState& ref = parts.front().state;
     RenderState merged{ref.key, 0, 0,
                        FilmSums(ref.sums.width(), ref.sums.height(), ref.sums.has_aovs()),
-                       static_cast<int>(total)};
+                       static_cast<int>(total > 0 ? last : 0)}; // (a version 3 part: total 0)
     std::string ranges;
     for (const Part* p : order) {
         merged.sums.add(p->state.sums);

@@ -543,9 +543,13 @@ void run(const RenderArgs& a, Globals& g) {
     std::string render_error;
     int sig = 0;
     bool stopped = false; // a round was abandoned (on some rank): stop, keeping none of it
+    // The time limit abandons no round before this run's first is whole: a resumed render whose
+    // first round (learning passes replayed included) outlasts the limit would otherwise drop it
+    // every time, and a loop of time-limited resumes never get further.
     renderer.set_stop([&] {
-        return done > 0 && (InterruptHandler::signal() != 0 ||
-                            (st.time_limit > 0 && render.seconds() >= st.time_limit));
+        return done > 0 &&
+               (InterruptHandler::signal() != 0 ||
+                (st.time_limit > 0 && done > resumed_from && render.seconds() >= st.time_limit));
     });
     // MPI ranks keep a round only where no rank abandoned its part (a film of rounds whole).
     renderer.set_hold(cl.size() > 1);
@@ -581,7 +585,8 @@ void run(const RenderArgs& a, Globals& g) {
         // by rank 0's clock, or the range done), save a checkpoint (rank 0's clock), a failure.
         int64_t f[4] = {0, 0, render_error.empty() ? 0 : 1, InterruptHandler::signal()};
         if (f[3] != 0 || stopped || (done > 0 && first + done >= end) || noise_reached ||
-            (cl.root() && done > 0 && st.time_limit > 0 && render.seconds() >= st.time_limit))
+            (cl.root() && done > resumed_from && st.time_limit > 0 &&
+             render.seconds() >= st.time_limit))
             f[0] = 1;
         if (cl.root() && a.checkpoint >= 0 && done > resumed_from &&
             since_checkpoint.seconds() >= a.checkpoint)

@@ -232,9 +232,12 @@ TEST(MpiRender, TimeLimitInsideARoundDropsTheRoundOnEveryRank) {
                                         {"--time-limit", std::to_string(2.5 * round), "--stats",
                                          stats, "--checkpoint", "0"}))});
     ASSERT_EQ(r.code, 0) << r.err;
-    EXPECT_NE(r.err.find("reached inside a pass"), std::string::npos) << r.err;
+    const bool inside = r.err.find("reached inside a pass") != std::string::npos;
     const std::string spp = metadata(dir + "/out.exr", "spp");
     ASSERT_GE(std::stoi("0" + spp), 2);
+    if (!inside) { // a machine 2.5x slower than when measured: the first round outlasted the limit
+        EXPECT_EQ(spp, "2") << r.err;
+    }
     EXPECT_EQ(std::stoi(spp) % 2, 0) << "two ranks add two samples a round";
     EXPECT_EQ(et::read_render_state(dir + "/out.envtrace-state").spp, std::stoi(spp));
     if (spp != "2") {

@@ -74,7 +74,10 @@ class Renderer {
     // next render_sample needs one of the two first.
     void set_hold(bool hold) { hold_ = hold; }
     void keep_held();
-    void drop_held() { held_ = false; }
+    void drop_held() {
+        stats_.samples_per_pixel -= held_ ? 1 : 0;
+        held_ = false;
+    }
     // Adaptive strategy: light share and ETK_BIN_* flags per material bin for the passes to come,
     // and the learned candidate per bin (-1 before or without learning).
     const std::array<float, ETK_SHARE_BINS>& light_shares() const { return shares_; }

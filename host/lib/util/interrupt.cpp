@@ -16,7 +16,10 @@ void on_signal(int sig) {
     int expected = 0;
     if (g_first.compare_exchange_strong(expected, sig))
         return;
-    // The second signal: only async-signal-safe calls from here.
+    // The second signal: only async-signal-safe calls from here. During the renames of a set
+    // of outputs it waits for them (they land whole), then ends the process.
+    if (ending_signal_deferred(sig))
+        return;
     remove_registered_temporaries();
     const char msg[] = "\nenvtrace: interrupted again: stopping now, nothing more is written\n";
     ssize_t ignored = ::write(2, msg, sizeof msg - 1);

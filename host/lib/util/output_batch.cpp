@@ -154,14 +154,18 @@ int remove_stale_temporaries(const std::string& target) {
     int removed = 0;
     for (; !ec && it != end; it.increment(ec)) {
         std::string name = it->path().filename().string();
+        auto is_temporary = [&](const std::string& n) {
+            return n.size() > prefix.size() + suffix.size() &&
+                   !n.compare(0, prefix.size(), prefix) &&
+                   !n.compare(n.size() - suffix.size(), suffix.size(), suffix);
+        };
         // A commit killed between keeping an old output aside and dropping it leaves the aside
-        // link (temporary + ".previous"): the dead process's too.
-        if (name.size() > kAside.size() &&
+        // link (temporary + ".previous"): the dead process's too. (A target named *.previous
+        // has temporaries of that extension: they match as they are.)
+        if (!is_temporary(name) && name.size() > kAside.size() &&
             !name.compare(name.size() - kAside.size(), kAside.size(), kAside))
             name.resize(name.size() - kAside.size());
-        if (name.size() <= prefix.size() + suffix.size() ||
-            name.compare(0, prefix.size(), prefix) ||
-            name.compare(name.size() - suffix.size(), suffix.size(), suffix))
+        if (!is_temporary(name))
             continue;
         const std::string digits =
             name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
@@ -238,6 +242,7 @@ void OutputBatch::commit() {
         if (!e.written)
             throw Error(e.target + ": was not written (a bug)");
     SignalHold hold;
+    CommitInProgress committing; // a signal taken by another thread waits for the renames
     FolderLocks locks(entries_);
     // All or nothing: a target that became a folder is refused before anything moves, and the
     // files a failed rename would leave replaced are kept aside (hard links) and put back, so a

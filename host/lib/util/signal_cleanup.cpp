@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <pthread.h>
 #include <cstring>
 #include <unistd.h>
 
@@ -14,12 +15,27 @@ struct Slot {
     char path[4096];
 };
 Slot g_slots[kSignalCleanupSlots];
+std::atomic<int> g_committing{0}, g_deferred{0};
+
+// Ends the process by `sig` as its default action would, the temporaries removed first.
+void die_of(int sig) {
+    remove_registered_temporaries();
+    struct sigaction sa;
+    std::memset(&sa, 0, sizeof sa);
+    sa.sa_handler = SIG_DFL;
+    sigemptyset(&sa.sa_mask);
+    sigaction(sig, &sa, nullptr);
+    // Raised in a handler, it runs once the handler returns (the signal is blocked meanwhile).
+    ::raise(sig);
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, sig);
+    pthread_sigmask(SIG_UNBLOCK, &set, nullptr); // outside a handler: now
+}
 
 void on_fatal_signal(int sig) {
-    remove_registered_temporaries();
-    // SA_RESETHAND restored the default action; raised here, it runs once the handler returns
-    // (the signal is blocked meanwhile) and ends the process as the signal would have.
-    ::raise(sig);
+    if (!ending_signal_deferred(sig))
+        die_of(sig);
 }
 
 } // namespace
@@ -29,7 +45,7 @@ void install_signal_cleanup() {
     std::memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_fatal_signal;
     sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESETHAND;
+    sa.sa_flags = SA_RESTART;
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
         struct sigaction old;
         // A signal ignored when envtrace started (nohup, a shell's background job) stays so.
@@ -58,6 +74,26 @@ void unregister_temporary(const std::string& path) {
             s.state.store(0, std::memory_order_release);
             return;
         }
+}
+
+bool ending_signal_deferred(int sig) {
+    if (g_committing.load() == 0)
+        return false;
+    int expected = 0;
+    g_deferred.compare_exchange_strong(expected, sig);
+    return true;
+}
+
+CommitInProgress::CommitInProgress() {
+    g_committing.fetch_add(1);
+}
+
+CommitInProgress::~CommitInProgress() {
+    if (g_committing.fetch_sub(1) == 1) {
+        const int sig = g_deferred.exchange(0);
+        if (sig != 0)
+            die_of(sig);
+    }
 }
 
 void remove_registered_temporaries() {

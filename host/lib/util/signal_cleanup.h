@@ -21,4 +21,20 @@ void unregister_temporary(const std::string& path);
 // Removes every registered file; async-signal-safe (unlink only).
 void remove_registered_temporaries();
 
+// Held over an output batch's renames (OutputBatch::commit). The committing thread blocks the
+// signals, but another thread of the process (OpenCL's, MPI's) may take one: a signal that would
+// end the process then waits until the renames are done, so that a set of outputs lands whole,
+// and ends it there (ending_signal_deferred).
+class CommitInProgress {
+  public:
+    CommitInProgress();
+    ~CommitInProgress(); // ends the process by a signal that arrived meanwhile
+    CommitInProgress(const CommitInProgress&) = delete;
+    CommitInProgress& operator=(const CommitInProgress&) = delete;
+};
+
+// For a handler about to end the process by `sig`: true where a commit is in progress, which
+// then ends it by that signal once its renames are done (async-signal-safe).
+bool ending_signal_deferred(int sig);
+
 } // namespace et
