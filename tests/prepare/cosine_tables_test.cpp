@@ -65,6 +65,33 @@ et::RgbImage random_map(int w, int h, uint32_t seed, float sun) {
     return img;
 }
 
+// A map's tables as the kernels read them, every bin a slot.
+struct Sampling {
+    etk::EtkScene S{};
+    etk::EtkParams p{};
+    explicit Sampling(const Map& m) {
+        S.env_dist = m.dist.table.data();
+        S.guide_regions = m.regions.data();
+        S.guide_cells = m.tables.data();
+        p.env = m.env;
+        p.guide_slots = ETK_NORMAL_BINS;
+        p.guide_ready = 1;
+    }
+};
+
+// 2^20 light samples of `bin`: each with the density it reports, the densities integrating to
+// one, the histogram fitting them (chi-square, two bins a test). Returns the check.
+ett::GuideSamplingCheck expect_samples_match_their_density(const Sampling& t, int bin,
+                                                           uint32_t seed) {
+    const ett::GuideSamplingCheck g =
+        ett::check_guide_sampling(t.S, t.p, bin, 1 << 20, seed, ett::sidak_alpha(0.01, 2));
+    EXPECT_EQ(g.bad, 0) << "bin " << bin;
+    EXPECT_EQ(g.mismatched, 0) << "bin " << bin;
+    EXPECT_NEAR(g.integral, 1.0, 1e-4) << "bin " << bin;
+    EXPECT_TRUE(g.chi.passed) << "bin " << bin << ": " << g.chi.report;
+    return g;
+}
+
 // The bins' weights bound the light times max(0, n . w) of every normal n of the bin, region by
 // region (conservative: no direction a vertex is lit from gets a density far below its share of
 // the light), summed here texel by texel from the distribution's masses at normals drawn all over
@@ -149,21 +176,9 @@ TEST(CosineTables, BoundTheClampedCosineOfEveryNormalOfTheBin) {
 // the bin's far side included).
 TEST(CosineTables, SamplesMatchTheirDensity) {
     const Map m = make_map(random_map(96, 48, 3, 400.0f), -1.1f);
-    etk::EtkScene S{};
-    S.env_dist = m.dist.table.data();
-    S.guide_regions = m.regions.data();
-    S.guide_cells = m.tables.data();
-    etk::EtkParams p{};
-    p.env = m.env;
-    p.guide_slots = ETK_NORMAL_BINS;
-    p.guide_ready = 1;
+    const Sampling t(m);
     for (int bin : {kBins[1], kBins[3]}) {
-        const ett::GuideSamplingCheck g =
-            ett::check_guide_sampling(S, p, bin, 1 << 20, 17u + bin, ett::sidak_alpha(0.01, 2));
-        EXPECT_EQ(g.bad, 0) << "bin " << bin;
-        EXPECT_EQ(g.mismatched, 0) << "bin " << bin;
-        EXPECT_NEAR(g.integral, 1.0, 1e-4) << "bin " << bin;
-        EXPECT_TRUE(g.chi.passed) << "bin " << bin << ": " << g.chi.report;
+        const ett::GuideSamplingCheck g = expect_samples_match_their_density(t, bin, 17u + bin);
         EXPECT_NEAR(g.mean_inv_pdf, 4.0 * M_PI, 5.0 * g.sd_inv_pdf) << "bin " << bin;
     }
 }
@@ -175,28 +190,16 @@ TEST(CosineTables, SamplesMatchTheirDensity) {
 // still reach the whole sphere (mean 1/pdf 4 pi; without, the sky below the sun is never drawn).
 TEST(CosineTables, SamplesMatchTheirDensityUnderASunOf1e11) {
     const Map m = make_map(random_map(96, 48, 3, 1e11f), 0.4f);
-    etk::EtkScene S{};
-    S.env_dist = m.dist.table.data();
-    S.guide_regions = m.regions.data();
-    S.guide_cells = m.tables.data();
-    etk::EtkParams p{};
-    p.env = m.env;
-    p.guide_slots = ETK_NORMAL_BINS;
-    p.guide_ready = 1;
+    const Sampling t(m);
     for (int bin : {kBins[2], kBins[3]}) {
-        const ett::GuideSamplingCheck g =
-            ett::check_guide_sampling(S, p, bin, 1 << 20, 31u + bin, ett::sidak_alpha(0.01, 2));
-        EXPECT_EQ(g.bad, 0) << "bin " << bin;
-        EXPECT_EQ(g.mismatched, 0) << "bin " << bin;
-        EXPECT_NEAR(g.integral, 1.0, 1e-4) << "bin " << bin;
-        EXPECT_TRUE(g.chi.passed) << "bin " << bin << ": " << g.chi.report;
+        expect_samples_match_their_density(t, bin, 31u + bin);
         // Every cell keeps a density (the mean of 1/pdf is too heavy-tailed to show it here).
         const int w = m.env.dist_w, h = m.env.dist_h;
         for (int r = 0; r < h; ++r)
             for (int c = 0; c < w; ++c) {
                 const etk::float2 uv = etk::make_float2((c + 0.5f) / w, (r + 0.5f) / h);
-                ASSERT_GT(etk::etk_pdf_2d(S.env_dist, w, h, uv) *
-                              etk::etk_guide_factor(S, p, bin, uv),
+                ASSERT_GT(etk::etk_pdf_2d(t.S.env_dist, w, h, uv) *
+                              etk::etk_guide_factor(t.S, t.p, bin, uv),
                           0.0f)
                     << "bin " << bin << " cell " << c << ", " << r;
             }
