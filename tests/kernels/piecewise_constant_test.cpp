@@ -15,11 +15,20 @@ namespace {
 
 struct Dist1D {
     std::vector<float> f, pdf, cdf;
+    std::vector<double> width_density; // what the CDF's widths hold: see the constructor
     double sum = 0;
     explicit Dist1D(std::vector<float> values) : f(std::move(values)) {
         pdf.resize(f.size());
         cdf.resize(f.size() + 1);
         sum = et::build_piecewise_constant_1d(f.data(), n(), pdf.data(), cdf.data());
+        // The CDF gives every cell with mass at least kMinCdfShare of it (the densities stay
+        // f n / sum): the density a sample is drawn with is n max(f, share sum) / (their sum).
+        double raised = 0.0;
+        for (float v : f)
+            raised += v > 0.0f ? std::max(double(v), sum * et::kMinCdfShare) : 0.0;
+        for (float v : f)
+            width_density.push_back(
+                v > 0.0f ? n() * std::max(double(v), sum * et::kMinCdfShare) / raised : 0.0);
     }
     int n() const { return static_cast<int>(f.size()); }
     float sample(float u, float* density, int* cell) const {
@@ -52,7 +61,7 @@ void check_sample(const Dist1D& d, float u) {
     EXPECT_EQ(density, etk::etk_interval_density(d.cdf.data(), d.n(), cell));
     if (d.sum > 0) {
         // Each CDF entry is within half an ulp (<= 2^-25 below 1) of its exact value.
-        EXPECT_NEAR(density, d.pdf[cell], d.n() * 0x1p-24 + 1e-6 * d.pdf[cell]);
+        EXPECT_NEAR(density, d.width_density[cell], d.n() * 0x1p-24 + 1e-6 * d.width_density[cell]);
         EXPECT_GT(d.cdf[cell + 1], d.cdf[cell]) << "a zero-width cell was chosen";
         EXPECT_GT(density, 0.0f);
         // CDF(x) = cdf[i] + (x n - i) (cdf[i+1] - cdf[i]) should give back u, up to the float
