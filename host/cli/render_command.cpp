@@ -193,6 +193,12 @@ std::string default_state_path(const std::string& exr_name) {
     return fs::path(exr_name).replace_extension(".envtrace-state").string();
 }
 
+// A render only a --time-limit or --noise-target ends: either without --spp on the command line
+// (the scene's spp is then no cap), and not a farm task's fixed range.
+bool uncapped_render(const RenderArgs& a, const RenderSettings& st, bool partial) {
+    return !partial && (st.time_limit > 0 || a.noise_target > 0) && a.spp <= 0;
+}
+
 nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const DeviceScene& ds,
                           const std::string& backend, const RenderStats& s,
                           const ProgramBuildInfo& build, const LightSet& light_set,
@@ -453,9 +459,7 @@ void run(const RenderArgs& a, Globals& g) {
             const int asked = partial ? range.second - range.first : st.spp;
             // Uncapped: --time-limit or --noise-target without --spp (the scene's spp is no cap
             // then, as for the render itself below).
-            const bool uncapped =
-                !partial && (st.time_limit > 0 || a.noise_target > 0) && a.spp <= 0;
-            if (!uncapped && state.spp > asked)
+            if (!uncapped_render(a, st, partial) && state.spp > asked)
                 throw Error(state_path + ": the render state has " + std::to_string(state.spp) +
                             " spp, more than the " + std::to_string(asked) +
                             (partial     ? " of --sample-range"
@@ -507,13 +511,12 @@ void run(const RenderArgs& a, Globals& g) {
     // --noise-target and --time-limit: --spp, when given on the command line, caps the render;
     // else only the target or the time ends it.
     const bool noise = a.noise_target > 0;
-    const int64_t end = partial                                      ? range.second
-                        : (st.time_limit > 0 || noise) && a.spp <= 0 ? int64_t(1) << 24
-                                                                     : st.spp;
+    const bool uncapped = uncapped_render(a, st, partial);
+    const int64_t end = partial ? range.second : uncapped ? int64_t(1) << 24 : st.spp;
     // The whole render's samples, kept in the state for merge (render_state.h).
-    const int whole_render = partial ? (a.spp > 0 ? a.spp : range.second)
-                             : (st.time_limit > 0 || noise) && a.spp <= 0 ? 0
-                                                                          : static_cast<int>(end);
+    const int whole_render = partial    ? (a.spp > 0 ? a.spp : range.second)
+                             : uncapped ? 0
+                                        : static_cast<int>(end);
     int64_t done = cl.broadcast(state.spp);
     if (a.resume && cl.root()) {
         renderer.resume(state.sums);

@@ -109,7 +109,7 @@ template <typename T> double build_1d(const T* f, int n, float* pdf, float* cdf,
                 floored.assign(f, f + n);
         if (!floored.empty()) {
             for (double& v : floored)
-                v = v > 0.0 ? std::max(v, floor) : 0.0;
+                v = raised_to_least_share(v, floor);
             floored_sum = prefix_sums(floored.data(), n, local, seg_offset);
         }
     }

@@ -86,6 +86,10 @@ inline float luminance(const float* rgb) {
 // are raised to it (the maps of ../shared/data have up to 3 such rows and 76 such texels, near
 // black or at a pole: their densities rise to the share, a shift below 1e-4 of the table).
 constexpr double kMinCdfShare = 0x1p-21;
+// A CDF interval's weight v as the CDF holds it, `least` = kMinCdfShare x the weights' sum.
+inline double raised_to_least_share(double v, double least) {
+    return v > 0.0 ? (v > least ? v : least) : 0.0;
+}
 
 // The 1D building block: density and CDF (n+1 entries) of f, as in the paper's Figure 2, every
 // interval with mass at least kMinCdfShare of the CDF (the densities stay f's own). Returns the

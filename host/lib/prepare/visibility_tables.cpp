@@ -78,14 +78,13 @@ void write_guide_cdf(const std::vector<double>& prob, float* cdf) {
     // Every region with mass keeps at least kMinCdfShare of the CDF, as the map's rows do: a
     // region 1e-8 of the table had no width after a sun's region, and no density.
     const double least = total * kMinCdfShare;
-    auto kept = [least](double x) { return x > 0.0 ? std::max(x, least) : 0.0; };
     total = 0.0;
     for (double x : prob)
-        total += kept(x);
+        total += raised_to_least_share(x, least);
     double run = 0.0;
     cdf[0] = 0.0f;
     for (int R = 0; R < K; ++R) {
-        run += kept(prob[R]);
+        run += raised_to_least_share(prob[R], least);
         cdf[R + 1] = total > 0.0 ? static_cast<float>(run / total) : float(R + 1) / K;
     }
     cdf[K] = 1.0f;
