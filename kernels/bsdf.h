@@ -10,9 +10,8 @@
 // (the paper's), or from the distribution of normals visible from wo (Heitz 2018, "Sampling the
 // GGX Distribution of Visible Normals"), pdf(h) = G1(wo) max(0, wo.h) D(h) / wo.z: it never
 // draws a normal that faces away from wo, so fewer samples go below the horizon and the weights
-// f cos / pdf vary only through G1(wi) and the Fresnel term; or from their even mixture, whose
-// weights are at most twice the better one's (ggx.h). EtkMaterial.ggx_sampling picks which
-// (ETK_GGX_*); the pdf follows it. Dielectrics take the mixture as visible normals.
+// f cos / pdf vary only through G1(wi) and the Fresnel term. EtkMaterial.ggx_sampling picks
+// which (ETK_GGX_*); the pdf follows it.
 //
 // A conductor (ETK_MAT_CONDUCTOR) is the same GGX lobe with the exact Fresnel reflectance of a
 // metal of complex index eta + i k per channel in place of Schlick's, and no diffuse base: it
@@ -45,7 +44,7 @@ typedef struct {
     float3 specular;
     float alpha;
     int type;
-    int ggx_sampling; // ETK_GGX_NDF, ETK_GGX_VNDF or ETK_GGX_MIX (ggx.h)
+    int ggx_sampling; // ETK_GGX_NDF or ETK_GGX_VNDF (ggx.h)
     float eta;        // dielectrics: n(far side) / n(side of wo) (dielectric.h); set by surface.h
 } EtkMaterial;
 
@@ -257,10 +256,8 @@ ETK_CL_INLINE_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
     float3 h = normalize(wo + wi);
     // The half vector's density over the reflection's Jacobian 1 / (4 wo.h).
     float d = etk_ggx_d(h.z, m.alpha);
-    float spec_v =
-        m.ggx_sampling != ETK_GGX_NDF ? etk_smith_g1(wo.z, m.alpha) * d / (4.0f * wo.z) : 0.0f;
-    float spec_n = m.ggx_sampling != ETK_GGX_VNDF ? d * h.z / (4.0f * dot(wo, h)) : 0.0f;
-    float spec = m.ggx_sampling == ETK_GGX_MIX ? 0.5f * (spec_v + spec_n) : spec_v + spec_n;
+    float spec = m.ggx_sampling == ETK_GGX_VNDF ? etk_smith_g1(wo.z, m.alpha) * d / (4.0f * wo.z)
+                                                : d * h.z / (4.0f * dot(wo, h));
     float ps = etk_specular_weight(m);
     return ps * spec + (1.0f - ps) * diffuse;
 }
@@ -317,11 +314,8 @@ ETK_CL_INLINE_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 
     }
     float ps = etk_bsdf_is_glossy(m) ? etk_specular_weight(m) : 0.0f; // lobe >= 0: cosine
     if (lobe < ps) {
-        // The mixture's technique from the lobe number's remainder (uniform on [0, ps) given
-        // the lobe): its upper half draws visible normals.
-        int visible =
-            m.ggx_sampling == ETK_GGX_VNDF || (m.ggx_sampling == ETK_GGX_MIX && lobe >= 0.5f * ps);
-        float3 h = visible ? etk_sample_ggx_vndf(wo, m.alpha, u) : etk_sample_ggx_ndf(m.alpha, u);
+        float3 h = m.ggx_sampling == ETK_GGX_VNDF ? etk_sample_ggx_vndf(wo, m.alpha, u)
+                                                  : etk_sample_ggx_ndf(m.alpha, u);
         s.wi = h * (2.0f * dot(wo, h)) - wo;
     } else {
         s.wi = etk_sample_cosine_hemisphere(u);

@@ -9,14 +9,11 @@
 
 ETK_BEGIN
 
-// How a GGX lobe is sampled (EtkMaterial.ggx_sampling, bsdf.h): from D(h) cos(theta_h), from the
-// normals visible from wo, or from the even mixture of the two (one-sample MIS: the density is
-// the mean of both, so f cos / pdf is never above twice the better technique's -- neither the
-// NDF's weights that explode at grazing wo nor the visible normals' sparser samples of
-// microfacets turned away from wo; docs/results.md).
+// How a GGX lobe is sampled (EtkMaterial.ggx_sampling, bsdf.h): from D(h) cos(theta_h) (the
+// paper's), or from the normals visible from wo (Heitz 2018), whose weights stay bounded at
+// grazing wo.
 #define ETK_GGX_NDF 0
 #define ETK_GGX_VNDF 1
-#define ETK_GGX_MIX 2
 
 // The nodes of the lobe's directional albedo table (base_albedo_table.h): square roots of the
 // cosine and of alpha, evenly spaced.

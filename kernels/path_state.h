@@ -14,10 +14,9 @@
     X(int, packet_slot)     /* per triangle: its packet x 4 + lane (bvh.h), for its vertices */    \
     X(float4, normals)      /* three vertex normals per triangle */                                \
     X(int, tri_material)    /* material index per triangle */                                      \
-    X(int, material_bin)    /* adaptive strategy: light-share bin per material */                  \
     X(float4, materials)    /* two float4 per material (bsdf.h) */                                 \
     X(float, env_dist)      /* the map's 2D distribution (piecewise_constant.h) */                 \
-    X(float, env_dist_comp) /* its MIS-compensated twin (compensated and adaptive strategies) */   \
+    X(float, env_dist_comp) /* its MIS-compensated twin (ETK_LIGHT_COMPENSATED) */                 \
     X(float, env_texels)    /* the map's RGB texels */                                             \
     X(int, env_black)       /* bits: the map's blocks that are black for certain (envmap.h) */     \
     X(float4, lights)       /* directional lights / SIS strata: direction, power */                \
@@ -34,29 +33,34 @@
 
 // Path state, one element per path in flight: X(type, name).
 #define ETK_PATH_FIELDS(X)                                                                         \
-    X(float4, ray_o)    /* origin; w: depth (surface interactions so far) */                       \
-    X(float4, ray_d)    /* direction; w: density it was drawn from (BSDF or guided mixture), < 0   \
-                           if a delta sample or none */                                            \
-    X(float4, beta)     /* throughput; w: adaptive: share of the vertex that made the ray, +4 if a \
-                           light sample; visibility: the vertex's hash-grid cell */                \
-    X(float4, radiance) /* accumulated along the path; w: its refractions' eta^2, which Russian    \
-                           roulette takes out of the throughput it weighs (integrator.h) */        \
-    X(float4, hit)      /* t, triangle (int bits), b1, b2 */                                       \
-    X(float4, shadow_o) /* shadow ray origin */                                                    \
-    X(float4, shadow_d) /* shadow ray direction; w: its length */                                  \
-    X(float4, shadow_L) /* tentative contribution of the shadow ray */                             \
-    X(int, pixel)       /* film pixel of the path */                                               \
-    X(int, learn_bin)   /* adaptive learning passes: light-share bin of the first hit, -1: none */ \
-    X(int, guide_key)   /* visibility learning: per shadow ray (queue order), cell x regions +     \
-                           region of its direction */                                              \
-    X(float, guide_val) /* visibility learning: its unoccluded L cos / pdf, 0 if blocked */        \
+    X(float4, ray_o)     /* origin */                                                              \
+    X(float4, ray_d)     /* direction */                                                           \
+    X(int, depth)        /* surface interactions before the ray's origin */                        \
+    X(float, ray_pdf)    /* density the ray was drawn from (BSDF or guided mixture); < 0 for a     \
+                            camera ray or a delta sample */                                        \
+    X(int, ray_cell)     /* the cell of the vertex that drew the ray: its light source's (binned,  \
+                            learned; etk_light_source) */                                          \
+    X(float4, beta)      /* throughput */                                                          \
+    X(float4, radiance)  /* accumulated along the path */                                          \
+    X(float, eta_scale)  /* its refractions' eta^2, which Russian roulette takes out of the        \
+                            throughput it weighs (integrator.h) */                                 \
+    X(float4, hit)       /* t, triangle (int bits), b1, b2 */                                      \
+    X(float4, shadow_o)  /* shadow ray origin */                                                   \
+    X(float4, shadow_d)  /* shadow ray direction; w: its length */                                 \
+    X(float4, shadow_L)  /* tentative contribution of the shadow ray */                            \
+    X(int, shadow_key)   /* visibility learning: its cell x regions + region of its direction */   \
+    X(float, shadow_val) /* visibility learning: its unweighted L cos / pdf */                     \
+    X(int, pixel)        /* film pixel of the path */                                              \
+    X(int, guide_key)    /* visibility learning: per shadow ray (queue order), shadow_key */       \
+    X(float, guide_val)  /* visibility learning: its shadow_val, 0 if blocked */                   \
     X(int,                                                                                         \
       guide_exit) /* visibility learning: the portal cell it leaves the box by, -1: blocked */     \
     X(float2, guide_rec_parts) /* visibility learning: its p_vis and p_portal (portal_guide.h) */  \
     X(float2, guide_parts)     /* the same per path slot, written by the shade stage */            \
     X(float4, light_dir)       /* the light sample of the path's vertex, drawn by sample_lights:   \
                                   direction; w: its density (integrator.h) */                      \
-    X(float4, light_L)         /* its radiance (rgb) */
+    X(float4, light_L)         /* its radiance (rgb) */                                            \
+    X(int, light_cell)         /* the cell sample_lights drew it in (etk_light_source) */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces; the others keep one buffer each for the whole render (the back ends
@@ -101,8 +105,8 @@ enum { ETK_COUNTERS(ETK_COUNTER_ENUM) ETK_Q_COUNT };
 // A stage's queue pushes are collected in an EtkPushes and made after the stage function returns:
 // natively one at a time (etk_push_each: the lane's own counters), on OpenCL with one global
 // atomic per work-group and queue (wavefront.cl), since every work-item bumping the same global
-// counter makes its cache line travel between cores on a CPU device (issue 12: 4% of a frame
-// on PoCL). The pushing queues are those of the first ETK_PUSH_QUEUES counters.
+// counter makes its cache line travel between cores on a CPU device (4% of a frame on
+// PoCL). The pushing queues are those of the first ETK_PUSH_QUEUES counters.
 #define ETK_PUSH_QUEUES 3
 // The largest work-group the host launches stages with (wavefront.cl keeps a group's pushes in
 // local arrays of this size).
@@ -115,6 +119,11 @@ typedef char etk_push_counters_come_first[((ETK_Q_RAY_OUT == 0) & (ETK_Q_SHADOW 
                                            (ETK_Q_SHADE == 2) & (ETK_PUSH_QUEUES == 3))
                                               ? 1
                                               : -1];
+
+// Path fields by name, for the host's reads of them (StageExecutor::read_fields).
+#define ETK_FIELD_ENUM(type, name) ETK_FIELD_##name,
+enum { ETK_PATH_FIELDS(ETK_FIELD_ENUM) ETK_FIELD_COUNT };
+#undef ETK_FIELD_ENUM
 
 #define ETK_STAGE_ENUM(kernel, fn, pushes) ETK_STAGE_##kernel,
 enum { ETK_STAGES(ETK_STAGE_ENUM) ETK_STAGE_COUNT };

@@ -58,7 +58,6 @@ struct RenderArgs {
     std::string bsdf_sampling;
     std::string light_batch;   // --light-batch: auto, on, off
     std::string guide_verdict; // --guide-verdict: on, off
-    std::string light_share;   // --light-share: "auto" or a number
     std::string lights;        // --lights: render with this directional light set
     int sis_samples = 64;
     int light_samples = 0, bsdf_samples = 0; // --light-samples, --bsdf-samples
@@ -129,8 +128,6 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
         st.light_batch = parse_light_batch(a.light_batch, cli);
     if (!a.guide_verdict.empty())
         st.guide_verdict = a.guide_verdict == "on";
-    if (!a.light_share.empty())
-        st.light_share = parse_light_share(a.light_share, cli + ": --light-share");
     if (a.light_samples_given)
         st.light_samples = check_split_count(a.light_samples, cli + ": --light-samples");
     if (a.bsdf_samples_given)
@@ -159,9 +156,6 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     // Options this render does not use: said, not silently dropped.
     if (a.sis_samples_given && st.strategy != Strategy::sis)
         warn("--sis-samples applies to --strategy sis only: ignored");
-    if (st.light_share >= 0.0f && st.strategy != Strategy::adaptive)
-        warn("a light share (--light-share, render.light_share) applies to --strategy adaptive "
-             "only: ignored");
     if (!a.guide_verdict.empty() && st.strategy != Strategy::visibility)
         warn("--guide-verdict applies to --strategy visibility only: ignored");
     if (st.backend == Backend::cpu && a.device_given)
@@ -184,8 +178,8 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
 }
 
 // The visibility strategy's verdict (render/guide_verdict.h), as the stats and the EXR name it.
-const char* verdict_name(int verdict) {
-    return verdict < 0 ? "none" : verdict ? "tables" : "mis";
+std::string verdict_name(const RenderStats& s) {
+    return s.learning.contains("verdict") ? s.learning["verdict"].get<std::string>() : "none";
 }
 
 // The state file of a render to `exr_name`: "out.exr" -> "out.envtrace-state".
@@ -230,45 +224,9 @@ nlohmann::json stats_json(const RenderArgs& a, const RenderSettings& st, const D
     j["light_batch"] = renderer.batches_light_samples();
     j["light_samples"] = st.light_samples; // per vertex (mis splitting; 1: the paper's)
     j["bsdf_samples"] = st.bsdf_samples;
-    if (st.strategy == Strategy::adaptive) {
-        // Per material: the light share its bin rendered with after learning.
-        nlohmann::json shares = nlohmann::json::object();
-        const auto& sh = renderer.light_shares();
-        const auto& fl = renderer.bin_flags();
-        for (size_t m = 0; m < ds.material_names.size() && m < ds.material_bin.size(); ++m) {
-            const size_t b = static_cast<size_t>(ds.material_bin[m]);
-            shares[ds.material_names[m]] = {
-                {"light_share", sh[b]},
-                {"distribution", (fl[b] & ETK_BIN_COMPENSATED) ? "compensated" : "full"},
-                {"ggx_sampling", (fl[b] & ETK_BIN_VNDF) ? "vndf" : "ndf"},
-                {"candidate", renderer.choices()[b]}};
-        }
-        j["light_share"] = {{"learned", st.light_share < 0.0f},
-                            {"learning_passes_extra", s.learning_passes},
-                            {"materials", shares}};
-    }
-    if (st.strategy == Strategy::visibility) {
-        nlohmann::json counts = nlohmann::json::object();
-        for (const auto& [n, cells] : s.guide_light_counts)
-            counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
-        j["visibility"] = {
-            {"learning_passes", ds.guide_options.learning_passes},
-            {"learning_passes_extra", s.learning_passes},
-            {"learning_seconds", s.guide_learning_seconds},
-            {"update_seconds", s.guide_update_seconds},
-            {"record_seconds", s.guide_record_seconds},
-            {"record_threads", s.guide_record_threads},
-            {"records", s.guide_records},
-            {"continuation_records", s.guide_continuation_records},
-            {"host_bytes", s.guide_host_bytes},
-            {"device_bytes", s.guide_device_bytes},
-            {"cells_with_fewer_light_samples", counts},
-            {"verdict", verdict_name(s.guide_verdict)},
-            {"verdict_passes", ds.guide_options.verdict_passes},
-            {"verdict_cost", verdict_cost_for(ds.guide_options, ds.params.guide_continuation != 0)},
-            {"verdict_seconds", s.guide_verdict_seconds},
-            {"verdict_mis_error", s.guide_verdict_mis_error},
-            {"verdict_tables_error", s.guide_verdict_tables_error}};
+    if (!s.learning.is_null()) { // the learning technique's figures (LearningPolicy::stats)
+        j[name_of(st.strategy)] = s.learning;
+        j[name_of(st.strategy)]["learning_passes_extra"] = s.learning_passes;
     }
     j["render_seconds"] = render_s;
     j["seconds_per_spp"] = render_s / std::max(1, rendered);
@@ -678,15 +636,12 @@ void run(const RenderArgs& a, Globals& g) {
                 {"envtrace:mis_heuristic", name_of(resolved_heuristic(st))},
                 {"envtrace:sampler", name_of(st.sampler)},
                 {"envtrace:bsdf_sampling", name_of(resolved_bsdf_sampling(st))},
-                {"envtrace:visibility_verdict", verdict_name(renderer.stats().guide_verdict)},
+                {"envtrace:visibility_verdict", verdict_name(renderer.stats())},
                 {"envtrace:seed", std::to_string(st.seed)},
                 {"envtrace:max_depth", std::to_string(st.max_depth)},
                 {"envtrace:rr_depth", std::to_string(st.rr_depth)},
                 {"envtrace:light_samples", std::to_string(st.light_samples)},
                 {"envtrace:bsdf_samples", std::to_string(st.bsdf_samples)},
-                {"envtrace:light_share", st.strategy != Strategy::adaptive ? std::string("none")
-                                         : st.light_share < 0.0f           ? std::string("auto")
-                                                                 : std::to_string(st.light_share)},
                 {"envtrace:environment", ds.map_name},
                 {"envtrace:render_seconds", std::to_string(render_s)},
                 {"envtrace:backend", renderer.name()},
@@ -789,8 +744,8 @@ void add_render_command(CLI::App& app, Globals& g) {
     cmd->add_option(
            "--strategy", a->strategy,
            "light | bsdf | mis (the paper's) | compensated (the default: MIS, the light "
-           "distribution compensated below the first vertex) | adaptive (compensated, light/BSDF "
-           "shares learned per material) | visibility (MIS, learns what blocks the map) "
+           "distribution compensated below the first vertex) | visibility (MIS, learns what blocks "
+           "the map) "
            "| cosine (compensated, the first vertex's light from the map x the cosine to its "
            "normal) | uniform | sis (structured importance sampling)")
         ->check(CLI::IsMember(strategy_names()));
@@ -807,14 +762,13 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "Render with this directional light set ('envtrace lights'), natively");
     cmd->add_option("--mis-heuristic", a->heuristic,
                     "auto | balance | power (auto: power for mis, the paper's estimator; balance "
-                    "for compensated, adaptive, visibility, cosine)")
+                    "for compensated, visibility, cosine)")
         ->check(CLI::IsMember(heuristic_names()));
     cmd->add_option("--sampler", a->sampler, "sobol | random")
         ->check(CLI::IsMember(sampler_names()));
     cmd->add_option("--bsdf-sampling", a->bsdf_sampling,
-                    "GGX lobes: vndf (visible normals) | ndf (the paper's) | mix (both, half "
-                    "each) | auto (vndf for compensated, adaptive, visibility and cosine, ndf "
-                    "otherwise)")
+                    "GGX lobes: vndf (visible normals) | ndf (the paper's) | auto (vndf for "
+                    "compensated, visibility and cosine, ndf otherwise)")
         ->check(CLI::IsMember(bsdf_sampling_names()));
     cmd->add_option("--light-batch", a->light_batch,
                     "Draw light samples " + std::to_string(ETK_LIGHT_BATCH) +
@@ -826,9 +780,6 @@ void add_render_command(CLI::App& app, Globals& g) {
                     "the image and keep the one cheaper per error (on, the default) | off (the "
                     "tables throughout)")
         ->check(CLI::IsMember({"on", "off"}));
-    cmd->add_option("--light-share", a->light_share,
-                    "Adaptive strategy: expected light samples of the two at a vertex, 0 .. "
-                    "1.875, or auto (learned per material from the first passes)");
     cmd->add_option("--seed", a->seed, "Sampler seed")->check(CLI::Range(0LL, 4294967295LL));
     cmd->add_option("--paths", a->paths,
                     "Paths in flight per lane (0: the film over the lanes; on a CPU device waves "

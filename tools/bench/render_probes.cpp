@@ -254,13 +254,12 @@ int main(int argc, char** argv) try {
             ds.settings.backend = b;
             const Frame env = render(ds, spp);
             // The in-situ comparison: the same scene with uniform light directions.
-            const int strategy = ds.params.strategy, batch = ds.params.light_batch;
-            ds.params.strategy = ETK_STRATEGY_UNIFORM;
+            const etk::EtkParams kept = ds.params;
+            et::set_technique(ds.params, et::Strategy::uniform);
             // (the device scene's rule for the stage: the uniform direction has none)
-            ds.params.light_batch = etk::etk_batches_light_samples(ds.params.strategy);
+            ds.params.light_batch = et::technique_batches_light_samples(ds.params);
             const Frame uni = render(ds, spp);
-            ds.params.strategy = strategy;
-            ds.params.light_batch = batch;
+            ds.params = kept;
             shade[k].push_back(env.shade_share);
             insitu[k].push_back((env.shade_seconds - uni.shade_seconds) / env.stage_seconds);
             if (b == et::Backend::cpu) {

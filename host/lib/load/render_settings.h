@@ -12,37 +12,30 @@
 
 namespace et {
 
+// A strategy is a name for a set of the kernels' technique switches (kernels/params.h), which
+// render/technique.h resolves; the name is what a user chooses.
 enum class Strategy : int {
-    light = ETK_STRATEGY_LIGHT,
-    bsdf = ETK_STRATEGY_BSDF,
-    mis = ETK_STRATEGY_MIS,
-    uniform = ETK_STRATEGY_UNIFORM,
-    sis = ETK_STRATEGY_SIS,
-    compensated = ETK_STRATEGY_COMPENSATED, // MIS, light samples from the compensated map
-    adaptive = ETK_STRATEGY_ADAPTIVE, // compensated map, light/BSDF shares learned per material
-    lights = ETK_STRATEGY_LIGHTS,     // a directional light set (--lights), never named by a user
-    visibility = ETK_STRATEGY_VISIBILITY, // MIS, light samples guided by learned visibility
-    cosine =
-        ETK_STRATEGY_COSINE, // MIS, light samples from the map x the cosine to the normal's bin
+    light,       // one map sample per vertex
+    bsdf,        // BSDF samples only
+    mis,         // the paper's: one of each, combined by MIS
+    uniform,     // uniform sphere directions (the baseline)
+    sis,         // structured importance sampling, direct light only
+    compensated, // MIS, light samples from the compensated map below the first vertex
+    lights,      // a directional light set (--lights), never named by a user
+    visibility,  // MIS, light samples guided by learned visibility
+    cosine,      // MIS, light samples from the map x the cosine to the normal's bin
 };
 // How GGX lobes are sampled (kernels/bsdf.h): automatic picks vndf for the strategies beyond the
-// paper -- compensated, adaptive, visibility -- and ndf, the paper's, for the others, so that
-// `mis` stays the paper's estimator (visibility: equal-spp variance lower on every scene of
-// issue 10's suite, by up to 21%, and on the five shipped scenes with GGX lobes, up to 12%, at
-// the same time per sample: docs/results.md, "The visibility strategy's verdict").
-// mix: the even mixture of both (one-sample MIS; kernels/ggx.h), never more than twice the better
-// one's variance.
-enum class BsdfSampling : int {
-    automatic = -1,
-    ndf = ETK_GGX_NDF,
-    vndf = ETK_GGX_VNDF,
-    mix = ETK_GGX_MIX
-};
+// paper -- compensated, visibility, cosine -- and ndf, the paper's, for the others, so that
+// `mis` stays the paper's estimator (visibility: equal-spp variance lower on every scene of the
+// efficiency suite, by up to 21%, and on the five shipped scenes with GGX lobes, up to 12%, at
+// the same time per sample: docs/history, "The visibility strategy's verdict").
+enum class BsdfSampling : int { automatic = -1, ndf = ETK_GGX_NDF, vndf = ETK_GGX_VNDF };
 // The MIS weights (kernels/integrator.h): automatic picks power for mis, the project's choice
 // for the paper's estimator, which every efficiency figure is relative to, and balance for the
-// strategies beyond it -- compensated, adaptive, visibility -- whose variance at equal samples
-// it lowers (visibility: 8 of 9 shipped scenes; compensated and adaptive: 19 of issue 10's 20
-// scene pairs lower or equal: docs/results.md, "The balance heuristic"). The others weigh
+// strategies beyond it -- compensated, visibility, cosine -- whose variance at equal samples it
+// lowers (visibility: 8 of 9 shipped scenes; compensated: 19 of the efficiency suite's 20 scene
+// pairs lower or equal: docs/history, "The balance heuristic"). The others weigh
 // nothing: power, unused.
 enum class MisHeuristic : int {
     automatic = -1,
@@ -71,8 +64,6 @@ SamplerKind parse_sampler(const std::string& s, const std::string& what);
 Backend parse_backend(const std::string& s, const std::string& what);
 BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what);
 LightBatch parse_light_batch(const std::string& s, const std::string& what);
-// "auto" (-1: learned) or a number in [0, kMaxLightShare].
-float parse_light_share(const std::string& s, const std::string& what);
 
 // A split count ("`what`: must be a power of two from 1 to 64" otherwise).
 int check_split_count(int n, const std::string& what);
@@ -84,8 +75,6 @@ std::vector<std::string> sampler_names();
 std::vector<std::string> backend_names();
 std::vector<std::string> bsdf_sampling_names();
 std::vector<std::string> light_batch_names();
-
-constexpr float kMaxLightShare = 1.875f; // below 2: a BSDF share is always left
 
 struct RenderSettings;
 // bsdf_sampling with automatic resolved for the strategy.
@@ -119,9 +108,6 @@ struct RenderSettings {
     // (rr_depth 2 here).
     int rr_depth = 5;
     int paths = 0; // OpenCL paths in flight per lane; 0: the film over the lanes (ClDevice)
-    // Adaptive strategy: expected light samples of the two at a vertex, in [0, kMaxLightShare];
-    // negative: learned per material bin from the first passes (render/light_share.h).
-    float light_share = -1.0f;
     // Splitting (Strategy::mis only): light and BSDF samples per vertex, powers of two up to
     // ETK_MAX_SPLIT (integrator.h, etk_split_samples). 1 and 1: the paper's estimator.
     int light_samples = 1, bsdf_samples = 1;

@@ -289,8 +289,8 @@ Scene load_scene(const std::string& path) {
         const json& s = *sp;
         const JsonReader rr = r.at("render");
         rr.warn_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
-                                 "time_limit", "paths", "bsdf_sampling", "light_share",
-                                 "light_samples", "bsdf_samples", "rr_depth"});
+                                 "time_limit", "paths", "bsdf_sampling", "light_samples",
+                                 "bsdf_samples", "rr_depth"});
         auto& st = scene.settings;
         st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
         st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
@@ -305,12 +305,6 @@ Scene load_scene(const std::string& path) {
         if (s.contains("bsdf_sampling"))
             st.bsdf_sampling = parse_bsdf_sampling(rr.string(s, "bsdf_sampling", ""),
                                                    rr.at("bsdf_sampling").where());
-        if (s.contains("light_share"))
-            st.light_share =
-                s["light_share"].is_string()
-                    ? parse_light_share(rr.string(s, "light_share", ""),
-                                        rr.at("light_share").where())
-                    : static_cast<float>(rr.number(s, "light_share", 1.0, 0.0, kMaxLightShare));
         st.seed = static_cast<uint32_t>(rr.integer(s, "seed", st.seed, 0, 4294967295LL));
         st.time_limit = rr.number(s, "time_limit", st.time_limit, 0.0, 1e7);
         st.paths = read_int(s, "paths", st.paths, 0, 1 << 26, rr);

@@ -5,6 +5,7 @@
 #include "prepare/env_compensation.h"
 
 #include "prepare/bvh_build.h"
+#include "prepare/technique.h"
 #include "prepare/visibility_tables.h"
 #include "util/error.h"
 
@@ -153,33 +154,6 @@ void add_triangles(const Scene& scene, DeviceScene& d) {
     d.triangle_count = n;
 }
 
-// The adaptive strategy's light-share bins: one per material while they fit, else one per
-// (type, roughness octave), in order of first use, wrapped when even those do not fit.
-std::vector<int> share_bins(const std::vector<Material>& materials) {
-    std::vector<int> bins;
-    if (materials.size() <= ETK_SHARE_BINS) {
-        for (size_t i = 0; i < materials.size(); ++i)
-            bins.push_back(static_cast<int>(i));
-    } else {
-        std::vector<std::pair<int, int>> keys;
-        for (const Material& m : materials) {
-            const int octave =
-                m.type == ETK_MAT_MICROFACET || m.type == ETK_MAT_CONDUCTOR ||
-                        m.type == ETK_MAT_DIELECTRIC
-                    ? static_cast<int>(std::floor(std::log2(std::max(m.roughness, 1e-3f))))
-                    : 0;
-            const std::pair<int, int> key{m.type, octave};
-            auto it = std::find(keys.begin(), keys.end(), key);
-            if (it == keys.end())
-                it = keys.insert(keys.end(), key);
-            bins.push_back(static_cast<int>(it - keys.begin()) % ETK_SHARE_BINS);
-        }
-    }
-    if (bins.empty())
-        bins.push_back(0);
-    return bins;
-}
-
 void add_materials(const Scene& scene, DeviceScene& d) {
     for (const auto& m : scene.materials) {
         // The type as a float value (bsdf.h: never an int's bits, a denormal in albedo's lane).
@@ -194,7 +168,6 @@ void add_materials(const Scene& scene, DeviceScene& d) {
     }
     if (d.materials.empty())
         d.materials.resize(2);
-    d.material_bin = share_bins(scene.materials);
     for (const auto& m : scene.materials)
         d.material_names.push_back(m.name);
 }
@@ -287,7 +260,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     p.height = scene.height;
     p.max_depth = st.max_depth;
     p.rr_depth = st.rr_depth;
-    p.strategy = static_cast<int>(st.strategy);
+    set_technique(p, st.strategy);
     p.heuristic = static_cast<int>(resolved_heuristic(st));
     p.sampler = static_cast<int>(st.sampler);
     p.seed = st.seed;
@@ -298,11 +271,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     p.bsdf_samples = st.bsdf_samples;
     // Whether batches may be used; the renderer turns them off on devices that prefer single
     // samples (LightBatch::automatic).
-    p.light_batch =
-        st.light_batch != LightBatch::off && etk::etk_batches_light_samples(p.strategy) ? 1 : 0;
-    const float share = st.light_share >= 0.0f ? std::min(st.light_share, kMaxLightShare) : 1.0f;
-    std::fill(p.light_share, p.light_share + ETK_SHARE_BINS, share);
-    std::fill(p.bin_flags, p.bin_flags + ETK_SHARE_BINS, ETK_BIN_COMPENSATED | ETK_BIN_VNDF);
+    p.light_batch = st.light_batch != LightBatch::off && technique_batches_light_samples(p) ? 1 : 0;
     add_triangles(scene, d);
     add_materials(scene, d);
     add_textures(scene, d);
@@ -320,8 +289,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     d.map_width = scene.env.image.width;
     d.map_height = scene.env.image.height;
     d.map_build_seconds = scene.env.build_seconds;
-    if (st.strategy == Strategy::compensated || st.strategy == Strategy::adaptive ||
-        st.strategy == Strategy::cosine)
+    if (p.light_first == ETK_LIGHT_COMPENSATED || p.light_deeper == ETK_LIGHT_COMPENSATED)
         d.env_dist_comp = compensate_distribution(scene.env.dist).table;
     d.env_dist = std::move(scene.env.dist.table);
     EnvBlackMask black = env_black_mask(scene.env.image);
@@ -337,6 +305,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
         d.guide_regions = guide_region_tables(d.env_dist, p.env.dist_w, p.env.dist_h);
         d.guide_cells = cosine_bin_tables(d.env_dist, d.guide_regions, p.env, kCosineAlpha);
         p.guide_slots = ETK_NORMAL_BINS;
+        p.guide_ready = 1; // prepared here, never learned
     }
     return d;
 }

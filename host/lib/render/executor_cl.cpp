@@ -300,28 +300,13 @@ void ClLane::read_counters(uint32_t* out) {
     collect_events();
 }
 
-void ClLane::read_learning(int n, int* bins) {
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_learn_bin], CL_TRUE, 0, sizeof(cl_int) * n, bins);
-}
-
-void ClLane::read_guide(int n, int* keys, float* values, int* exits, float* parts) {
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_rec_parts], CL_TRUE, 0, sizeof(cl_float2) * n,
-                             parts);
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_key], CL_TRUE, 0, sizeof(cl_int) * n, keys);
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_val], CL_TRUE, 0, sizeof(cl_float) * n,
-                             values);
-    queue_.enqueueReadBuffer(args_[etk::ETK_ARG_guide_exit], CL_TRUE, 0, sizeof(cl_int) * n, exits);
-}
-
-void ClLane::read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) {
-    const size_t bytes = sizeof(cl_float4) * n;
-    const std::pair<int, float*> fields[] = {{etk::ETK_ARG_ray_o, ray_o},
-                                             {etk::ETK_ARG_ray_d, ray_d},
-                                             {etk::ETK_ARG_beta, beta},
-                                             {etk::ETK_ARG_radiance, radiance}};
-    for (const auto& [arg, to] : fields)
-        if (to)
-            queue_.enqueueReadBuffer(args_[arg], CL_FALSE, 0, bytes, to);
+void ClLane::read_fields(int n, const std::vector<FieldRead>& reads) {
+    // Path field k is kernel argument ETK_ARG_<first field> + k (path_state.h's argument order).
+    constexpr int first = etk::ETK_ARG_ray_o;
+    static_assert(etk::ETK_FIELD_ray_o == 0, "ray_o is the first path field");
+    for (const FieldRead& r : reads)
+        queue_.enqueueReadBuffer(args_[first + r.field], CL_FALSE, 0,
+                                 path_field_bytes(r.field) * static_cast<size_t>(n), r.to);
     queue_.finish(); // the reads above are non-blocking
 }
 

@@ -50,9 +50,7 @@ class ClLane : public StageExecutor {
     void bind_queues(bool swapped) override;
     void reset_counters() override;
     void read_counters(uint32_t* counters) override;
-    void read_learning(int n, int* bins) override;
-    void read_guide(int n, int* keys, float* values, int* exits, float* parts) override;
-    void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) override;
+    void read_fields(int n, const std::vector<FieldRead>& reads) override;
     void launch(int stage, int n, const etk::EtkParams& params) override;
 
     void zero_words(const cl::Buffer& buffer, uint64_t words);

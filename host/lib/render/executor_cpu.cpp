@@ -5,6 +5,7 @@
 #include "util/timer.h"
 
 #include <algorithm>
+#include <cstring>
 #include <memory>
 #include <string>
 
@@ -50,26 +51,9 @@ class CpuDevice::Lane : public StageExecutor {
     void read_counters(uint32_t* out) override {
         std::copy(counters_, counters_ + etk::ETK_Q_COUNT, out);
     }
-    void read_learning(int n, int* bins) override {
-        std::copy(learn_bin_.get(), learn_bin_.get() + n, bins);
-    }
-    void read_guide(int n, int* keys, float* values, int* exits, float* parts) override {
-        std::copy(reinterpret_cast<const float*>(guide_rec_parts_.get()),
-                  reinterpret_cast<const float*>(guide_rec_parts_.get() + n), parts);
-        std::copy(guide_key_.get(), guide_key_.get() + n, keys);
-        std::copy(guide_val_.get(), guide_val_.get() + n, values);
-        std::copy(guide_exit_.get(), guide_exit_.get() + n, exits);
-    }
-    void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance) override {
-        auto copy = [n](const etk::float4* from, float* to) {
-            if (to)
-                std::copy(reinterpret_cast<const float*>(from),
-                          reinterpret_cast<const float*>(from + n), to);
-        };
-        copy(ray_o_.get(), ray_o);
-        copy(ray_d_.get(), ray_d);
-        copy(beta_.get(), beta);
-        copy(radiance_.get(), radiance);
+    void read_fields(int n, const std::vector<FieldRead>& reads) override {
+        for (const FieldRead& r : reads)
+            std::memcpy(r.to, field(r.field), path_field_bytes(r.field) * static_cast<size_t>(n));
     }
     // The cells' tables live in the device, not the (read-only) prepared scene.
     void set_guide_cells(const float* cells) {
@@ -102,6 +86,16 @@ class CpuDevice::Lane : public StageExecutor {
     double seconds[etk::ETK_STAGE_COUNT] = {};
 
   private:
+    const void* field(int f) const {
+        switch (f) {
+#define ET_FIELD_CASE(type, name)                                                                  \
+    case etk::ETK_FIELD_##name:                                                                    \
+        return name##_.get();
+            ETK_PATH_FIELDS(ET_FIELD_CASE)
+#undef ET_FIELD_CASE
+        }
+        throw Error("no path field " + std::to_string(f) + " (a bug)");
+    }
     etk::EtkScene scene_;
     etk::EtkFilm film_;
     etk::EtkPaths paths_{};

@@ -81,12 +81,11 @@ uint64_t render_key(const DeviceScene& scene) {
     p.sample_index = 0;
     p.first_pixel = 0;
     p.light_batch = 0; // where the map samples are drawn changes no bit of the film
-    p.learn = 0;
     h.add_value(p);
     // The visibility strategy's schedule, decided on the host: which passes learn, and its
     // verdict's passes and cost (a verdict on one side of a resume and not on the other, or
     // weighed otherwise, would switch estimators part-way).
-    if (scene.params.strategy == ETK_STRATEGY_VISIBILITY) {
+    if (scene.params.light_first == ETK_LIGHT_LEARNED) {
         const VisibilityOptions& o = scene.guide_options;
         h.add_value(static_cast<int32_t>(o.learning_passes));
         h.add_value(static_cast<int32_t>(o.verdict_passes));

@@ -17,6 +17,14 @@ namespace et {
 // The stage names (the OpenCL kernel names), indexed by ETK_STAGE_*.
 const char* stage_name(int stage);
 
+// One path field to read: ETK_FIELD_* and where its elements go.
+struct FieldRead {
+    int field;
+    void* to;
+};
+// Bytes per element of path field `field` (ETK_FIELD_*).
+size_t path_field_bytes(int field);
+
 // Runs the stages over a set of paths in flight: path state, queues and counters of its own.
 class StageExecutor {
   public:
@@ -27,32 +35,22 @@ class StageExecutor {
     virtual void read_counters(uint32_t counters[etk::ETK_Q_COUNT]) = 0;
     // Runs `stage` over entries 0 .. n-1 of its queue (nothing when n <= 0).
     virtual void launch(int stage, int n, const etk::EtkParams& params) = 0;
-    // Learning passes of the adaptive strategy: the first hit's bin of path slots 0 .. n-1.
-    virtual void read_learning(int n, int* bins) = 0;
-    // Learning passes of the visibility strategy: the records of shadow rays 0 .. n-1 (in queue
-    // order) of the last trace_shadows launch: cell and region, value, portal cell (-1: none),
-    // and the densities p_vis, p_portal of its direction (2 n floats).
-    virtual void read_guide(int n, int* keys, float* values, int* exits, float* parts);
-    // Learning passes of the continuation guide: ray_o, ray_d, beta and radiance of path slots
-    // 0 .. n-1 (4 n floats each; a null pointer skips its field).
-    virtual void read_paths(int n, float* ray_o, float* ray_d, float* beta, float* radiance);
+    // The first n elements of path fields (ETK_FIELD_*), each into its `to` (elements of the
+    // field's type, path_field_bytes apiece): what a learning technique reads between launches.
+    virtual void read_fields(int n, const std::vector<FieldRead>& reads) = 0;
 };
 
 struct RayCounts {
     uint64_t camera = 0, continuation = 0, shadow = 0;
     uint64_t shaded = 0;    // surface hits shaded (one light sample or light-set sum each)
     uint64_t nonfinite = 0; // samples dropped by the film; anything but 0 is a bug
-    // Visibility strategy: seconds the lanes spent reading the guide's records back and adding
-    // them to its sums (summed over the lanes), the learning passes' host share.
-    double guide_record_seconds = 0.0;
-    int guide_record_threads = 0; // the most host threads one bounce's records were sliced over
-    bool abandoned = false;       // a stop request ended the pass early: its film is incomplete
+    bool abandoned = false; // a stop request ended the pass early: its film is incomplete
     RayCounts& operator+=(const RayCounts& o);
 };
 
 class Film;
-class LightShareLearner;
-class VisibilityCache;
+class LearningPolicy;
+class WaveRecorder;
 
 // A back end: one or more executors ("lanes") that can run waves concurrently, and the film.
 class WavefrontDevice {
@@ -73,7 +71,7 @@ class WavefrontDevice {
     // Time per stage so far: summed over the lanes, device time for OpenCL (kernels of two lanes
     // may overlap), thread time natively.
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
-    // The visibility strategy's per-cell tables (EtkScene.guide_cells) for the passes to come.
+    // A learning technique's tables (EtkScene.guide_cells) for the passes to come.
     virtual void upload_guide(const std::vector<float>& cells);
     // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
     virtual bool prefers_light_batches() const { return true; }
@@ -89,21 +87,16 @@ class WavefrontDevice {
 using StopRequest = std::function<bool()>;
 
 // One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
-// the film. Adds the rays traced to `counts`.
-// With params.learn, hands the first-hit bins of the wave's pixels to `learner`; with
-// params.guide_learn, every bounce's shadow-ray records to `guide`.
-// host_threads: how many threads add the guide's records (the tables are the same bits with
-// any number: integer sums).
+// the film. Adds the rays traced to `counts`. A learning pass's recorder (learning_policy.h) is
+// called after every bounce and after the last.
 // Returns false where `stop` ended the wave before its film was written.
 bool run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
-              LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr,
-              int host_threads = 1, const StopRequest& stop = {});
+              WaveRecorder* recorder = nullptr, const StopRequest& stop = {});
 
 // One pass: sample params.sample_index of every pixel, in waves of the device's size handed
-// to its lanes as they free up (learner: as run_wave). `stop` may abandon it (the result's
-// `abandoned`); the waiting lanes then take no more waves.
+// to its lanes as they free up, each with its recorder from `policy` (if any). `stop` may abandon
+// it (the result's `abandoned`); the waiting lanes then take no more waves.
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
-                   LightShareLearner* learner = nullptr, VisibilityCache* guide = nullptr,
-                   const StopRequest& stop = {});
+                   LearningPolicy* policy = nullptr, const StopRequest& stop = {});
 
 } // namespace et
