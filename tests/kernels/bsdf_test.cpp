@@ -58,18 +58,10 @@ std::vector<Config> configs() {
                 {"microfacet vndf", material(ETK_MAT_MICROFACET, 0.0f, 0.9f, alpha, 1), cos_o});
             c.push_back(
                 {"plastic vndf", material(ETK_MAT_MICROFACET, 0.5f, 0.04f, alpha, 1), cos_o});
-            // The even mixture of both, with the mean of their pdfs.
-            c.push_back({"microfacet mix",
-                         material(ETK_MAT_MICROFACET, 0.0f, 0.9f, alpha, ETK_GGX_MIX), cos_o});
-            c.push_back({"plastic mix",
-                         material(ETK_MAT_MICROFACET, 0.5f, 0.04f, alpha, ETK_GGX_MIX), cos_o});
         }
         for (float alpha : {0.05f, 0.5f})
-            for (int vndf : {ETK_GGX_NDF, ETK_GGX_VNDF, ETK_GGX_MIX})
-                c.push_back({vndf == ETK_GGX_MIX ? "conductor mix"
-                             : vndf              ? "conductor vndf"
-                                                 : "conductor",
-                             conductor(alpha, vndf), cos_o});
+            for (int vndf : {ETK_GGX_NDF, ETK_GGX_VNDF})
+                c.push_back({vndf ? "conductor vndf" : "conductor", conductor(alpha, vndf), cos_o});
     }
     return c;
 }
@@ -287,9 +279,6 @@ TEST(Bsdf, PdfBoundHoldsEverywhereAndIsReachedHeadOn) {
     const etk::float3 up = n, below = etk::make_float3(0.6f, 0.0f, -0.8f);
     EXPECT_EQ(etk::etk_bsdf_pdf_bound(material(ETK_MAT_MICROFACET, 0.5f, 0.04f, 0.2f, 0), up),
               ETK_PDF_UNBOUNDED);
-    EXPECT_EQ(
-        etk::etk_bsdf_pdf_bound(material(ETK_MAT_MICROFACET, 0.5f, 0.04f, 0.2f, ETK_GGX_MIX), up),
-        ETK_PDF_UNBOUNDED); // half of it is the NDF's
     EXPECT_EQ(etk::etk_bsdf_pdf_bound(material(ETK_MAT_MIRROR, 0.0f, 0.9f, 0.2f), up),
               ETK_PDF_UNBOUNDED);
     EXPECT_EQ(etk::etk_bsdf_pdf_bound(material(ETK_MAT_DIELECTRIC, 1.0f, 0.0f, 0.2f), up),
@@ -298,43 +287,6 @@ TEST(Bsdf, PdfBoundHoldsEverywhereAndIsReachedHeadOn) {
     // A lobe of F0 0 under a white base: the diffuse bound even where NDF sampling has none.
     EXPECT_FLOAT_EQ(etk::etk_bsdf_pdf_bound(material(ETK_MAT_MICROFACET, 1.0f, 0.0f, 0.2f, 0), up),
                     1.0f / float(M_PI));
-}
-
-// The mixture's density is the mean of the NDF's and the visible normals' (so its f cos / pdf is
-// at most twice either one's), for glossy lobes with and without a base; dielectrics, which have
-// no mixture, take it as visible normals. The chi-square test above checks that its samples
-// follow that density.
-TEST(Bsdf, MixtureDensityIsTheMeanOfBothTechniques) {
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> U(0.0f, 0.99999994f);
-    for (float alpha : {0.05f, 0.3f})
-        for (int k = 0; k < 3; ++k) {
-            etk::EtkMaterial m = k == 0   ? material(ETK_MAT_MICROFACET, 0.0f, 0.9f, alpha)
-                                 : k == 1 ? material(ETK_MAT_MICROFACET, 0.5f, 0.04f, alpha)
-                                          : conductor(alpha, 0);
-            for (int i = 0; i < 2000; ++i) {
-                const etk::float3 wo = wo_of(std::max(0.02f, U(rng)));
-                const etk::float3 wi =
-                    etk::etk_sample_uniform_sphere(etk::make_float2(U(rng), U(rng)));
-                m.ggx_sampling = ETK_GGX_NDF;
-                const float pn = etk::etk_bsdf_pdf(m, wo, wi);
-                m.ggx_sampling = ETK_GGX_VNDF;
-                const float pv = etk::etk_bsdf_pdf(m, wo, wi);
-                m.ggx_sampling = ETK_GGX_MIX;
-                ASSERT_NEAR(etk::etk_bsdf_pdf(m, wo, wi), 0.5f * (pn + pv), 1e-5f * (pn + pv))
-                    << "type " << m.type << " alpha " << alpha;
-            }
-        }
-    etk::EtkMaterial glass = material(ETK_MAT_DIELECTRIC, 1.0f, 0.0f, 0.3f);
-    glass.eta = 1.5f;
-    for (int i = 0; i < 200; ++i) {
-        const etk::float3 wo = wo_of(std::max(0.02f, U(rng)));
-        const etk::float3 wi = etk::etk_sample_uniform_sphere(etk::make_float2(U(rng), U(rng)));
-        glass.ggx_sampling = ETK_GGX_VNDF;
-        const float pv = etk::etk_bsdf_pdf(glass, wo, wi);
-        glass.ggx_sampling = ETK_GGX_MIX;
-        ASSERT_EQ(etk::etk_bsdf_pdf(glass, wo, wi), pv);
-    }
 }
 
 // The conductor's Fresnel reflectance: a dielectric's when k = 0 (at every angle, against
@@ -376,7 +328,7 @@ TEST(Bsdf, ConductorOfUnitReflectanceIsTheMicrofacetLobeOfUnitF0) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> U(0.0f, 0.99999994f);
     for (float alpha : {0.05f, 0.3f, 1.0f})
-        for (int vndf : {ETK_GGX_NDF, ETK_GGX_VNDF, ETK_GGX_MIX}) {
+        for (int vndf : {ETK_GGX_NDF, ETK_GGX_VNDF}) {
             etk::EtkMaterial metal = material(ETK_MAT_CONDUCTOR, 0.0f, 0.0f, alpha, vndf);
             metal.albedo = etk::make_float3(1.0f, 1.0f, 1.0f);
             metal.specular = etk::make_float3(1e4f, 1e4f, 1e4f);

@@ -92,8 +92,10 @@ TEST(Integrator, IntersectQueuesHitsLightsEscapesAndEndsAtTheLastBounce) {
     ett::add_square(sc.triangles, glm::vec3(0.0f), glm::vec3(0, 0, 1), 1.0f, 0);
     sc.settings.max_depth = 2;
     const et::DeviceScene d = et::prepare_device_scene(sc, sc.settings);
-    std::vector<float4> ray_o = {{0, 0, 1, 0}, {0, 0, 1, 0}, {0, 0, 1, 2}};
-    std::vector<float4> ray_d = {{0, 0, -1, -1}, {0, 0, 1, -1}, {0, 0, -1, -1}};
+    std::vector<float4> ray_o(3, float4{0, 0, 1, 0});
+    std::vector<float4> ray_d = {{0, 0, -1, 0}, {0, 0, 1, 0}, {0, 0, -1, 0}};
+    std::vector<int> depth = {0, 0, 2};
+    std::vector<float> ray_pdf(3, -1.0f); // camera rays: no MIS weight at an escape
     std::vector<float4> beta(3, float4{0.5f, 0.25f, 1.0f, 0});
     std::vector<float4> radiance(3, float4{0, 0, 0, 0}), hit(3, float4{-9, -9, -9, -9});
     std::vector<int> ray_in = {0, 1, 2};
@@ -101,6 +103,8 @@ TEST(Integrator, IntersectQueuesHitsLightsEscapesAndEndsAtTheLastBounce) {
     etk::EtkPaths P{}; // what intersect and the escaped light read and write, nothing else
     P.ray_o = ray_o.data();
     P.ray_d = ray_d.data();
+    P.depth = depth.data();
+    P.ray_pdf = ray_pdf.data();
     P.beta = beta.data();
     P.radiance = radiance.data();
     P.hit = hit.data();

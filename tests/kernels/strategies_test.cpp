@@ -1,7 +1,7 @@
-// The light, bsdf, mis, compensated, adaptive, visibility and cosine strategies (and either GGX
-// sampling, any light share, and mis split into several light and BSDF samples per vertex)
-// estimate the same integral, so they converge to the same image; and the error of an unbiased
-// estimator with independent samples falls as 1/sqrt(spp).
+// The light, bsdf, mis, compensated, visibility and cosine strategies (and either GGX sampling
+// and mis split into several light and BSDF samples per vertex) estimate the same integral, so
+// they converge to the same image; and the error of an unbiased estimator with independent
+// samples falls as 1/sqrt(spp).
 //
 // Noise: every render uses the random sampler (independent passes), and the per-pixel variance
 // of the mean is measured from the passes (render_util.h). Two renders of the same image give
@@ -66,20 +66,6 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     et::Scene vndf_scene = scene(env, "mis", depth, 6);
     vndf_scene.settings.bsdf_sampling = et::BsdfSampling::vndf;
     const auto mis_vndf = ett::render(vndf_scene, "cpu", spp);
-    // The compensated strategy with the even mixture of both GGX samplers, on OpenCL (the
-    // mixture's choice and density in the kernels PoCL compiles).
-    et::Scene mix_scene = scene(env, "compensated", depth, 14);
-    mix_scene.settings.bsdf_sampling = et::BsdfSampling::mix;
-    const auto comp_mix = ett::render(mix_scene, "opencl", spp);
-    // Adaptive allocation: shares learned from the first passes, and fixed shares at both ends
-    // of the range (mostly BSDF samples; mostly light samples, the continuation too at the
-    // last bounce).
-    const auto adaptive = ett::render(scene(env, "adaptive", depth, 7), "cpu", spp);
-    et::Scene low = scene(env, "adaptive", depth, 8), high = scene(env, "adaptive", depth, 9);
-    low.settings.light_share = 0.125f;
-    high.settings.light_share = et::kMaxLightShare;
-    const auto adaptive_low = ett::render(low, "cpu", spp);
-    const auto adaptive_high = ett::render(high, "cpu", spp);
     // Light samples guided by learned visibility (tables from the first passes).
     const auto visibility = ett::render(scene(env, "visibility", depth, 10), "cpu", spp);
     // Light samples from the map times the cosine to the first vertex's normal bin.
@@ -104,10 +90,6 @@ TEST_P(Strategies, ConvergeToTheSameImage) {
     expect_agree(light, comp, "light vs compensated" + d);
     expect_agree(mis, comp, "mis vs compensated" + d);
     expect_agree(light, mis_vndf, "light vs mis+vndf" + d);
-    expect_agree(light, comp_mix, "light vs compensated+mix (OpenCL)" + d);
-    expect_agree(mis, adaptive, "mis vs adaptive" + d);
-    expect_agree(light, adaptive_low, "light vs adaptive s=0.125" + d);
-    expect_agree(mis, adaptive_high, "mis vs adaptive s=1.875" + d);
     expect_agree(mis, visibility, "mis vs visibility" + d);
     expect_agree(light, cosine, "light vs cosine" + d);
     expect_agree(light, mis_split_light, "light vs mis 4+2 samples" + d);
@@ -124,7 +106,7 @@ TEST(Strategies, AgreeUnderASunFarBrighterThanItsSky) {
     for (int k = 0; k < 3; ++k)
         sky.rgb[3 * (16 * 128 + 40) + k] = 1e11f;
     const et::EnvMap env = et::make_envmap("sun", sky, {});
-    for (const char* strategy : {"mis", "compensated", "cosine", "visibility", "adaptive"}) {
+    for (const char* strategy : {"mis", "compensated", "cosine", "visibility"}) {
         et::Scene s = ett::base_scene(16, 16, env);
         s.materials.push_back(ett::diffuse(0.8f));
         ett::add_square(s.triangles, glm::vec3(0, 1, 0), glm::vec3(0, -1, 0), 4.0f, 0);
@@ -153,7 +135,7 @@ TEST(Strategies, AgreeUnderASunFarBrighterThanItsSky) {
 }
 
 // The compensated strategy samples the full map at the path's first vertex, where the sampler's
-// stratification is best kept by its smooth warp (integrator.h, etk_light_dist), and the
+// stratification is best kept by its smooth warp (light_sampling.h), and the
 // compensated distribution below it: at depth 1 it renders the bits of the paper's MIS with the
 // compensated strategy's balance heuristic and visible-normal sampling, at depth 3 it does not.
 // Both back ends (the light batches draw from the same distribution as the shade stage).

@@ -1,5 +1,7 @@
 // Typed settings (host/lib/load/render_settings.h): every name parses to its value and back,
-// the values are the kernels' codes, and an unknown name is an error that names the choices.
+// the values are the kernels' codes (a strategy is a name alone: prepare/technique.h resolves it
+// into the kernels' switches), an unknown name is an error that names the choices, and a retired
+// name is an error that says so.
 #include "load/render_settings.h"
 #include "util/error.h"
 
@@ -18,28 +20,33 @@ TEST(RenderSettings, NamesRoundTrip) {
         EXPECT_EQ(et::name_of(et::parse_backend(n, "t")), n);
     for (const auto& n : et::bsdf_sampling_names())
         EXPECT_EQ(et::name_of(et::parse_bsdf_sampling(n, "t")), n);
-    EXPECT_EQ(et::strategy_names().size(), 9u); // "lights" is chosen by --lights only
+    EXPECT_EQ(et::strategy_names().size(), 8u); // "lights" is chosen by --lights only
 }
 
 TEST(RenderSettings, ValuesAreTheKernelCodes) {
-    EXPECT_EQ(static_cast<int>(et::parse_strategy("mis", "t")), ETK_STRATEGY_MIS);
-    EXPECT_EQ(static_cast<int>(et::parse_strategy("sis", "t")), ETK_STRATEGY_SIS);
-    EXPECT_EQ(static_cast<int>(et::Strategy::lights), ETK_STRATEGY_LIGHTS);
-    EXPECT_EQ(static_cast<int>(et::parse_strategy("compensated", "t")), ETK_STRATEGY_COMPENSATED);
-    EXPECT_EQ(static_cast<int>(et::parse_strategy("adaptive", "t")), ETK_STRATEGY_ADAPTIVE);
-    EXPECT_EQ(static_cast<int>(et::parse_strategy("visibility", "t")), ETK_STRATEGY_VISIBILITY);
-    EXPECT_EQ(static_cast<int>(et::parse_strategy("cosine", "t")), ETK_STRATEGY_COSINE);
+    // Strategies have no kernel code: each name parses to its own value and back.
+    EXPECT_EQ(et::parse_strategy("mis", "t"), et::Strategy::mis);
+    EXPECT_STREQ(et::name_of(et::Strategy::mis), "mis");
+    EXPECT_EQ(et::parse_strategy("sis", "t"), et::Strategy::sis);
+    EXPECT_STREQ(et::name_of(et::Strategy::sis), "sis");
+    EXPECT_STREQ(et::name_of(et::Strategy::lights), "lights");
+    EXPECT_EQ(et::parse_strategy("compensated", "t"), et::Strategy::compensated);
+    EXPECT_STREQ(et::name_of(et::Strategy::compensated), "compensated");
+    EXPECT_EQ(et::parse_strategy("visibility", "t"), et::Strategy::visibility);
+    EXPECT_STREQ(et::name_of(et::Strategy::visibility), "visibility");
+    EXPECT_EQ(et::parse_strategy("cosine", "t"), et::Strategy::cosine);
+    EXPECT_STREQ(et::name_of(et::Strategy::cosine), "cosine");
     // auto: visible normals for the strategies beyond the paper, the paper's sampling for mis.
     et::RenderSettings st;
     st.strategy = et::Strategy::mis;
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
-    for (et::Strategy s : {et::Strategy::compensated, et::Strategy::adaptive,
-                           et::Strategy::visibility, et::Strategy::cosine}) {
+    for (et::Strategy s :
+         {et::Strategy::compensated, et::Strategy::visibility, et::Strategy::cosine}) {
         st.strategy = s;
         EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf) << et::name_of(s);
     }
     EXPECT_EQ(static_cast<int>(et::parse_bsdf_sampling("vndf", "t")), ETK_GGX_VNDF);
-    EXPECT_EQ(static_cast<int>(et::parse_bsdf_sampling("mix", "t")), ETK_GGX_MIX);
+    EXPECT_EQ(static_cast<int>(et::parse_bsdf_sampling("ndf", "t")), ETK_GGX_NDF);
     st.strategy = et::Strategy::compensated;
     st.bsdf_sampling = et::BsdfSampling::ndf;
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
@@ -55,8 +62,7 @@ TEST(RenderSettings, AutomaticHeuristicIsPowerForThePapersEstimatorAlone) {
     EXPECT_EQ(st.heuristic, et::MisHeuristic::automatic);
     for (const auto& n : et::strategy_names()) {
         st.strategy = et::parse_strategy(n, "t");
-        const bool balance =
-            n == "compensated" || n == "adaptive" || n == "visibility" || n == "cosine";
+        const bool balance = n == "compensated" || n == "visibility" || n == "cosine";
         EXPECT_EQ(et::resolved_heuristic(st),
                   balance ? et::MisHeuristic::balance : et::MisHeuristic::power)
             << n;
@@ -68,18 +74,25 @@ TEST(RenderSettings, AutomaticHeuristicIsPowerForThePapersEstimatorAlone) {
     EXPECT_EQ(et::resolved_heuristic(st), et::MisHeuristic::balance);
 }
 
-TEST(RenderSettings, LightShares) {
-    EXPECT_EQ(et::parse_light_share("auto", "t"), -1.0f);
-    EXPECT_EQ(et::parse_light_share("0.5", "t"), 0.5f);
-    EXPECT_EQ(et::parse_light_share("1.875", "t"), et::kMaxLightShare);
-    for (const char* bad : {"2", "-0.1", "1.5x", "", "nan", "inf"}) {
-        try {
-            et::parse_light_share(bad, "command line: --light-share");
-            ADD_FAILURE() << "accepted '" << bad << "'";
-        } catch (const et::Error& e) {
-            EXPECT_NE(std::string(e.what()).find("--light-share"), std::string::npos) << e.what();
-        }
+// The retired choices (docs/history) are refused by a message that says they were retired, not
+// taken for unknown names.
+TEST(RenderSettings, RetiredNamesAreRefused) {
+    try {
+        et::parse_strategy("adaptive", "t");
+        FAIL() << "strategy 'adaptive' accepted";
+    } catch (const et::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("retired"), std::string::npos) << e.what();
     }
+    try {
+        et::parse_bsdf_sampling("mix", "t");
+        FAIL() << "BSDF sampling 'mix' accepted";
+    } catch (const et::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("retired"), std::string::npos) << e.what();
+    }
+    for (const auto& n : et::strategy_names())
+        EXPECT_NE(n, "adaptive");
+    for (const auto& n : et::bsdf_sampling_names())
+        EXPECT_NE(n, "mix");
 }
 
 // The default estimator goes beyond the paper's (docs/results.md, "The default strategy"): MIS

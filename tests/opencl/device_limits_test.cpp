@@ -136,7 +136,9 @@ class Watch : public et::StageExecutor {
     void bind_queues(bool swapped) override { lane_.bind_queues(swapped); }
     void reset_counters() override { lane_.reset_counters(); }
     void read_counters(uint32_t* c) override { lane_.read_counters(c); }
-    void read_learning(int n, int* bins) override { lane_.read_learning(n, bins); }
+    void read_fields(int n, const std::vector<et::FieldRead>& reads) override {
+        lane_.read_fields(n, reads);
+    }
     void launch(int stage, int n, const etk::EtkParams& p) override {
         lane_.launch(stage, n, p);
         ++launches;

@@ -84,14 +84,13 @@ void render_tiny(const et::DeviceScene& ds, bool past_learning) {
 void render_every_strategy(const et::Scene& s) {
     for (et::Strategy strategy :
          {et::Strategy::mis, et::Strategy::light, et::Strategy::bsdf, et::Strategy::uniform,
-          et::Strategy::compensated, et::Strategy::adaptive, et::Strategy::visibility}) {
+          et::Strategy::compensated, et::Strategy::visibility}) {
         SCOPED_TRACE(et::name_of(strategy));
         et::RenderSettings st = s.settings;
         st.strategy = strategy;
         st.backend = et::Backend::cpu;
         st.threads = 1;
-        const bool learns =
-            strategy == et::Strategy::adaptive || strategy == et::Strategy::visibility;
+        const bool learns = strategy == et::Strategy::visibility;
         render_tiny(et::prepare_device_scene(s, st), learns);
     }
 }
@@ -119,7 +118,7 @@ TEST(Memcheck, LightSetAndSisRenderNatively) {
 
 // The control, run by ctest under memcheck_control.sh: the native lanes' path state must start
 // unwritten, as a device's does, or memcheck could never see a stage read a field no stage
-// wrote (a zeroed field is "initialised"). Reading the learning bins before any stage ran and
+// wrote (a zeroed field is "initialised"). Reading the paths' depths before any stage ran and
 // branching on them must be reported, with the lane's allocation as the origin.
 TEST(MemcheckControl, UnwrittenPathStateIsReported) {
     const et::Scene s = load_small(write_scene());
@@ -128,12 +127,12 @@ TEST(MemcheckControl, UnwrittenPathStateIsReported) {
     const et::DeviceScene ds = et::prepare_device_scene(s, st);
     et::Film film(s.width, s.height);
     et::CpuDevice device(ds, film, 1, 16);
-    std::vector<int> bins(16);
-    device.lane(0).read_learning(16, bins.data());
+    std::vector<int> depths(16);
+    device.lane(0).read_fields(16, {{etk::ETK_FIELD_depth, depths.data()}});
     int negative = 0;
-    for (int b : bins)
-        negative += b < 0 ? 1 : 0; // the branch memcheck must report
-    std::printf("control: %d of 16 unwritten bins negative\n", negative);
+    for (int d : depths)
+        negative += d < 0 ? 1 : 0; // the branch memcheck must report
+    std::printf("control: %d of 16 unwritten depths negative\n", negative);
 }
 
 } // namespace

@@ -115,16 +115,14 @@ TEST_P(Backends, DepthOneEqualUpToRounding) {
     s.settings.max_depth = 1;
     s.settings.sampler = et::SamplerKind::sobol;
     s.settings.seed = 11;
-    const int spp = 20; // past the adaptive strategy's 16 learning passes
-    // The paper's MIS, MIS with the compensated distribution and visible-normal sampling, and
-    // the adaptive strategy (its light shares learned from the first passes on each back end:
-    // equal records give equal shares).
+    const int spp = 20;
+    // The paper's MIS, and MIS with the compensated distribution and visible-normal sampling.
     // The visibility strategy: its tables learned from the first passes on each back end (equal
     // records, summed in fixed point, give equal tables).
     // The cosine strategy: its bins' tables, prepared once, the same for both.
     for (et::Strategy strategy :
-         {et::Strategy::mis, et::Strategy::compensated, et::Strategy::adaptive,
-          et::Strategy::visibility, et::Strategy::cosine}) {
+         {et::Strategy::mis, et::Strategy::compensated, et::Strategy::visibility,
+          et::Strategy::cosine}) {
         SCOPED_TRACE(et::name_of(strategy));
         s.settings.strategy = strategy;
         const auto cl = ett::render(s, "opencl", spp, false);

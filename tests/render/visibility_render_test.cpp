@@ -35,8 +35,8 @@ Result render(const et::Scene& s, int threads, int from, int to,
               const et::FilmSums* resume = nullptr) {
     const ett::SampleRun run = ett::render_samples(s, threads, from, to, resume);
     const et::RenderStats& st = run.renderer->stats();
-    return {run.renderer->sums().mean(), st.guide_records, st.guide_continuation_records,
-            st.guide_verdict};
+    return {run.renderer->sums().mean(), ett::learning_count(st, "records"),
+            ett::learning_count(st, "continuation_records"), ett::learning_verdict(st)};
 }
 
 TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
@@ -70,7 +70,7 @@ std::vector<float> samples(et::Scene s, et::Strategy strategy, int from, int to,
     s.settings.strategy = strategy;
     const ett::SampleRun run = ett::render_samples(s, 2, from, to);
     if (verdict)
-        *verdict = run.renderer->stats().guide_verdict;
+        *verdict = ett::learning_verdict(run.renderer->stats());
     return run.renderer->sums().mean();
 }
 
@@ -174,9 +174,10 @@ TEST(VisibilityRender, SameBitsWithTheRecordsAddedOnSeveralHostThreads) {
         });
         for (uint32_t k = 0; k < 20; ++k) // inside the 32 learning passes
             r.render_sample(k);
-        return Result{r.sums().mean(), r.stats().guide_records,
-                      r.stats().guide_continuation_records, r.stats().guide_verdict,
-                      r.stats().guide_record_threads};
+        const et::RenderStats& st = r.stats();
+        return Result{r.sums().mean(), ett::learning_count(st, "records"),
+                      ett::learning_count(st, "continuation_records"), ett::learning_verdict(st),
+                      static_cast<int>(ett::learning_count(st, "record_threads"))};
     };
     const Result one = run(1), four = run(4);
     // Per pass (20): depth 2 records continuations at the first vertex alone, ~39,000 here.

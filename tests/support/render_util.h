@@ -92,6 +92,28 @@ inline et::Scene side_lit_room(int w, int h) {
     return s;
 }
 
+// A count among the learning technique's figures (RenderStats::learning, the visibility
+// strategy's: "records", "continuation_records", "record_threads"); 0 where nothing learns.
+inline uint64_t learning_count(const et::RenderStats& st, const char* key) {
+    return st.learning.is_object() && st.learning.contains(key) ? st.learning[key].get<uint64_t>()
+                                                                  : 0;
+}
+// The visibility strategy's verdict: 1 the tables stay, 0 MIS from then on, -1 not (yet) given.
+inline int learning_verdict(const et::RenderStats& st) {
+    if (!st.learning.is_object() || !st.learning.contains("verdict"))
+        return -1;
+    const std::string v = st.learning["verdict"].get<std::string>();
+    return v == "tables" ? 1 : v == "mis" ? 0 : -1;
+}
+// Its learned cells that take fewer light samples, per count.
+inline std::map<float, uint64_t> learning_light_counts(const et::RenderStats& st) {
+    std::map<float, uint64_t> out;
+    if (st.learning.is_object() && st.learning.contains("cells_with_fewer_light_samples"))
+        for (const auto& [n, cells] : st.learning["cells_with_fewer_light_samples"].items())
+            out[std::stof(n)] = cells.get<uint64_t>();
+    return out;
+}
+
 struct RenderResult {
     std::vector<float> mean; // RGB per pixel
     std::vector<double> var; // sample variance of one pass, per pixel and channel
@@ -135,7 +157,7 @@ inline RenderResult render(const et::Scene& scene, const std::string& backend, i
     out.mean = r->image();
     // The film drops non-finite samples instead of writing NaN; none may occur.
     EXPECT_EQ(r->stats().nonfinite_samples, 0u) << backend << ": non-finite samples dropped";
-    out.light_counts = r->stats().guide_light_counts;
+    out.light_counts = learning_light_counts(r->stats());
     out.var.assign(n, 0.0);
     if (variance && spp > 1)
         for (size_t i = 0; i < n; ++i)

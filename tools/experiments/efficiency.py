@@ -228,14 +228,14 @@ def render(scene, out, strategy, budget, seed, extra, unit="s"):
 
 
 def strategy_args(strategy):
-    """A strategy of the table: a --strategy name, optionally with +options: ndf, vndf or mix (GGX
+    """A strategy of the table: a --strategy name, optionally with +options: ndf or vndf (GGX
     sampling), balance or power (the MIS heuristic), xE (the map's distribution built on
     luminance^E, E < 1: tone-mapped), lN / bN (N light / BSDF samples per vertex), verdict or
     noverdict (the visibility strategy's verdict on or off)."""
     parts = strategy.split("+")
     a, exponent = ["--strategy", parts[0]], None
     for opt in parts[1:]:
-        if opt in ("ndf", "vndf", "mix"):
+        if opt in ("ndf", "vndf"):
             a += ["--bsdf-sampling", opt]
         elif opt in ("balance", "power"):
             a += ["--mis-heuristic", opt]
