@@ -17,6 +17,7 @@
 #include "load/scene.h"
 #include "opencl/opencl_runtime.h"
 #include "prepare/device_scene.h"
+#include "prepare/technique.h"
 #include "render/renderer.h"
 #include "util/json_file.h"
 #include "util/parallel.h"
