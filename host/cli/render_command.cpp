@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "progress.h"
 #include "render_options.h"
+#include "render_print.h"
 
 #include "image/image_io.h"
 #include "load/scene.h"
@@ -23,24 +24,6 @@
 namespace fs = std::filesystem;
 
 namespace et::cli {
-
-// out.exr -> (out.exr, out.png); out.png -> (out.exr, out.png). A build without OpenImageIO
-// writes no preview: out.pfm -> (out.pfm, "").
-std::pair<std::string, std::string> output_names(const std::string& out) {
-    fs::path p(out);
-    std::error_code ec;
-    if (!out.empty() && (out.back() == '/' || p.filename() == "." || p.filename() == ".." ||
-                         fs::is_directory(p, ec)))
-        throw Error(out + ": is a folder: name the image to write in it (e.g. " +
-                    (fs::path(out) / "render.exr").lexically_normal().string() + ")");
-    const std::string ext = lower_extension(out);
-    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
-        return {fs::path(p).replace_extension(".exr").string(), out};
-    if (ext == ".exr" || ext == ".hdr" || ext == ".pfm")
-        return {out, have_image_library() ? fs::path(p).replace_extension(".png").string() : ""};
-    throw Error(out + ": unsupported output format '" + ext +
-                "' (use .exr, .hdr, .pfm, or .png / .jpg for the preview beside an .exr)");
-}
 
 namespace {
 
@@ -114,24 +97,6 @@ RenderOutputs plan_outputs(const RenderArgs& a, const Scene& scene, const Render
     return o;
 }
 
-void print_prepared(const RenderArgs& a, const PreparedRender& p) {
-    const DeviceScene& ds = p.scene;
-    if (ds.settings.strategy == Strategy::lights)
-        std::printf("light set %s: %zu directional lights (%s)\n", ds.settings.lights.c_str(),
-                    p.light_set.lights.size(), p.light_set.method.c_str());
-    if (ds.settings.strategy == Strategy::sis) {
-        std::printf("SIS: %d strata (per level:", ds.settings.sis_samples);
-        for (int n : p.sis.level_samples)
-            std::printf(" %d", n);
-        std::printf(") precomputed in %.3f s\n", p.sis.seconds);
-    }
-    std::printf("scene %s: %zu triangles, BVH %d nodes (depth %d, SAH cost %.1f) in %.1f ms; "
-                "environment %dx%d, distribution in %.2f ms\n",
-                a.scene.c_str(), ds.triangle_count, ds.bvh.nodes, ds.bvh.depth, ds.bvh.sah_cost,
-                ds.bvh.build_seconds * 1e3, ds.map_width, ds.map_height,
-                ds.map_build_seconds * 1e3);
-}
-
 // Every rank reads and prepares everything; rank 0 alone reads the state and reserves the
 // outputs, once every input has been read.
 void set_up(const RenderArgs& a, const Globals& g, Setup& s) {
@@ -150,7 +115,7 @@ void set_up(const RenderArgs& a, const Globals& g, Setup& s) {
     s.outputs = plan_outputs(a, scene, st, s.options, cl.root());
     s.options.state_path = s.outputs.state;
     s.prepared = prepare_render(std::move(scene), st);
-    print_prepared(a, *s.prepared);
+    print_prepared(a.scene, *s.prepared);
     RenderState state;
     if (a.resume && cl.root()) {
         state = read_render_state(s.outputs.state);
@@ -163,30 +128,6 @@ void set_up(const RenderArgs& a, const Globals& g, Setup& s) {
         s.batch = reserve_outputs(s.outputs, a.resume);
     s.session = std::make_unique<RenderSession>(cl, *s.prepared, s.options, &s.build);
     s.session->resume(std::move(state));
-}
-
-void print_start(const Setup& setup, const Cluster& cl) {
-    const RenderSession& s = *setup.session;
-    const RenderSettings& st = s.settings();
-    const DeviceScene& ds = s.prepared().scene;
-    if (st.backend == Backend::opencl)
-        std::printf("OpenCL program build %.3f s (%s)\n", setup.build.seconds,
-                    setup.build.from_cache ? "cached binary" : "compiled");
-    if (s.options().resume && cl.root())
-        std::printf("resumed from %s at %d spp\n", s.options().state_path.c_str(),
-                    static_cast<int>(s.resumed_from()));
-    const std::string spp =
-        st.time_limit > 0 ? "time-limited" : std::to_string(s.end() - s.first());
-    const std::string range = s.options().partial ? " (samples " + std::to_string(s.first()) +
-                                                        ".." + std::to_string(s.end() - 1) + ")"
-                                                  : "";
-    const std::string ranks = cl.size() > 1 ? ", " + std::to_string(cl.size()) + " MPI ranks" : "";
-    std::printf("backend %s: %dx%d, %s spp%s, depth %d, strategy %s, sampler %s, %d paths in "
-                "flight%s\n",
-                s.renderer().name().c_str(), ds.width(), ds.height(), spp.c_str(), range.c_str(),
-                st.max_depth, name_of(st.strategy), name_of(st.sampler), s.renderer().paths(),
-                ranks.c_str());
-    std::fflush(stdout);
 }
 
 // Renders on every rank; a first SIGINT/SIGTERM (InterruptHandler) stops the session, which
@@ -204,60 +145,6 @@ SessionResult render(RenderSession& session, const Cluster& cl) {
     return r;
 }
 
-// Why the render stopped early, on stderr, and where its state is for --resume.
-void print_stop(const Setup& s, const SessionResult& r, const Cluster& cl) {
-    if (!cl.root())
-        return;
-    if (r.stopped && !r.signal)
-        std::fprintf(stderr,
-                     "envtrace: time limit of %g s reached inside a pass: that pass is dropped, "
-                     "the image holds the %d spp before it\n",
-                     s.session->settings().time_limit, r.spp);
-    if (r.signal)
-        std::fprintf(stderr,
-                     "envtrace: %s: stopped at %d spp; writing the %s and the state %s "
-                     "(--resume continues it; a second signal stops at once)\n",
-                     signal_name(r.signal), r.spp, s.outputs.partial ? "partial film" : "image",
-                     s.outputs.state.c_str());
-}
-
-// The summary on stdout: rates, stage times, what was written.
-void print_summary(const RenderArgs& a, const Setup& s, const SessionResult& r, double total,
-                   const Cluster& cl) {
-    const RenderStats& st = r.stats;
-    const DeviceScene& ds = s.prepared->scene;
-    const int rendered = r.spp - r.resumed_from;
-    const double secs = r.render_seconds;
-    std::printf("rendered %d spp in %.2f s: %.2f Mrays/s (%llu camera, %llu continuation, %llu "
-                "shadow), %.3g samples/s, %.4f s/spp%s\n",
-                rendered, secs, st.rays() / secs * 1e-6, (unsigned long long)st.camera_rays,
-                (unsigned long long)st.continuation_rays, (unsigned long long)st.shadow_rays,
-                double(rendered) * ds.width() * ds.height() / secs, secs / std::max(1, rendered),
-                r.stopped ? " (the time and rays include the pass abandoned at the stop)" : "");
-    if (st.nonfinite_samples > 0 && cl.root())
-        warn(a.scene + ": " + std::to_string(st.nonfinite_samples) +
-             " samples were not finite and counted as zero (a renderer bug: please "
-             "report the scene)");
-    std::printf("%s time per stage, summed over the lanes%s:",
-                ds.settings.backend == Backend::cpu ? "thread" : "device",
-                cl.size() > 1 ? " (rank 0)" : "");
-    for (const auto& [name, t] : st.stage_seconds)
-        std::printf(" %s %.3fs", name.c_str(), t);
-    const RenderOutputs& o = s.outputs;
-    const bool state = writes_state(o, r);
-    if (o.partial)
-        std::printf("\nwrote the partial film %s (samples %d..%d)%s%s (total %.2f s)\n",
-                    o.state.c_str(), r.first, r.first + r.spp - 1, o.stats.empty() ? "" : " and ",
-                    o.stats.c_str(), total);
-    else
-        std::printf("\nwrote %s%s%s%s%s at %d spp (total %.2f s)\n", o.image.c_str(),
-                    o.preview.empty() ? "" : " and ", o.preview.c_str(),
-                    state ? " and the state " : "", state ? o.state.c_str() : "", r.spp, total);
-    if (a.noise_target > 0 && cl.root())
-        std::printf("noise target %g %s at %d spp: estimated relative error %.4g\n", a.noise_target,
-                    r.noise_reached ? "reached" : "NOT reached", r.spp, r.noise_error);
-}
-
 void run(const RenderArgs& a, Globals& g) {
     const Cluster& cl = *g.cluster;
     if (cl.launched_without_mpi())
@@ -271,16 +158,16 @@ void run(const RenderArgs& a, Globals& g) {
     Setup s;
     cl.check(attempt([&] { set_up(a, g, s); }));
     s.session->start();
-    print_start(s, cl);
+    print_start(*s.session, s.build, cl);
     InterruptHandler interrupts;
     const SessionResult r = render(*s.session, cl);
-    print_stop(s, r, cl);
+    print_stop(*s.session, s.outputs, r, cl);
     cl.check(attempt([&] {
         if (cl.root())
             write_outputs(*s.batch, s.outputs, *s.session, r,
                           render_report({*s.session, r, s.build, cl.size()}));
     }));
-    print_summary(a, s, r, total.seconds(), cl);
+    print_summary(*s.session, s.outputs, r, total.seconds(), cl);
     if (r.signal)
         g.exit_code = 128 + r.signal;
 }
