@@ -333,15 +333,15 @@ std::string help_text(const std::vector<std::string>& args, const std::string& d
 TEST(CliOptions, RenderHelpShowsUserOptionsAndDefaultsExpertKnobsApart) {
     const std::string dir = ett::scratch_dir("cli-opt-help");
     const std::string help = help_text({"render", "--help"}, dir);
-    for (const char* shown : {"--spp", "--time-limit", "--noise-target", "--max-depth",
-                              "--strategy", "--seed", "--backend", "--threads", "--aovs",
-                              "--checkpoint", "--resume", "--sample-range", "--width",
-                              "--height", "--exposure", "--help-expert",
-                              "docs/scene-format.md", "else 16", "=opencl"})
+    for (const char* shown :
+         {"--spp", "--time-limit", "--noise-target", "--max-depth", "--strategy", "--seed",
+          "--backend", "--threads", "--aovs", "--checkpoint", "--resume", "--sample-range",
+          "--width", "--height", "--exposure", "--help-expert", "docs/scene-format.md", "else 16",
+          "=opencl"})
         EXPECT_NE(help.find(shown), std::string::npos) << shown << "\n" << help;
-    const char* expert[] = {"--light-batch", "--paths", "--guide-verdict", "--light-samples",
-                            "--bsdf-samples", "--mis-heuristic", "--bsdf-sampling",
-                            "--rr-depth"};
+    const char* expert[] = {"--light-batch",   "--paths",        "--guide-verdict",
+                            "--light-samples", "--bsdf-samples", "--mis-heuristic",
+                            "--bsdf-sampling", "--rr-depth"};
     for (const char* hidden : expert)
         EXPECT_EQ(help.find(hidden), std::string::npos) << hidden;
     for (const char* gone : {"--light-share", "adaptive (", "mix ("})

@@ -403,10 +403,10 @@ TEST(RenderCommand, InterruptedRenderLeavesAStateThatResumesBitIdentical) {
     const std::string state = dir + "/out.envtrace-state";
     // The noise check's line on stderr says the render loop runs (the handler is in place); a
     // target never met keeps it running.
-    const ett::CliProcess p = ett::start_envtrace(
-        args(scene, dir + "/out.exr",
-             {"--spp", "16000000", "--noise-target", "1e-6", "--seed", "7"}),
-        dir);
+    const ett::CliProcess p =
+        ett::start_envtrace(args(scene, dir + "/out.exr",
+                                 {"--spp", "16000000", "--noise-target", "1e-6", "--seed", "7"}),
+                            dir);
     ASSERT_TRUE(wait_for_text(p.err_file, "noise check at"));
     EXPECT_FALSE(fs::exists(state));
     kill(p.pid, SIGINT);
@@ -444,10 +444,10 @@ TEST(RenderCommand, InterruptedRenderLeavesAStateThatResumesBitIdentical) {
 TEST(RenderCommand, FilmSizeFromTheCommandLine) {
     const std::string dir = ett::scratch_dir("render_film_size");
     const std::string scene = write_scene(dir);
-    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr",
-                                       {"--spp", "1", "--width", "20", "--height", "7"}),
-                                  dir),
-                0);
+    expect_exit(
+        ett::run_envtrace(
+            args(scene, dir + "/out.exr", {"--spp", "1", "--width", "20", "--height", "7"}), dir),
+        0);
     const et::RgbImage img = et::read_rgb_image(dir + "/out.exr");
     EXPECT_EQ(img.width, 20);
     EXPECT_EQ(img.height, 7);
@@ -455,8 +455,8 @@ TEST(RenderCommand, FilmSizeFromTheCommandLine) {
     EXPECT_EQ(preview.width, 20);
     EXPECT_EQ(preview.height, 7);
     // Only --width: the scene's height stays.
-    expect_exit(
-        ett::run_envtrace(args(scene, dir + "/w.exr", {"--spp", "1", "--width", "9"}), dir), 0);
+    expect_exit(ett::run_envtrace(args(scene, dir + "/w.exr", {"--spp", "1", "--width", "9"}), dir),
+                0);
     const et::RgbImage w = et::read_rgb_image(dir + "/w.exr");
     EXPECT_EQ(w.width, 9);
     EXPECT_EQ(w.height, 12);
@@ -469,10 +469,10 @@ TEST(RenderCommand, ExposureChangesOnlyThePreview) {
     const std::string dir = ett::scratch_dir("render_exposure");
     const std::string scene = write_scene(dir);
     auto render_at = [&](const std::string& name, const std::string& ev) {
-        expect_exit(ett::run_envtrace(args(scene, dir + "/" + name + ".exr",
-                                           {"--spp", "2", "--exposure", ev}),
-                                      dir),
-                    0);
+        expect_exit(
+            ett::run_envtrace(
+                args(scene, dir + "/" + name + ".exr", {"--spp", "2", "--exposure", ev}), dir),
+            0);
         double sum = 0;
         for (float v : et::read_rgb_image(dir + "/" + name + ".png").rgb)
             sum += v;
@@ -494,9 +494,14 @@ TEST(RenderCommand, ExposureChangesOnlyThePreview) {
 TEST(RenderCommand, DefaultOutputGoesUnderRenders) {
     const std::string dir = ett::scratch_dir("render_default_output");
     const std::string scene = write_scene(dir);
-    const std::vector<std::string> a = {"render", scene, "--backend", "cpu", "--threads", "2",
-                                        "--spp", "1"};
-    expect_exit(ett::run_envtrace(a, dir), 0);
+    const std::vector<std::string> a = {"render",    scene, "--backend", "cpu",
+                                        "--threads", "2",   "--spp",     "1"};
+    // envtrace runs in the test's folder: this one, for the render.
+    const fs::path here = fs::current_path();
+    fs::current_path(dir);
+    const ett::CliRun r = ett::run_envtrace(a, dir);
+    fs::current_path(here);
+    expect_exit(r, 0);
     EXPECT_TRUE(fs::exists(dir + "/renders/s.exr"));
     EXPECT_TRUE(fs::exists(dir + "/renders/s.png"));
     EXPECT_FALSE(fs::exists(dir + "/s.exr"));
@@ -506,11 +511,11 @@ TEST(RenderCommand, DefaultOutputGoesUnderRenders) {
 TEST(RenderCommand, StatsAndMetadataAgree) {
     const std::string dir = ett::scratch_dir("render_report");
     const std::string scene = write_scene(dir);
-    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr",
-                                       {"--spp", "3", "--stats", dir + "/s.json"}),
-                                  dir),
-                0);
-    const std::string json = read_file(dir + "/s.json");
+    expect_exit(
+        ett::run_envtrace(
+            args(scene, dir + "/out.exr", {"--spp", "3", "--stats", dir + "/stats.json"}), dir),
+        0);
+    const std::string json = read_file(dir + "/stats.json");
     for (const auto& [key, value] :
          std::vector<std::pair<std::string, std::string>>{{"spp", "3"},
                                                           {"max_depth", "4"},
@@ -518,8 +523,7 @@ TEST(RenderCommand, StatsAndMetadataAgree) {
                                                           {"strategy", "\"compensated\""},
                                                           {"interrupted", "\"no\""}}) {
         EXPECT_NE(json.find("\"" + key + "\": " + value), std::string::npos) << key << json;
-        const std::string unquoted =
-            value[0] == '"' ? value.substr(1, value.size() - 2) : value;
+        const std::string unquoted = value[0] == '"' ? value.substr(1, value.size() - 2) : value;
         EXPECT_EQ(metadata(dir + "/out.exr", key), unquoted) << key;
     }
     EXPECT_EQ(metadata(dir + "/out.exr", "noise_target"), "none");
