@@ -176,7 +176,10 @@ void add_render_options(CLI::App& cmd, RenderArgs& a) {
                "--help-expert.");
 }
 
-RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSettings st) {
+namespace {
+
+// The values the command line gives, over the scene's.
+void apply_overrides(const RenderArgs& a, const Globals& g, RenderSettings& st) {
     const std::string cli = "command line";
     if (a.spp > 0)
         st.spp = a.spp;
@@ -212,16 +215,10 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     st.sis_samples = a.sis_samples;
     st.lights = a.lights;
     st.aovs = a.aovs;
-    if (!st.lights.empty()) {
-        // A light set is its own estimator: a strategy asked for as well would be dropped.
-        if (!a.strategy.empty())
-            throw Error(cli +
-                        ": --lights renders with the directional light set; it excludes "
-                        "--strategy " +
-                        a.strategy);
-        st.strategy = Strategy::lights;
-    }
-    // Options this render does not use: said, not silently dropped.
+}
+
+// Options this render does not use: said, not silently dropped.
+void warn_idle_options(const RenderArgs& a, const RenderSettings& st) {
     if (a.sis_samples_given && st.strategy != Strategy::sis)
         warn("--sis-samples applies to --strategy sis only: ignored");
     if (!a.guide_verdict.empty() && st.strategy != Strategy::visibility)
@@ -231,6 +228,21 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     if (st.backend == Backend::cpu && a.paths_given)
         warn("--paths sets the OpenCL back end's paths in flight: ignored with --backend cpu "
              "(each native thread keeps its own wave)");
+}
+
+} // namespace
+
+RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSettings st) {
+    apply_overrides(a, g, st);
+    if (!st.lights.empty()) {
+        // A light set is its own estimator: a strategy asked for as well would be dropped.
+        if (!a.strategy.empty())
+            throw Error("command line: --lights renders with the directional light set; it "
+                        "excludes --strategy " +
+                        a.strategy);
+        st.strategy = Strategy::lights;
+    }
+    warn_idle_options(a, st);
     const bool direct_only = st.strategy == Strategy::sis || st.strategy == Strategy::lights;
     if (direct_only && st.max_depth != 1) {
         warn("--lights and --strategy sis render direct lighting only: using --max-depth 1");
