@@ -15,6 +15,12 @@ template <class T> std::string scene_or(const char* key, const T& builtin) {
     return s.str();
 }
 
+// CLI::IsMember whose choices the option's text names instead of CLI11's list: the text offers
+// what a user should choose, while a name the library is retiring still parses.
+CLI::Validator listed_in_text(const std::vector<std::string>& names) {
+    return CLI::IsMember(names).description("");
+}
+
 // Output, samples, time and noise: what and how much to render.
 void add_output_options(CLI::App& cmd, RenderArgs& a) {
     const RenderSettings d;
@@ -64,7 +70,7 @@ void add_estimator_options(CLI::App& cmd, RenderArgs& a) {
                    "compensated below the first vertex) | visibility (MIS, learns what blocks "
                    "the map) | cosine (compensated, the first vertex's light from the map x the "
                    "cosine to its normal) | uniform | sis (structured importance sampling)")
-        ->check(CLI::IsMember(strategy_names()))
+        ->check(listed_in_text(strategy_names()))
         ->default_str(scene_or("strategy", name_of(d.strategy)));
     cmd.add_option("--sis-samples", a.sis_samples,
                    "SIS strata (one shadow ray per sample; --spp a multiple of it)")
@@ -120,7 +126,7 @@ std::vector<CLI::Option*> add_expert_options(CLI::App& cmd, RenderArgs& a) {
         cmd.add_option("--bsdf-sampling", a.bsdf_sampling,
                        "GGX lobes: vndf (visible normals) | ndf (the paper's) | auto (vndf for "
                        "compensated, visibility and cosine, ndf otherwise)")
-            ->check(CLI::IsMember(bsdf_sampling_names()))
+            ->check(listed_in_text(bsdf_sampling_names()))
             ->default_str("auto"),
         cmd.add_option("--light-samples", a.light_samples,
                        "mis: light samples per vertex (splitting, a power of two up to 64)")

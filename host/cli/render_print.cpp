@@ -60,10 +60,10 @@ void print_stop(const RenderSession& s, const RenderOutputs& o, const SessionRes
                      s.settings().time_limit, r.spp);
     if (r.signal)
         std::fprintf(stderr,
-                     "envtrace: %s: stopped at %d spp; writing the %s and the state %s "
-                     "(--resume continues it; a second signal stops at once)\n",
-                     signal_name(r.signal), r.spp, o.partial ? "partial film" : "image",
-                     o.state.c_str());
+                     "envtrace: %s: stopped at %d spp; writing %s%s (--resume continues it; "
+                     "a second signal stops at once)\n",
+                     signal_name(r.signal), r.spp,
+                     o.partial ? "the partial film " : "the image and the state ", o.state.c_str());
 }
 
 void print_summary(const RenderSession& s, const RenderOutputs& o, const SessionResult& r,

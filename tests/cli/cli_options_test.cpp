@@ -344,9 +344,12 @@ TEST(CliOptions, RenderHelpShowsUserOptionsAndDefaultsExpertKnobsApart) {
                             "--bsdf-sampling", "--rr-depth"};
     for (const char* hidden : expert)
         EXPECT_EQ(help.find(hidden), std::string::npos) << hidden;
-    for (const char* gone : {"--light-share", "adaptive (", "mix ("})
-        EXPECT_EQ(help.find(gone), std::string::npos) << gone;
     const std::string all = help_text({"render", "--help-expert"}, dir);
+    // Retired: the adaptive strategy, its light share and the mixed GGX sampling.
+    for (const char* gone : {"--light-share", "adaptive", "mix"}) {
+        EXPECT_EQ(help.find(gone), std::string::npos) << gone;
+        EXPECT_EQ(all.find(gone), std::string::npos) << gone;
+    }
     for (const char* listed : expert)
         EXPECT_NE(all.find(listed), std::string::npos) << listed;
     EXPECT_NE(all.find("--spp"), std::string::npos);
