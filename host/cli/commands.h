@@ -7,9 +7,11 @@
 #include <string>
 #include <utility>
 
-namespace et::cli {
-
+namespace et {
 class Cluster;
+}
+
+namespace et::cli {
 
 struct Globals {
     int device = 0;

@@ -1,6 +1,6 @@
 // envtrace: Monte Carlo rendering with natural illumination.
-#include "cluster.h"
 #include "commands.h"
+#include "session/cluster.h"
 #include "util/error.h"
 #include "util/signal_cleanup.h"
 #include "opencl/opencl_runtime.h"
@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
     // its image is written: stdout's writes then fail quietly instead of raising SIGPIPE.
     std::signal(SIGPIPE, SIG_IGN);
     // Under mpirun: MPI starts here and ends when main returns (the ranks of `render`).
-    et::cli::Cluster cluster(&argc, &argv);
+    et::Cluster cluster(&argc, &argv);
     // A signal that ends envtrace (convert, lights, merge ... or a render's second) removes the
     // temporaries of the outputs it was writing.
     et::install_signal_cleanup();
@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
             return app.exit(e);
         std::cerr << "envtrace: error: " << e.what() << " (see envtrace --help)\n";
         return 1;
-    } catch (const et::cli::ClusterError& e) {
+    } catch (const et::ClusterError& e) {
         // A failure of one or more ranks: rank 0 names them, the others stay silent.
         if (*e.what())
             std::cerr << "envtrace: error: " << e.what() << "\n";

@@ -11,6 +11,7 @@
 
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -314,6 +315,52 @@ TEST(CliOptions, CommandLinesThatDoNotParseAreOneErrorLineAndStatusOne) {
     }
     const ett::CliRun help = ett::run_envtrace({"render", "--help"}, dir);
     EXPECT_EQ(help.code(), 0) << help.err;
+}
+
+// The help text as a string: stdout of `envtrace ARGS` (run_envtrace keeps stderr only).
+std::string help_text(const std::vector<std::string>& args, const std::string& dir) {
+    std::string command = ENVTRACE_EXE;
+    for (const std::string& a : args)
+        command += " " + a;
+    command += " > " + dir + "/help.txt";
+    EXPECT_EQ(std::system(command.c_str()), 0) << command;
+    std::ifstream in(dir + "/help.txt");
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// `render --help` lists what a user chooses, with defaults, and points at the scene format; the
+// internal knobs are listed by --help-expert only, and still work.
+TEST(CliOptions, RenderHelpShowsUserOptionsAndDefaultsExpertKnobsApart) {
+    const std::string dir = ett::scratch_dir("cli-opt-help");
+    const std::string help = help_text({"render", "--help"}, dir);
+    for (const char* shown :
+         {"--spp", "--time-limit", "--noise-target", "--max-depth", "--strategy", "--seed",
+          "--backend", "--threads", "--aovs", "--checkpoint", "--resume", "--sample-range",
+          "--width", "--height", "--exposure", "--help-expert", "docs/scene-format.md", "else 16",
+          "=opencl"})
+        EXPECT_NE(help.find(shown), std::string::npos) << shown << "\n" << help;
+    const char* expert[] = {"--light-batch",   "--paths",        "--guide-verdict",
+                            "--light-samples", "--bsdf-samples", "--mis-heuristic",
+                            "--bsdf-sampling", "--rr-depth"};
+    for (const char* hidden : expert)
+        EXPECT_EQ(help.find(hidden), std::string::npos) << hidden;
+    const std::string all = help_text({"render", "--help-expert"}, dir);
+    // Retired: the adaptive strategy, its light share and the mixed GGX sampling.
+    for (const char* gone : {"--light-share", "adaptive", "mix"}) {
+        EXPECT_EQ(help.find(gone), std::string::npos) << gone;
+        EXPECT_EQ(all.find(gone), std::string::npos) << gone;
+    }
+    for (const char* listed : expert)
+        EXPECT_NE(all.find(listed), std::string::npos) << listed;
+    EXPECT_NE(all.find("--spp"), std::string::npos);
+    // An expert knob still renders (and is checked) though --help does not list it.
+    const std::string scene = write_scene(dir);
+    const ett::CliRun r = ett::run_envtrace(
+        render(scene, dir + "/o.exr", {"--spp", "1", "--rr-depth", "2", "--light-batch", "off"}),
+        dir);
+    EXPECT_EQ(r.code(), 0) << r.err;
+    expect_error(ett::run_envtrace(render(scene, dir + "/o.exr", {"--light-share", "0.5"}), dir),
+                 "--light-share");
 }
 
 // Empty values are refused by the option's name (`compare --json ""` wrote nothing, status 0;

@@ -3,7 +3,8 @@
 // abandon a pass in flight; a render killed with SIGKILL and
 // resumed from its state equals the uninterrupted render bit for bit; a state of another render
 // is refused; a time limit shorter than a pass still renders a sample; no output replaces an
-// input of the run.
+// input of the run; an interrupted render leaves a state without --checkpoint; the film size and
+// the preview's exposure from the command line; the default output folder.
 #include "cli_run.h"
 #include "deep_scene.h"
 #include "image/image_io.h"
@@ -382,6 +383,152 @@ TEST(RenderCommand, OutputsNeverReplaceInputs) {
         refused(dir + "/out.exr", {"--checkpoint", "1", "--state", map}); // the state
         EXPECT_FALSE(fs::exists(dir + "/out.exr"));
     }
+}
+
+// Waits (up to 60 s) until `path` holds `text`.
+bool wait_for_text(const std::string& path, const std::string& text) {
+    for (int i = 0; i < 12000; ++i) {
+        if (read_file(path).find(text) != std::string::npos)
+            return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return false;
+}
+
+// SIGINT on a render without --checkpoint still leaves a state (it said "no such file" to
+// --resume before), named on stderr, and the resumed render equals the uninterrupted one.
+TEST(RenderCommand, InterruptedRenderLeavesAStateThatResumesBitIdentical) {
+    const std::string dir = ett::scratch_dir("render_interrupt_state");
+    const std::string scene = write_scene(dir);
+    const std::string state = dir + "/out.envtrace-state";
+    // The noise check's line on stderr says the render loop runs (the handler is in place); a
+    // target never met keeps it running.
+    const ett::CliProcess p =
+        ett::start_envtrace(args(scene, dir + "/out.exr",
+                                 {"--spp", "16000000", "--noise-target", "1e-6", "--seed", "7"}),
+                            dir);
+    ASSERT_TRUE(wait_for_text(p.err_file, "noise check at"));
+    EXPECT_FALSE(fs::exists(state));
+    kill(p.pid, SIGINT);
+    const ett::CliRun r = ett::finish_envtrace(p, 120);
+    expect_exit(r, 128 + SIGINT);
+    EXPECT_NE(r.err.find("the state " + state), std::string::npos) << r.err;
+    const int reached = std::stoi("0" + metadata(dir + "/out.exr", "spp"));
+    ASSERT_GE(reached, 1);
+    ASSERT_TRUE(fs::exists(state));
+    EXPECT_EQ(et::read_render_state(state).spp, reached);
+    EXPECT_TRUE(temporaries_in(dir).empty()) << temporaries_in(dir)[0];
+
+    const int total = reached + 5;
+    expect_exit(ett::run_envtrace(args(scene, dir + "/out.exr",
+                                       {"--spp", std::to_string(total), "--resume", "--seed", "7"}),
+                                  dir, 120),
+                0);
+    EXPECT_EQ(metadata(dir + "/out.exr", "resumed_from_spp"), std::to_string(reached));
+    expect_exit(ett::run_envtrace(args(scene, dir + "/whole.exr",
+                                       {"--spp", std::to_string(total), "--seed", "7"}),
+                                  dir, 120),
+                0);
+    const et::RgbImage a = et::read_rgb_image(dir + "/out.exr");
+    const et::RgbImage b = et::read_rgb_image(dir + "/whole.exr");
+    ASSERT_EQ(a.rgb.size(), b.rgb.size());
+    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0)
+        << "the resumed render differs from the uninterrupted one";
+    // A render that ends on its own keeps no state it was not asked for.
+    expect_exit(ett::run_envtrace(args(scene, dir + "/plain.exr", {"--spp", "2"}), dir), 0);
+    EXPECT_FALSE(fs::exists(dir + "/plain.envtrace-state"));
+}
+
+// --width and --height replace the scene's film size (16 x 12): the image, the stats and the
+// state say the same size.
+TEST(RenderCommand, FilmSizeFromTheCommandLine) {
+    const std::string dir = ett::scratch_dir("render_film_size");
+    const std::string scene = write_scene(dir);
+    expect_exit(
+        ett::run_envtrace(
+            args(scene, dir + "/out.exr", {"--spp", "1", "--width", "20", "--height", "7"}), dir),
+        0);
+    const et::RgbImage img = et::read_rgb_image(dir + "/out.exr");
+    EXPECT_EQ(img.width, 20);
+    EXPECT_EQ(img.height, 7);
+    const et::RgbImage preview = et::read_rgb_image(dir + "/out.png");
+    EXPECT_EQ(preview.width, 20);
+    EXPECT_EQ(preview.height, 7);
+    // Only --width: the scene's height stays.
+    expect_exit(ett::run_envtrace(args(scene, dir + "/w.exr", {"--spp", "1", "--width", "9"}), dir),
+                0);
+    const et::RgbImage w = et::read_rgb_image(dir + "/w.exr");
+    EXPECT_EQ(w.width, 9);
+    EXPECT_EQ(w.height, 12);
+    expect_exit(ett::run_envtrace(args(scene, dir + "/z.exr", {"--width", "0"}), dir), 1);
+}
+
+// --exposure EV scales the preview's radiance by 2^EV before its tone curve: +2 EV is brighter,
+// -2 EV darker, and the linear image is the same bits whatever the exposure.
+TEST(RenderCommand, ExposureChangesOnlyThePreview) {
+    const std::string dir = ett::scratch_dir("render_exposure");
+    const std::string scene = write_scene(dir);
+    auto render_at = [&](const std::string& name, const std::string& ev) {
+        expect_exit(
+            ett::run_envtrace(
+                args(scene, dir + "/" + name + ".exr", {"--spp", "2", "--exposure", ev}), dir),
+            0);
+        double sum = 0;
+        for (float v : et::read_rgb_image(dir + "/" + name + ".png").rgb)
+            sum += v;
+        return sum;
+    };
+    const double dark = render_at("dark", "-2"), plain = render_at("plain", "0");
+    const double bright = render_at("bright", "2");
+    EXPECT_LT(dark, plain);
+    EXPECT_LT(plain, bright);
+    const et::RgbImage a = et::read_rgb_image(dir + "/dark.exr");
+    const et::RgbImage b = et::read_rgb_image(dir + "/bright.exr");
+    ASSERT_EQ(a.rgb.size(), b.rgb.size());
+    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0);
+    expect_exit(ett::run_envtrace(args(scene, dir + "/x.exr", {"--exposure", "nan"}), dir), 1);
+}
+
+// Without -o the image goes under renders/ in the current folder (created), named by the
+// scene's "output", else after the scene file: never among a checkout's sources.
+TEST(RenderCommand, DefaultOutputGoesUnderRenders) {
+    const std::string dir = ett::scratch_dir("render_default_output");
+    const std::string scene = write_scene(dir);
+    const std::vector<std::string> a = {"render",    scene, "--backend", "cpu",
+                                        "--threads", "2",   "--spp",     "1"};
+    // envtrace runs in the test's folder: this one, for the render.
+    const fs::path here = fs::current_path();
+    fs::current_path(dir);
+    const ett::CliRun r = ett::run_envtrace(a, dir);
+    fs::current_path(here);
+    expect_exit(r, 0);
+    EXPECT_TRUE(fs::exists(dir + "/renders/s.exr"));
+    EXPECT_TRUE(fs::exists(dir + "/renders/s.png"));
+    EXPECT_FALSE(fs::exists(dir + "/s.exr"));
+}
+
+// The stats JSON and the image's metadata come from one description: the facts both carry agree.
+TEST(RenderCommand, StatsAndMetadataAgree) {
+    const std::string dir = ett::scratch_dir("render_report");
+    const std::string scene = write_scene(dir);
+    expect_exit(
+        ett::run_envtrace(
+            args(scene, dir + "/out.exr", {"--spp", "3", "--stats", dir + "/stats.json"}), dir),
+        0);
+    const std::string json = read_file(dir + "/stats.json");
+    for (const auto& [key, value] :
+         std::vector<std::pair<std::string, std::string>>{{"spp", "3"},
+                                                          {"max_depth", "4"},
+                                                          {"resumed_from_spp", "0"},
+                                                          {"strategy", "\"compensated\""},
+                                                          {"interrupted", "\"no\""}}) {
+        EXPECT_NE(json.find("\"" + key + "\": " + value), std::string::npos) << key << json;
+        const std::string unquoted = value[0] == '"' ? value.substr(1, value.size() - 2) : value;
+        EXPECT_EQ(metadata(dir + "/out.exr", key), unquoted) << key;
+    }
+    EXPECT_EQ(metadata(dir + "/out.exr", "noise_target"), "none");
+    EXPECT_EQ(metadata(dir + "/out.exr", "light_share"), "");
+    EXPECT_EQ(json.find("noise_target"), std::string::npos);
 }
 
 } // namespace

@@ -1,8 +1,8 @@
-// The cost of the film's reduction across MPI ranks (host/cli/cluster.h, Cluster::reduce) and of
-// adding one pass to the exact sums (FilmSums::add_pass), for films of 512x512 to 4096x4096.
+// The cost of the film's reduction across MPI ranks (host/lib/session/cluster.h, Cluster::reduce)
+// and of adding one pass to the exact sums (FilmSums::add_pass), for films of 512x512 to 4096x4096.
 // Run under mpirun (rank 0 prints one JSON line per size); alone it measures add_pass only.
 //   mpirun -np 2 build/tools/bench/film_reduce [--runs R] [--sizes 512,1024,2048,4096]
-#include "cluster.h"
+#include "session/cluster.h"
 #include "render/film.h"
 #include "render/film_sums.h"
 #include "util/timer.h"
@@ -28,7 +28,7 @@ double median(std::vector<double> v) {
 } // namespace
 
 int main(int argc, char** argv) {
-    et::cli::Cluster cluster(&argc, &argv);
+    et::Cluster cluster(&argc, &argv);
     int runs = 5;
     std::vector<int> sizes = {512, 1024, 2048, 4096};
     for (int i = 1; i + 1 < argc; i += 2) {

@@ -1,5 +1,5 @@
-// The ranks of one render under mpirun (Open MPI), or a single process. Only the command line
-// knows about MPI: when envtrace is built with it (ENVTRACE_MPI) and started by mpirun, the
+// The ranks of one render under mpirun (Open MPI), or a single process. Only this file's source
+// includes MPI: when envtrace is built with it (ENVTRACE_MPI) and started by mpirun, the
 // ranks render disjoint sample indices of one film and rank 0 writes the outputs; otherwise
 // every call here is the trivial one of a cluster of one.
 //
@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <string>
 
-namespace et::cli {
+namespace et {
 
 // A failure of one or more ranks; what() is empty on the ranks that do not report it.
 class ClusterError : public Error {
@@ -58,4 +58,17 @@ class Cluster {
     std::string host_;
 };
 
-} // namespace et::cli
+// The message of the exception in flight, as main prints it (for Cluster::check).
+std::string error_text();
+
+// Runs f, returning its error message ("" when it succeeded): a rank's part of Cluster::check.
+template <class F> std::string attempt(F&& f) {
+    try {
+        f();
+        return "";
+    } catch (...) {
+        return error_text();
+    }
+}
+
+} // namespace et

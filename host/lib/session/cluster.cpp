@@ -1,4 +1,5 @@
-#include "cluster.h"
+#include "session/cluster.h"
+#include "opencl/opencl_runtime.h"
 
 #include <algorithm>
 #include <chrono>
@@ -11,7 +12,7 @@
 #include <mpi.h>
 #endif
 
-namespace et::cli {
+namespace et {
 namespace {
 
 // The world size mpirun (Open MPI, or a PMI launcher) announces to its ranks; 0 if none.
@@ -201,4 +202,18 @@ FilmSums Cluster::reduce(const FilmSums& mine) const {
 #endif
 }
 
-} // namespace et::cli
+std::string error_text() {
+    try {
+        throw;
+    } catch (const cl::Error& e) {
+        return std::string("OpenCL call ") + e.what() + " failed: " + cl_error_name(e.err());
+    } catch (const std::bad_alloc&) {
+        return "out of memory (a smaller film, fewer --paths or a smaller scene needs less)";
+    } catch (const std::exception& e) {
+        return e.what();
+    } catch (...) {
+        return "unexpected exception (not a std::exception)";
+    }
+}
+
+} // namespace et
