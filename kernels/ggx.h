@@ -13,7 +13,7 @@ ETK_BEGIN
 // normals visible from wo, or from the even mixture of the two (one-sample MIS: the density is
 // the mean of both, so f cos / pdf is never above twice the better technique's -- neither the
 // NDF's weights that explode at grazing wo nor the visible normals' sparser samples of
-// microfacets turned away from wo; docs/results.md).
+// microfacets turned away from wo; docs/history/results-journal.md).
 #define ETK_GGX_NDF 0
 #define ETK_GGX_VNDF 1
 #define ETK_GGX_MIX 2
