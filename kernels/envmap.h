@@ -306,7 +306,7 @@ ETK_FN void etk_env_radiance_batch(ETK_GLOBAL const float* texels, EtkEnvMap env
 // 580.159.04) the interleaved steps inside the wavefront program drew wrong samples -- images
 // 10% dark, different from run to run -- though the same functions pass in a small kernel
 // (EnvmapSampling tests) and the sample_lights stage drawing one by one gives the shade stage's
-// own bits (README, "A GPU"). A GPU hides the latency with other work-items anyway.
+// own bits (docs/devices.md). A GPU hides the latency with other work-items anyway.
 ETK_CL_INLINE_FN void etk_env_light_batch(ETK_GLOBAL const float* dist,
                                           ETK_GLOBAL const float* texels, EtkEnvMap env,
                                           const float* xu, const float* xv, float* dx, float* dy,
