@@ -22,7 +22,7 @@
 #define ETK_FN static inline
 // For small helpers on hot paths that take pointers to the caller's locals (the BVH lane) or a
 // large struct by value (EtkParams): a call that is not inlined spills them or copies the struct,
-// and PoCL's inliner leaves such calls (issue 12: 0.73x -> 0.87x of native from etk_bvh_lane
+// and PoCL's inliner leaves such calls (0.73x -> 0.87x of native from etk_bvh_lane
 // alone). Everything else stays plain inline: inlining it all multiplies PoCL's build time by 8.
 #if defined(__clang__) || defined(__GNUC__)
 #define ETK_FORCE_INLINE_FN static inline __attribute__((always_inline))
@@ -31,7 +31,7 @@
 #endif
 // Forced inline in OpenCL C only: functions that take a struct by value (EtkMaterial, EtkEnvMap,
 // EtkParams, EtkSurface) and that PoCL leaves as calls, copying the struct through memory on
-// every call (issue 12: PoCL's shade stage 0.98-1.09x native's -> 0.74-0.84x at depth 5), while
+// every call (PoCL's shade stage 0.98-1.09x native's -> 0.74-0.84x at depth 5), while
 // GCC, forced, made the native back end slower (the visibility strategy's render +5%), so
 // natively they stay plain inline. Plain too where the host defines ETK_PLAIN_INLINE: for
 // Oclgrind, whose interpreter has no llvm.experimental.noalias.scope.decl, which clang emits when

@@ -1,4 +1,4 @@
-// Path guiding of the continuation (the visibility strategy; issue 11). In a room lit through
+// Path guiding of the continuation (the visibility strategy). In a room lit through
 // windows most of the light a wall receives comes from the sunlit patch on the floor, which a
 // diffuse BSDF sample finds by chance. The visibility strategy's hash-grid cells
 // (visibility_guide.h) also hold a distribution over ETK_GUIDE_REGIONS equal-area regions of the

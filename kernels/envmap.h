@@ -164,8 +164,8 @@ ETK_CL_INLINE_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEn
 // restart the loads behind it. The same functions in the same order per sample as etk_env_sample,
 // so the same bits. B = 32: window_room (mis, 320 x 240, native), the shade stage and this one
 // together 18% below the shade stage alone, against 10% / 16% / 18% / 16% for B = 8 / 16 / 32 / 64
-// (tools/bench/README.md). One constant for the host (which launches one work-item per batch) and
-// the device.
+// (docs/history/bench-journal.md). One constant for the host (which launches one work-item per
+// batch) and the device.
 #define ETK_LIGHT_BATCH 32
 // Every loop runs over arrays of scalars: LLVM (PoCL) vectorises no loop that holds a
 // vector-typed value (a float2 or float3), GCC (native) splits those itself.
@@ -306,7 +306,7 @@ ETK_FN void etk_env_radiance_batch(ETK_GLOBAL const float* texels, EtkEnvMap env
 // 580.159.04) the interleaved steps inside the wavefront program drew wrong samples -- images
 // 10% dark, different from run to run -- though the same functions pass in a small kernel
 // (EnvmapSampling tests) and the sample_lights stage drawing one by one gives the shade stage's
-// own bits (README, "A GPU"). A GPU hides the latency with other work-items anyway.
+// own bits (docs/devices.md). A GPU hides the latency with other work-items anyway.
 ETK_CL_INLINE_FN void etk_env_light_batch(ETK_GLOBAL const float* dist,
                                           ETK_GLOBAL const float* texels, EtkEnvMap env,
                                           const float* xu, const float* xv, float* dx, float* dy,

@@ -9,10 +9,10 @@
 #define ETK_NORMAL_BINS_H
 #include "compat.h"
 
-// 32 x 32 bins of ~6 degrees. Diffuse vertices, unoccluded, under issue 10's maps, one light and
-// one cosine sample by the balance heuristic (tools/experiments/cosine_bins.py): 8 x 8 bins leave
-// 0.22-0.44 of the paper's variance, 16 x 16 0.18-0.34, 32 x 32 0.17-0.31 (spot1Lux's one texel:
-// 1.00); 2 MB of tables.
+// 32 x 32 bins of ~6 degrees. Diffuse vertices, unoccluded, under the efficiency suite's maps, one
+// light and one cosine sample by the balance heuristic (tools/experiments/cosine_bins.py): 8 x 8
+// bins leave 0.22-0.44 of the paper's variance, 16 x 16 0.18-0.34, 32 x 32 0.17-0.31 (spot1Lux's
+// one texel: 1.00); 2 MB of tables.
 #define ETK_NORMAL_BIN_SIDE 32
 #define ETK_NORMAL_BINS (ETK_NORMAL_BIN_SIDE * ETK_NORMAL_BIN_SIDE)
 

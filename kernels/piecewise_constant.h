@@ -5,7 +5,7 @@
 //   [h, 2h+1)                   marginal CDF, h+1 entries, 0 ... 1
 //   [2h+1, 2h+1+h*w)            conditional densities p(u|v), one row of w after another
 //   [2h+1+h*w, 2h+1+h*(2w+1))   conditional CDFs, w+1 entries per row
-//   then the guide tables (cutpoint method, issue 12): Kh+1 entries for the marginal CDF, then
+//   then the guide tables (cutpoint method): Kh+1 entries for the marginal CDF, then
 //   Kw+1 per conditional CDF, K = etk_guide_cells(n). Entry k is the interval
 //   etk_find_interval returns for u = k/K (entry K: n-1), stored as a float holding an exact
 //   integer (n <= 65536), so one flat float table still holds the whole distribution and a
@@ -60,7 +60,7 @@ ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
     // Binary lifting with no branches and a number of steps that depends on n only: every
     // work-item runs the same instructions, so OpenCL compilers can vectorise across work-items.
     // Steps of n or more never move (mid >= n), so the search starts at the largest power of
-    // two below n: log2(n) steps rather than 17 (issue 12), the same result.
+    // two below n: log2(n) steps rather than 17, the same result.
     int first = 1;
     while (2 * first < n)
         first *= 2;
@@ -181,7 +181,7 @@ ETK_FN float etk_cell_coordinate(int i, float t, int n) {
 // inversion of this float CDF really samples with (the stored densities f n / sum differ from it
 // by the CDF's rounding), so a sample's density and the density evaluated at its point are one
 // number from the two CDF entries the sample has just read: sampling touches no density table
-// (issue 12: one cache line fewer per sample).
+// (one cache line fewer per sample).
 ETK_FN float etk_interval_density_between(float lo, float hi, int n) {
     return (hi - lo) * (float)n;
 }

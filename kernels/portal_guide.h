@@ -1,4 +1,4 @@
-// Learned portals (the visibility strategy; issue 11). In a room lit through windows the light
+// Learned portals (the visibility strategy). In a room lit through windows the light
 // that reaches a point comes through a few openings, and from across the room a window is a
 // small solid angle that no fixed set of direction regions resolves (visibility_guide.h's are
 // 11.25 degrees wide, a window seen from across the room crosses several, and their cells are

@@ -1,4 +1,4 @@
-// Environment sampling that learns visibility (the visibility strategy; issue 11). In a room lit
+// Environment sampling that learns visibility (the visibility strategy). In a room lit
 // through windows most directions the map's distribution picks hit a wall: the map knows the
 // light, not what blocks it. A hash grid over surface positions (with the dominant axis and sign
 // of the geometric normal) holds per cell a distribution over ETK_GUIDE_REGIONS coarse lat-long
@@ -16,8 +16,8 @@
 // level, then the map's own CDFs restricted to the region -- so, like the paper's warp, it
 // keeps the stratification of the Sobol' points (a separate technique or region choice would
 // thin them at random; measured on window_room, that was not where the strategy loses to the
-// Sobol' points: docs/results.md, issue 11). Collisions of the hash merge two cells' tables: the
-// density stays the one sampled, only less well fitted.
+// Sobol' points: docs/history/results-journal.md). Collisions of the hash merge two cells' tables:
+// the density stays the one sampled, only less well fitted.
 //
 // guide_regions: [0, K) the map's mass per region, M_R (sum 1); then, per region column C and
 // row R, the CDF over the region's distribution rows of p(v_r) x the row's mass in C's columns:
@@ -47,7 +47,7 @@
 
 // 16 x 32 regions of 11.25 degrees: at 320 x 240 and larger films the cells have the records
 // to fill them (8 x 16 left 13% more variance in window_room, 6% in skylight_room; 12 x 24
-// half-way: docs/results.md, issue 11). Two sub-bands per column band keep the sub-bands of a
+// half-way: docs/history/results-journal.md). Two sub-bands per column band keep the sub-bands of a
 // 1024-wide map 16 columns wide, as four were with 16 column bands.
 #define ETK_GUIDE_ROWS 16
 #define ETK_GUIDE_COLS 32

@@ -19,7 +19,7 @@
 // global atomic and writes the slots there in work-item order. One barrier and no local atomics:
 // on a CPU device each barrier splits the kernel into loops over the group with the live state
 // saved between them (PoCL); the local atomics and the three barriers of the earlier
-// count-then-write scheme cost ~20% of the intersect stage there (issue 12); the 64 x 3 slots
+// count-then-write scheme cost ~20% of the intersect stage there; the 64 x 3 slots
 // are a short serial loop (on a GPU, one lane's loop over local memory). Every work-item calls
 // this (the barrier), pushing or not.
 static inline __attribute__((always_inline)) void etk_push_group(EtkQueues Q, EtkPushes out,

@@ -1,6 +1,6 @@
 // envtrace convert: an image as envtrace reads maps (linear RGB floats: 8- and 16-bit files decoded
 // from sRGB, alpha ignored), written in the output's format. To PFM the floats travel bit for bit,
-// which is how a data folder is made for a build without OpenImageIO (tools/gpu/README.md); to
+// which is how a data folder is made for a build without OpenImageIO (docs/devices.md); to
 // 8-bit formats they are encoded as sRGB, so that envtrace reads back what it wrote.
 #include "commands.h"
 

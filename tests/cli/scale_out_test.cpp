@@ -1,4 +1,4 @@
-// One render across processes (README, "One render on many machines"): `mpirun -np 2` and
+// One render across processes (docs/multiple-machines.md): `mpirun -np 2` and
 // `-np 4` give the image of one process bit for bit, a time-limited MPI render stops at a spp
 // the ranks agree on and resumes (with another number of ranks) to the uninterrupted image, a
 // failing or killed rank ends the job naming it with nothing written; farm tasks

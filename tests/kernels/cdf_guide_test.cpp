@@ -1,4 +1,4 @@
-// Guide tables of the CDFs (cutpoint method, issue 12: kernels/piecewise_constant.h
+// Guide tables of the CDFs (cutpoint method: kernels/piecewise_constant.h
 // etk_find_interval_guided, host/lib/load/env_distribution.cpp build_cdf_guide): the guided
 // search must return exactly the interval of the plain binary search for every u in [0, 1], so
 // a sample's direction, density and cell do not change; the 2D tables built by the distribution

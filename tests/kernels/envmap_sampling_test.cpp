@@ -112,7 +112,7 @@ void compare_kernel_and_host(const std::string& name, const et::EnvMap& env) {
     }
     for (int f = 0; f < 10; ++f)
         EXPECT_EQ(differ[f], 0) << kField[f] << ": batched samples differing from one-by-one ones";
-    // For the record (README, "A GPU"): how many of the device's values are not the host's bits
+    // For the record (docs/devices.md): how many of the device's values are not the host's bits
     // (allowed above within rounding; the renders compare whole images).
     size_t not_host = 0;
     for (size_t i = 0; i < dev.size(); ++i)

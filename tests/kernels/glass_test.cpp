@@ -226,8 +226,8 @@ TEST(GlassScene, DielectricMaterialFromJson) {
     }
 }
 
-// MTL illum 4, 6, 7 become dielectrics (scenes/README.md): Ni the index (1.5 without it), Tf the
-// tint (white without it), Pr > 0 rough; other illum models keep the opaque mapping.
+// MTL illum 4, 6, 7 become dielectrics (docs/scene-format.md): Ni the index (1.5 without it), Tf
+// the tint (white without it), Pr > 0 rough; other illum models keep the opaque mapping.
 TEST(GlassScene, DielectricFromMtl) {
     const std::string dir = ett::scratch_dir("glass-mtl");
     std::ofstream(dir + "/g.mtl") << "newmtl water\nillum 7\nNi 1.33\nTf 0.9 0.8 0.7\n"

@@ -35,7 +35,7 @@ TEST(LatLong, RoundTripAgainstReadmeFormula) {
     for (int i = 0; i < 100000; ++i) {
         double x = g(rng), y = g(rng), z = g(rng), len = std::sqrt(x * x + y * y + z * z);
         x /= len, y /= len, z /= len;
-        // README: u = (1 + atan2(x, -z) / pi) / 2, v = acos(y) / pi, in double.
+        // docs/conventions.md: u = (1 + atan2(x, -z) / pi) / 2, v = acos(y) / pi, in double.
         const double u = 0.5 * (1.0 + std::atan2(x, -z) / M_PI), v = std::acos(y) / M_PI;
         const float2 uv = etk::etk_dir_to_latlong(etk::make_float3(float(x), float(y), float(z)));
         ASSERT_NEAR(uv.y, v, 2e-6);

@@ -172,7 +172,7 @@ TEST(PiecewiseConstant1D, RandomUniformsOnRandomFunctions) {
 // etk_find_interval against the definition (the last cell whose CDF entry is <= u and whose
 // successor is larger, i.e. std::upper_bound - 1 over the first n entries) for sizes around
 // powers of two up to 65536, on random, peaky, tied and zero-mass functions, at random u and at
-// every CDF entry and its neighbours (issue 12 shortened the search: the result must not move).
+// every CDF entry and its neighbours (the search was shortened: the result must not move).
 TEST(PiecewiseConstant1D, SearchEqualsUpperBound) {
     std::mt19937 rng(12);
     std::vector<int> sizes = {1,  2,   3,   4,   5,   7,    8,    9,     31,   32,

@@ -66,7 +66,7 @@ UV blender_uv(D3 d) {
     return {u, 1.0 - vb};
 }
 
-// envtrace's own (kernels/latlong.h, README), for the control cases.
+// envtrace's own (kernels/latlong.h, docs/conventions.md), for the control cases.
 D3 envtrace_dir(UV t) {
     const double th = M_PI * t.v, ph = M_PI * (2 * t.u - 1);
     return {std::sin(th) * std::sin(ph), std::cos(th), -std::sin(th) * std::cos(ph)};
@@ -123,8 +123,8 @@ TEST(LatLongConvention, NamesAndTurns) {
     EXPECT_EQ(et::convention_rotation_degrees(LatLongConvention::blender), 90.0);
 }
 
-// The relations of the README: u_mitsuba = u - 1/2, u_blender = u - 1/4, v the same; both proper
-// rotations (checked over the sphere, so a mirrored convention would fail).
+// The relations of docs/conventions.md: u_mitsuba = u - 1/2, u_blender = u - 1/4, v the same; both
+// proper rotations (checked over the sphere, so a mirrored convention would fail).
 TEST(LatLongConvention, OtherRenderersAreTurnsOfEnvtraces) {
     std::mt19937 rng(14);
     std::normal_distribution<double> g;
@@ -182,8 +182,9 @@ TEST(LatLongConvention, LookupCoordinatesMatchTheOtherRenderer) {
         }
 }
 
-// Which way "rotation" turns the map (README): positive turns it clockwise seen from above, what
-// the map shows towards -Z moving towards +X; the texel at u lands where u + rotation / 360 was.
+// Which way "rotation" turns the map (docs/conventions.md): positive turns it clockwise seen from
+// above, what the map shows towards -Z moving towards +X; the texel at u lands where u + rotation /
+// 360 was.
 TEST(LatLongConvention, PositiveRotationTurnsMinusZTowardsPlusX) {
     et::EnvMap env;
     env.image = ett::constant_image(8, 4, 1.0f);

@@ -1,6 +1,6 @@
 // load_obj (host/lib/load/obj_loader.cpp): polygons triangulated, the transform applied to
 // positions and (inverse-transposed) to normals, per-vertex normals used when the OBJ has them and
-// the geometric normal otherwise, MTL materials mapped as scenes/README.md documents (Kd ->
+// the geometric normal otherwise, MTL materials mapped as docs/scene-format.md documents (Kd ->
 // albedo, Ks -> specular, Ns -> roughness = sqrt(2 / (Ns + 2))), override_material, and dropped
 // degenerate triangles.
 #include "load/scene.h"

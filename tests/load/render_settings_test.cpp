@@ -95,8 +95,9 @@ TEST(RenderSettings, RetiredNamesAreRefused) {
         EXPECT_NE(n, "mix");
 }
 
-// The default estimator goes beyond the paper's (docs/results.md, "The default strategy"): MIS
-// compensation below the first vertex, with visible-normal GGX sampling and the balance heuristic.
+// The default estimator goes beyond the paper's (docs/history/results-journal.md, "The default
+// strategy"): MIS compensation below the first vertex, with visible-normal GGX sampling and the
+// balance heuristic.
 TEST(RenderSettings, DefaultIsCompensated) {
     const et::RenderSettings st;
     EXPECT_EQ(st.strategy, et::Strategy::compensated);

@@ -1,4 +1,4 @@
-// What the host asks of an OpenCL device before using it (issue 15): work-group sizes from the
+// What the host asks of an OpenCL device before using it: work-group sizes from the
 // kernel and device, every buffer checked against the largest allocation and their sum against
 // global memory (with messages naming the buffer and the sizes), big-endian devices refused,
 // and profiling events released as a render goes rather than kept for its whole length.

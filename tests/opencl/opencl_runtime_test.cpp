@@ -76,7 +76,7 @@ TEST(OpenClRuntime, BuildErrorNamesKernelFileAndLine) {
 TEST(OpenClRuntime, DivisionAndSqrtRoundAsOnTheHost) {
     // Where the device reports CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT, programs are built so that
     // x / y and sqrt(x) equal the host's bit for bit, which is what lets images of the two back
-    // ends agree exactly (without the option NVIDIA's driver gave other bits: README, "A GPU").
+    // ends agree exactly (without the option NVIDIA's driver gave other bits: docs/devices.md).
     et::ClRuntime& rt = ett::runtime();
     if (!rt.limits().correctly_rounded_div_sqrt)
         GTEST_SKIP() << "the device does not report correctly rounded division and sqrt";

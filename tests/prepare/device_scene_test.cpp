@@ -1,7 +1,7 @@
 // prepare/device_scene: what the kernels load as float vectors holds no int's bits. A compiler may
 // load a float3 as four floats; where the fourth was an int (EtkParams' film width after `up`, a
 // material's type after its albedo), its bits read as a float were a denormal, and every product
-// in that unused lane took a microcode assist (PoCL's generate stage ran 3x slower, issue 12).
+// in that unused lane took a microcode assist (PoCL's generate stage ran 3x slower).
 #include "load/scene.h"
 #include "prepare/device_scene.h"
 #include "test_data.h"

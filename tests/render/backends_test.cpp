@@ -2,7 +2,7 @@
 // same sample values (regenerated bit-identically from pixel, index and dimension), so:
 // - at max_depth 1, with the same scene, seed and sampler, the images are equal up to float
 //   rounding: per-pixel relative difference below 1e-4 wherever the value is above 1e-3 of the
-//   image mean (issue 4). In fact they are bit-identical: FMA contraction is off on both sides
+//   image mean. In fact they are bit-identical: FMA contraction is off on both sides
 //   and the shared headers use their own trig and vector geometry, not built-ins;
 // - at depth 5, where rounding differences grow into different paths (a continuation ray that
 //   grazes an edge hits another triangle, Russian roulette compares against a value that moved

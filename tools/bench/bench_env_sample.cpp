@@ -1,4 +1,4 @@
-// Cost of one environment-map sample, in pieces, on one core (issue 12): the two CDF searches
+// Cost of one environment-map sample, in pieces, on one core: the two CDF searches
 // with the plain binary search (etk_find_interval) and with the guide tables
 // (etk_find_interval_guided), the whole 2D inversion both ways, and etk_env_sample (2D sample +
 // direction + solid-angle pdf), one at a time and in the sample_lights stage's batches. The sample

@@ -1,6 +1,6 @@
-// Ray traversal throughput (issue 12): the same rays through envtrace's BVH (native, and the
-// OpenCL back end through kernels/bvh_test.cl), through the BVH as it was before issue 12
-// (bvh_baseline.*, native) and, when CMake found it, through Embree (an optional benchmark
+// Ray traversal throughput: the same rays through envtrace's BVH (native, and the
+// OpenCL back end through kernels/bvh_test.cl), through the BVH as it was before the SAH and 4-wide
+// rewrite (bvh_baseline.*, native) and, when CMake found it, through Embree (an optional benchmark
 // dependency, never one of the renderer). Also: the SAH cost of each tree (traversal 1, triangle
 // 1, relative to the root's area) and, with Embree, the SAH cost of Embree's own builder
 // (rtcBuildBVH, binary, leaves of <= 4) and that tree traced by envtrace's traversal.

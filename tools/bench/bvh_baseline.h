@@ -1,6 +1,7 @@
-// The BVH as it was before issue 12 (builder of host/lib/prepare/bvh_build.cpp and traversal of
-// kernels/bvh.h at main d2e3a75), kept verbatim in tools/bench only so that bench_rays measures
-// before and after side by side in one process. Not used by the renderer; delete once served.
+// The BVH as it was before the SAH and 4-wide rewrite (builder of host/lib/prepare/bvh_build.cpp
+// and traversal of kernels/bvh.h at main d2e3a75), kept verbatim in tools/bench only so that
+// bench_rays measures before and after side by side in one process. Not used by the renderer;
+// delete once served.
 #pragma once
 #include "kernels/bvh.h"
 #include "load/scene.h"

@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""Writes a unit sphere of about N triangles as an OBJ (issue 12, "How cost grows"): a cube whose
+"""Writes a unit sphere of about N triangles as an OBJ (docs/history/bench-journal.md, "How cost
+grows"): a cube whose
 six faces are n x n grids, projected onto the sphere (12 n^2 triangles of similar size and
 shape, unlike a lat-long sphere's slivers at the poles), with vertex normals.
 

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Plots tools/bench/scaling/*.csv (issue 12, "How cost grows"; the figures and the commands that
-made them are in tools/bench/README.md) into tools/bench/scaling/scaling.png."""
+"""Plots tools/bench/scaling/*.csv (the figures and the commands that made them are in
+docs/history/bench-journal.md, "How cost grows") into tools/bench/scaling/scaling.png."""
 import csv
 import os
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Renderer benchmarks (issues 3 and 4): `envtrace bench` on the bunny under grace, royal_esplanade_1k
+"""Renderer benchmarks: `envtrace bench` on the bunny under grace, royal_esplanade_1k
 and pedestrian_overpass_1k, and on ogre, at depth 1 and 5, 512x512. Each invocation renders with
 both back ends in alternation (see host/cli/bench_command.cpp), and tools/bench/render_probes
 (environment-sampling share, program builds); this script collects their JSON
@@ -49,7 +49,7 @@ def main():
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--depths", default="1,5")
     # The throughput of one estimator across versions: the paper's, as these results have always
-    # measured, whatever the scenes name (since 2026-11-28 some name visibility, which learns).
+    # measured, whatever the scenes name (some name visibility, which learns).
     ap.add_argument("--strategy", default="mis", help="estimator (default mis, the paper's)")
     ap.add_argument("--spp", type=int, default=0, help="spp per run (default: envtrace chooses)")
     args = ap.parse_args()

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Scale-out figures (issue 13): one render over MPI ranks and the cost of summing the films.
+"""Scale-out figures: one render over MPI ranks and the cost of summing the films.
 
 1. Speed-up of 2 ranks x 1 thread against 1 rank x 1 thread (native back end) on a shipped
    scene: the two alternate, --runs times each, side by side; medians of the wall time of the

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Efficiency of envtrace's estimators: relative MSE x time against a converged reference, relative to the
-paper's MIS (issue 10).
+paper's MIS.
 
     tools/experiments/efficiency.py [--budgets 0.5 2 | --spp N] [--seeds 3] [--maps ...] [--depths 1 5]
                                     [--strategies light bsdf mis ...] [--out DIR] [--tiny]
@@ -49,12 +49,13 @@ alternate seed by seed in both modes, so a drifting load times them alike.
 Fireflies: the brightest pixel of each render over the brightest pixel of the reference (max over
 seeds); NaN/Inf: the renders' nonfinite_samples and any non-finite pixel.
 
---scenes FILE... measures given scene files instead (issue 11: the interiors of the visibility
+--scenes FILE... measures given scene files instead (the interiors of the visibility
 strategy), each at its own depth and film size (--size overrides it), the whole image as one
 region: `tools/experiments/efficiency.py --scenes scenes/interiors/window_room.json --strategies
 mis visibility --budgets 4 16 --ref-seconds 240 --out docs/figures/visibility`.
 
-Writes OUT/efficiency.csv (every render), OUT/efficiency.md (the tables for docs/results.md) and
+Writes OUT/efficiency.csv (every render), OUT/efficiency.md (the tables for
+docs/history/results-journal.md) and
 OUT/efficiency.png."""
 import json
 import math
@@ -149,7 +150,7 @@ def regions(width, height):
     (scene_json): each sphere's pixels (the pixel centre's camera ray hits it first; the
     tessellated sphere differs from the analytic one by a pixel at most along its outline), then
     the ground's. The spheres fill the image's middle 60% of columns, so columns split evenly
-    (what this tool measured until 2026-11-27) mixed the ground and two spheres in each band.
+    (what an earlier version of this tool measured) mixed the ground and two spheres in each band.
     Returns [(name, mask)] in MATERIALS order, then ("ground", mask); the rest is the map."""
     s = scene_json("", 1, width, height)
     cam = s["camera"]

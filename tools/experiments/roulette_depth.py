@@ -51,7 +51,8 @@ def main():
                                           depth)
                     seconds.append(stats["render_seconds"])
                     images.append(common.read_pfm(img))
-                # On the luminance (the channels' mean), as docs/results.md's figures are.
+                # On the luminance (the channels' mean), as docs/history/results-journal.md's
+                # figures are.
                 lum = [img.mean(axis=2, keepdims=True) for img in images]
                 v, t = common.relative_variance(*lum), sum(seconds) / 2
                 cost = v * t

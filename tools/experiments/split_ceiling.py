@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""How much of the paper's MIS variance a light-sampling estimator could remove at all (issue 10).
+"""How much of the paper's MIS variance a light-sampling estimator could remove at all.
 
     tools/experiments/split_ceiling.py [--spp 128] [--split 32] [--maps ...] [--depths 1 5] [--out DIR]
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the libFuzzer harnesses (tools/fuzz) over their seed corpora and prints, per harness, the
-# executions done and whether it found anything. Build first (README, "Fuzzing and sanitizers"):
+# executions done and whether it found anything. Build first (docs/testing.md):
 #   CXX=clang++ cmake -S . -B build-asan -DENVTRACE_FUZZ=ON && cmake --build build-asan
 # usage: tools/fuzz/run_fuzz.sh [--build DIR] [--runs N | --seconds S] [--out DIR] [--keep-going]
 #                               [HARNESS...]

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# envtrace on a second OpenCL implementation with a GPU behind it (README, "A GPU"): NVIDIA's
+# envtrace on a second OpenCL implementation with a GPU behind it (docs/devices.md): NVIDIA's
 # OpenCL driver, with PoCL on the same machine (when installed) and the native back end as the
 # references. Needs only a built envtrace (a build without OpenImageIO will do: PFM in and out),
 # optionally the test binaries, numpy, and the driver's libnvidia-opencl.so.1.

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Everything tools/gpu/check_opencl_device.sh needs on a GPU machine that has a driver and
-# python3 with numpy but none of envtrace's libraries (README, "A GPU"), in one folder:
+# python3 with numpy but none of envtrace's libraries (docs/devices.md), in one folder:
 #   bin/envtrace     a build without OpenImageIO (PFM only), -march=x86-64-v3, static libstdc++
 #   tests.tar.xz     the test binaries of that build (kernel against host, chi-square, BVH, back ends)
 #   lib/             the shared libraries it still needs (tinyobjloader, tinygltf, stb, ICD loader)
@@ -16,7 +16,7 @@ bundle=$(realpath -m "$1")
 build=$(realpath -m "${2:-$root/build-gpu}")
 data=${ENVTRACE_DATA:-$root/../shared/data}
 host_envtrace=$root/build/envtrace # the full build reads every format, for the conversion
-[ -x "$host_envtrace" ] || { echo "make_bundle.sh: $host_envtrace: build envtrace first (README, Two commands)" >&2; exit 1; }
+[ -x "$host_envtrace" ] || { echo "make_bundle.sh: $host_envtrace: build envtrace first (README, 'Set up and test')" >&2; exit 1; }
 [ -d "$data/envmaps" ] || { echo "make_bundle.sh: $data/envmaps: no data folder (set ENVTRACE_DATA)" >&2; exit 1; }
 mkdir -p "$bundle/bin" "$bundle/lib"
 

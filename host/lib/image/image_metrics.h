@@ -1,5 +1,5 @@
 // Error metrics between a rendered image and a reference, as used by `envtrace compare` and the
-// experiments (docs/results.md defines each one).
+// experiments (docs/history/results-journal.md defines each one).
 #pragma once
 #include "image/image_io.h"
 

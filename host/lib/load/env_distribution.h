@@ -28,7 +28,7 @@ struct DistributionOptions {
     float blur_sigma = 0.5f;   // Gaussian blur of luminance, in texels; 0 disables it
     // The function sampled is luminance^exponent: 1 is the paper's (linear) distribution; below
     // 1 a compressive, tone-mapping-like transform that moves samples from the brightest texels
-    // to dimmer ones (the paper's future work; measured in docs/results.md).
+    // to dimmer ones (the paper's future work; measured in docs/history/results-journal.md).
     float exponent = 1.0f;
     int threads = 0; // rows built on this many threads (0: all cores); same result
 };

@@ -1,7 +1,7 @@
 // glTF 2.0 meshes (.gltf with embedded or external buffers, and .glb) through tinygltf (Debian's
 // libtinygltf-dev): the triangle primitives of the default scene with the node hierarchy's
 // transforms, POSITION, NORMAL and TEXCOORD_0, and the metallic-roughness material mapped onto
-// envtrace's (scenes/README.md). The JSON is parsed and checked here first (prepare_json,
+// envtrace's (docs/scene-format.md). The JSON is parsed and checked here first (prepare_json,
 // prepare_glb), then tinygltf parses it and the GLB container and decodes the buffers; every
 // accessor is bounds-checked here before it is read, since tinygltf 2.7 does not.
 #include "util/error.h"

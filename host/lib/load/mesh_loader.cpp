@@ -1,5 +1,5 @@
 // The scene's "mesh" shape: one loader per file format, chosen by the file's extension
-// (scenes/README.md lists them).
+// (docs/scene-format.md lists them).
 #include "load/scene.h"
 #include "util/error.h"
 #include "util/file_check.h"

@@ -202,7 +202,8 @@ void check_obj_face(const std::string& path, const std::string& text, size_t lin
 // one ("v 1 2") as 0, which moves the vertex without a word. Every "v" line is checked here
 // first: a word or a missing coordinate is an error naming the line; a coordinate that is not a
 // finite float ("nan", "inf", 1e300) makes the vertex non-finite, so that the triangles using it
-// are skipped with the loader's warning, as the README says. Returns those vertices (0-based).
+// are skipped with the loader's warning, as docs/scene-format.md says. Returns those vertices
+// (0-based).
 std::vector<size_t> check_obj_vertices(const std::string& path, const std::string& text) {
     std::vector<size_t> nonfinite;
     size_t line = 0, vertex = 0;

@@ -48,7 +48,7 @@ std::vector<std::string> names_in(const Named<E> (&table)[N], size_t count = N) 
 }
 
 // Names that were choices once, and why they are not: a scene or script that names one is told.
-// Their measurements: docs/history.
+// Their measurements: docs/history/results-journal.md.
 void refuse_retired(const std::string& s, const std::string& what, const char* kind) {
     if (std::string(kind) == "strategy" && s == "adaptive")
         throw Error(what + ": strategy 'adaptive' was retired (it measured 0.92-0.94x the "

@@ -29,13 +29,13 @@ enum class Strategy : int {
 // paper -- compensated, visibility, cosine -- and ndf, the paper's, for the others, so that
 // `mis` stays the paper's estimator (visibility: equal-spp variance lower on every scene of the
 // efficiency suite, by up to 21%, and on the five shipped scenes with GGX lobes, up to 12%, at
-// the same time per sample: docs/history, "The visibility strategy's verdict").
+// the same time per sample: docs/history/results-journal.md, "The visibility strategy's verdict").
 enum class BsdfSampling : int { automatic = -1, ndf = ETK_GGX_NDF, vndf = ETK_GGX_VNDF };
 // The MIS weights (kernels/integrator.h): automatic picks power for mis, the project's choice
 // for the paper's estimator, which every efficiency figure is relative to, and balance for the
 // strategies beyond it -- compensated, visibility, cosine -- whose variance at equal samples it
 // lowers (visibility: 8 of 9 shipped scenes; compensated: 19 of the efficiency suite's 20 scene
-// pairs lower or equal: docs/history, "The balance heuristic"). The others weigh
+// pairs lower or equal: docs/history/results-journal.md, "The balance heuristic"). The others weigh
 // nothing: power, unused.
 enum class MisHeuristic : int {
     automatic = -1,
@@ -90,9 +90,9 @@ struct RenderSettings {
     int spp = 16;
     int max_depth = 1;
     // compensated: above the paper's MIS (mis) or within 6% of it on every scene measured, at no
-    // extra cost per sample on any device (docs/results.md, "The default strategy"). The
-    // visibility strategy gains more in rooms and around occluders but pays for its learning
-    // passes, and loses under an open sky: a scene names it.
+    // extra cost per sample on any device (docs/history/results-journal.md, "The default
+    // strategy"). The visibility strategy gains more in rooms and around occluders but pays for its
+    // learning passes, and loses under an open sky: a scene names it.
     Strategy strategy = Strategy::compensated;
     MisHeuristic heuristic = MisHeuristic::automatic;
     SamplerKind sampler = SamplerKind::sobol;
@@ -103,9 +103,9 @@ struct RenderSettings {
     // continuations of surfaces 1 .. rr_depth always go on. 5, one past Mitsuba 3's default (its
     // rr_depth 5 cuts from the fifth surface's continuation, this one's 4): in rooms lit
     // indirectly the second to fifth bounces carry much of the light, and cutting them by the
-    // path's throughput cost more variance than the saved rays were worth (docs/results.md,
-    // "Russian roulette"). The build before cut from the continuation of the third surface on
-    // (rr_depth 2 here).
+    // path's throughput cost more variance than the saved rays were worth
+    // (docs/history/results-journal.md, "Russian roulette"). The build before cut from the
+    // continuation of the third surface on (rr_depth 2 here).
     int rr_depth = 5;
     int paths = 0; // OpenCL paths in flight per lane; 0: the film over the lanes (ClDevice)
     // Splitting (Strategy::mis only): light and BSDF samples per vertex, powers of two up to

@@ -1,6 +1,6 @@
 // A scene as the renderer consumes it: camera, film, environment, a triangle soup with per-corner
 // shading normals and per-triangle materials, and the render settings. Loaded from JSON
-// (scenes/README.md documents the format).
+// (docs/scene-format.md documents the format).
 #pragma once
 #include "load/environment_map.h"
 #include "load/render_settings.h"
@@ -69,7 +69,8 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
 
 // Appends the triangle primitives of a glTF 2.0 file's default scene (.gltf or .glb), with the
 // node transforms applied before `transform`; its metallic-roughness materials become envtrace
-// materials (scenes/README.md) unless `override_material` >= 0. Textures are not read (a warning).
+// materials (docs/scene-format.md) unless `override_material` >= 0. Textures are not read (a
+// warning).
 void load_gltf(const std::string& path, const glm::mat4& transform, int override_material,
                std::vector<Material>& materials, TriangleSoup& out);
 

@@ -90,7 +90,7 @@ struct Builder {
             make_leaf();
             return;
         }
-        // Binned SAH over all three axes (issue 12: the largest extent alone left the SAH cost
+        // Binned SAH over all three axes (the largest extent alone left the SAH cost
         // of the bunny scene 1.7x that of Embree's builder); the cheapest split wins.
         glm::vec3 ext = cbounds.hi - cbounds.lo;
         int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);

@@ -18,10 +18,10 @@ struct Technique {
 // breaks it: at equal samples on the efficiency suite at depth 1, compensating the first vertex
 // too has 0.52-0.91x MIS's error, the full distribution there 1.02-1.08x; below it, where the
 // points are padded, the compensated distribution's lower variance per sample wins (depth 5: up
-// to 1.3x; docs/history). Delta vertices draw no light sample, and rays they scatter count in
-// full, so nothing needs the full distribution below the first vertex. A rough dielectric's BSDF
-// sample reaches every direction of either hemisphere where it transmits or reflects anything,
-// so the compensated distribution serves it over the whole sphere too.
+// to 1.3x; docs/history/results-journal.md). Delta vertices draw no light sample, and rays they
+// scatter count in full, so nothing needs the full distribution below the first vertex. A rough
+// dielectric's BSDF sample reaches every direction of either hemisphere where it transmits or
+// reflects anything, so the compensated distribution serves it over the whole sphere too.
 Technique technique_of(Strategy s) {
     switch (s) {
     case Strategy::light:

@@ -17,21 +17,21 @@ namespace et {
 struct VisibilityOptions {
     // Hash-grid cells (a power of two): 2^13 x 2 x 514 floats = 32 MiB of tables on the device
     // (window_room's variance 0.00887 with 2^13, 0.00875 with 2^14 at twice the memory, 0.00915
-    // with 2^12: docs/results.md, issue 11).
+    // with 2^12: docs/history/results-journal.md).
     int slots = 1 << 13;
     int resolution = 8; // cells along the scene's longest side (few records per cell
-                        // otherwise: measured in docs/results.md, issue 11)
+                        // otherwise: measured in docs/history/results-journal.md)
     // The map's defensive share of every light sample (light samples weigh at most 1 / alpha
-    // times the map's own). 0.25 until 2026-11-27; with 16 x 32 regions 0.1 leaves 7-8% less
+    // times the map's own). With 16 x 32 regions 0.1 (against 0.25) leaves 7-8% less
     // variance in window_room (320 x 240 and 160 x 120), skylight_room and the Cornell box, 4% on
-    // bunny_grace, the same at 80 x 60 (docs/results.md, issue 11).
+    // bunny_grace, the same at 80 x 60 (docs/history/results-journal.md).
     float alpha = 0.1f;
     // Samples 0 .. L-1 record shadow rays and continuations, L = learning_passes; preparation
     // sets it for the film (guide_learning_passes): as many passes as learn from about
     // learning_paths camera paths, within [min_learning_passes, max_learning_passes]. The tables
     // saturate: at 320 x 240 (76,800 paths a pass) 16, 32 and 64 passes leave window_room's
     // variance within 3% while each learning pass costs ~1.3 steady ones; at 80 x 60, 16 passes
-    // gave 1.78x MIS's efficiency and 64 2.17x (docs/results.md, issue 11).
+    // gave 1.78x MIS's efficiency and 64 2.17x (docs/history/results-journal.md).
     int learning_passes = 64;
     int min_learning_passes = 16, max_learning_passes = 64;
     double learning_paths = 2.0e6;
@@ -41,7 +41,7 @@ struct VisibilityOptions {
     int min_records = 64;
     bool continuation = true; // guide diffuse vertices' continuations as well
     // The guided share of a well-learned cell's continuations (0.3 / 0.5 / 0.7 measured:
-    // docs/results.md, issue 11).
+    // docs/history/results-journal.md).
     double continuation_share = 0.5;
     // Portals (kernels/portal_guide.h): each cell's share of light samples drawn from the learned
     // portal table is the one of these whose light sample has the least second moment on the
@@ -53,7 +53,7 @@ struct VisibilityOptions {
     // its density costs at every guided vertex of the cell (equal-spp relative variance, 320 x
     // 240, 128 spp: skylight_room 0.0346 -> 0.0218 / 0.0239 / 0.0322 with a cost of 0 / 0.15 /
     // 0.3, window_room 0.0187 -> 0.0177 / 0.0185 / 0.0186, while a cost of 0 took ~15% more
-    // time per sample: docs/results.md, issue 11).
+    // time per sample: docs/history/results-journal.md).
     std::array<double, 4> spot_shares{{0.0, 0.25, 0.5, 0.75}};
     double spot_cost = 0.15;
     // Each cell's expected light samples n (kernels/visibility_guide.h, etk_guide_light_count):
@@ -71,13 +71,13 @@ struct VisibilityOptions {
     // still learn where they are learning passes) and as many passes of MIS, each in two blocks;
     // the tables stay -- and learn on to L -- if MIS's error is at least verdict_cost times
     // theirs, otherwise every later pass renders MIS and the learning ends there (a render under
-    // the open sky saves the learning passes' cost, 2-2.3x a MIS pass's on issue 10's suite).
+    // the open sky saves the learning passes' cost, 2-2.3x a MIS pass's on the efficiency suite).
     // verdict_cost is the tables' time per sample over MIS's after learning, verdict_cost_guided
-    // the same where the continuation is guided too (depth > 1): measured (native, issue 10's
-    // suite, samples 64 .. 447 less 64 .. 191, so no learning is in it; 2026-11-27) 1.19-1.26 at
-    // depth 1 and 1.29-1.43 at depth 5, 1.61 in window_room (docs/results.md, "The visibility
-    // strategy's verdict" and "The tables under the open sky"). 0 passes: no verdict, the tables
-    // throughout.
+    // the same where the continuation is guided too (depth > 1): measured (native, the efficiency
+    // suite, samples 64 .. 447 less 64 .. 191, so no learning is in it) 1.19-1.26 at
+    // depth 1 and 1.29-1.43 at depth 5, 1.61 in window_room (docs/history/results-journal.md, "The
+    // visibility strategy's verdict" and "The tables under the open sky"). 0 passes: no verdict,
+    // the tables throughout.
     int verdict_passes = 8;
     int verdict_after = 16;
     double verdict_cost = 1.25;

@@ -69,7 +69,7 @@ std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt) {
 // Paths in flight per lane on a CPU device, by default. PoCL, 2 lanes, depth 5 (envtrace bench
 // --paths P, OpenCL / native): bunny_grace 0.96 at 131,072 (its 512 x 512 film over two lanes),
 // 1.00 at 65,536 and 32,768; matpreview 1.00 / 1.02 / 1.01 and textures 0.98 / 0.97 / 0.96 at
-// 65,536 / 32,768 / 16,384 (more launches); tools/bench/README.md.
+// 65,536 / 32,768 / 16,384 (more launches); docs/history/bench-journal.md.
 constexpr int kCpuWave = 65536;
 
 int default_cl_lanes(const ClRuntime& rt) {
@@ -338,7 +338,7 @@ void ClLane::launch(int stage, int n, const etk::EtkParams& params) {
 }
 
 // Zeroed on the device rather than uploaded from the host's zeroed film: a 512x512 film is 16 MB
-// each way per pass, 3-4% of a pass on PoCL (issue 12). Zeroed by lane 0 and waited for, since
+// each way per pass, 3-4% of a pass on PoCL. Zeroed by lane 0 and waited for, since
 // every lane writes the film.
 void ClDevice::clear_film(bool aovs) {
     ClLane& l = *lanes_[0];

@@ -32,7 +32,7 @@ std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt);
 
 // Whether --light-batch auto batches the light samples on a device: on CPUs, where one
 // work-item's batch keeps its cache misses in flight together; not on GPUs, where other
-// work-items hide the latency (measured: tools/bench/README.md).
+// work-items hide the latency (measured: docs/history/bench-journal.md).
 inline bool prefers_light_batches_on(const DeviceLimits& limits) {
     return limits.cpu;
 }

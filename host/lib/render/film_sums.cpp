@@ -85,9 +85,9 @@ void FilmSums::add_pass(const Film& pass, int threads_wanted) {
                     std::to_string(pass.height()) + " pass to a " + std::to_string(width_) + "x" +
                     std::to_string(height_) + " film");
     // Every pass of a render is folded here, on the host, while the device waits: ~7 ms for
-    // 512x512 on one core (a 112-byte sum per pixel read and written), 5% of a depth-1 pass
-    // (issue 12). Pixels are independent, so large films are split over the cores, which the
-    // renderer leaves idle between passes: the same sums.
+    // 512x512 on one core (a 112-byte sum per pixel read and written), 5% of a depth-1 pass.
+    // Pixels are independent, so large films are split over the cores, which the renderer
+    // leaves idle between passes: the same sums.
     const size_t n = pixels_.size();
     const int threads = n >= kParallelFoldPixels ? thread_count(threads_wanted) : 1;
     run_on_threads(threads, [&](int t) {

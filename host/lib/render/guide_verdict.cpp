@@ -11,8 +11,9 @@ namespace {
 constexpr size_t kRadius = 2; // the reference mean's neighbourhood: 5 x 5 pixels
 // Every pixel's value counts up to the pooled values' 99.9% quantile: a few fireflies (the sun's
 // glint on a metal sphere caught by one block: one pixel of 23,040 held 40% of a technique's error
-// on issue 10's esplanade scene) must not decide, while the errors MIS makes in a room lit through
-// an opening, spread over many pixels, change by 2-3% (window_room, skylight_room, bunny_grace).
+// on the efficiency suite's esplanade scene) must not decide, while the errors MIS makes in a room
+// lit through an opening, spread over many pixels, change by 2-3% (window_room, skylight_room,
+// bunny_grace).
 constexpr double kTrim = 0.999;
 } // namespace
 

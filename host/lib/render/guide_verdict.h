@@ -2,10 +2,10 @@
 //
 // The tables cost time at every vertex (the cell's hash, the guided sample and its densities,
 // the continuation guide: 1.19-1.61x MIS's time per sample after learning, 2-2.3x while learning
-// on issue 10's suite; docs/results.md) and save much variance only where the map's light is
-// blocked in ways the map's own distribution cannot see -- rooms lit through openings, not a row
-// of spheres under the open sky (issue 10's suite: 0.58-1.21x MIS's efficiency at equal spp x
-// time, 0.77x in geometric mean).
+// on the efficiency suite; docs/history/results-journal.md) and save much variance only where the
+// map's light is blocked in ways the map's own distribution cannot see -- rooms lit through
+// openings, not a row of spheres under the open sky (the efficiency suite: 0.58-1.21x MIS's
+// efficiency at equal spp x time, 0.77x in geometric mean).
 //
 // Which of the two a scene is, is measured, not modelled: `passes` passes of the tables after
 // some learning (VisibilityOptions::verdict_after; part of the image, as any) and as many passes
@@ -22,11 +22,11 @@
 //
 // Blocks of consecutive samples, not the samples' variance: the Sobol' points stratify each
 // block, and the map's smooth warp keeps more of that stratification than the learned tables'
-// piecewise one (issue 10's suite, 128 spp: the per-sample variance favoured the tables up to
+// piecewise one (the efficiency suite, 128 spp: the per-sample variance favoured the tables up to
 // 1.7x where the two-seed variance of the images favoured MIS -- as the adaptive strategy found,
-// docs/results.md). Comparing the same pixels rendered both ways measures the estimators on this
-// image: a model of the second moments (the learned shares' way) leaves out the MIS weights, the
-// stratification and the continuation's indirect light.
+// docs/history/results-journal.md). Comparing the same pixels rendered both ways measures the
+// estimators on this image: a model of the second moments (the learned shares' way) leaves out the
+// MIS weights, the stratification and the continuation's indirect light.
 //
 // The verdict depends on the passes' film values alone: the seed's, on every thread count and
 // wave size, and on a process that starts past them (it renders them first, renderer.cpp).

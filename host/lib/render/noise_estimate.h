@@ -12,8 +12,8 @@
 //
 // Samples within a pixel come from one randomized Sobol' sequence, so they are not independent:
 // s^2/n is the variance of the mean of n independent samples, and the randomized QMC estimate
-// usually has less (stratification), so E is usually conservative (README, "AOVs, variance and
-// the noise target", with measurements).
+// usually has less (stratification), so E is usually conservative (docs/outputs.md, "Noise
+// target", with measurements).
 #pragma once
 #include "render/film_sums.h"
 

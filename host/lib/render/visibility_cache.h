@@ -27,10 +27,10 @@
 // as the path counted it, so sky the light sample already covers weighs less). The sums take
 // luminance(L_in) cos / p = pi p_b v (p_b = cos / pi, recovered from the record's density as for
 // the secondary-source moments below): the guide follows the diffuse integrand, incident radiance
-// x cosine, not the radiance alone (radiance alone, before 2026-11-27, left 13% / 4% / 17% more
-// variance in window_room / skylight_room / the Cornell box: docs/results.md, issue 11). Per cell,
-// P(R) = n / (n + n0) S(R) / sum S + n0 / (n + n0) / K (uniform where it knows little) and the
-// guided share c = continuation_share x n / (n + n0), 0 where the cell saw no light come back.
+// x cosine, not the radiance alone (radiance alone left 13% / 4% / 17% more
+// variance in window_room / skylight_room / the Cornell box: docs/history/results-journal.md). Per
+// cell, P(R) = n / (n + n0) S(R) / sum S + n0 / (n + n0) / K (uniform where it knows little) and
+// the guided share c = continuation_share x n / (n + n0), 0 where the cell saw no light come back.
 //
 // Portals (kernels/portal_guide.h): every unoccluded shadow-ray record also names the cell of the
 // scene's box the ray left by; its value is summed there (the same fixed point), and the table
