@@ -151,7 +151,7 @@ int read_texture_param(const nlohmann::json& j, const char* key, TextureUse use,
         return -1;
     const nlohmann::json& t = *it;
     const JsonReader rt = r.at(key);
-    rt.warn_unknown_keys(t, {"texture", "checker", "uv_scale", "uv_offset"});
+    rt.reject_unknown_keys(t, {"texture", "checker", "uv_scale", "uv_offset"});
     const bool file = t.contains("texture"), checker = t.contains("checker");
     if (file == checker)
         rt.fail("a texture needs exactly one of \"texture\" (an image file) and \"checker\"");
@@ -175,7 +175,7 @@ int read_texture_param(const nlohmann::json& j, const char* key, TextureUse use,
     const JsonReader rc = rt.at("checker");
     const nlohmann::json& c = t["checker"];
     rc.expect_object(c);
-    rc.warn_unknown_keys(c, {"color0", "color1", "resolution"});
+    rc.reject_unknown_keys(c, {"color0", "color1", "resolution"});
     const glm::vec3 c0 = read_colour(c, "color0", glm::vec3(0.4f), rc);
     const glm::vec3 c1 = read_colour(c, "color1", glm::vec3(0.2f), rc);
     const int res = static_cast<int>(rc.integer(c, "resolution", 32, 1, 2048));
