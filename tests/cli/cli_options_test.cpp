@@ -233,7 +233,8 @@ TEST(CliOptions, FilesWithoutFacesAreNotMeshes) {
         write_file(dir + "/m.json", R"({"environment": {"map": ")" + dir +
                                         R"(/sky.pfm"}, "film": {"width": 4, "height": 2},
             "shapes": [{"type": "mesh", "file": ")" +
-                                        dir + "/" + name + R"("}], "render": {"spp": 1, "max_depth": 1}})");
+                                        dir + "/" + name +
+                                        R"("}], "render": {"spp": 1, "max_depth": 1}})");
         expect_error(ett::run_envtrace(render(dir + "/m.json", dir + "/o.exr"), dir),
                      name + ": no triangles to render");
         EXPECT_FALSE(fs::exists(dir + "/o.exr"));

@@ -169,7 +169,8 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
     Material m;
     m.name = name;
     r.expect_object(j);
-    r.reject_unknown_keys(j, {"type", "albedo", "specular", "roughness", "ior", "tint", "eta", "k"});
+    r.reject_unknown_keys(j,
+                          {"type", "albedo", "specular", "roughness", "ior", "tint", "eta", "k"});
     const std::string type = r.string(j, "type", "diffuse");
     if (type == "diffuse") {
         m.type = ETK_MAT_DIFFUSE;
@@ -289,8 +290,8 @@ Scene load_scene(const std::string& path) {
         const json& s = *sp;
         const JsonReader rr = r.at("render");
         rr.reject_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
-                                 "time_limit", "paths", "bsdf_sampling", "light_share",
-                                 "light_samples", "bsdf_samples", "rr_depth"});
+                                   "time_limit", "paths", "bsdf_sampling", "light_share",
+                                   "light_samples", "bsdf_samples", "rr_depth"});
         auto& st = scene.settings;
         st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
         st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);

@@ -15,7 +15,7 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     if (!env.is_object())
         r.fail("expected an object with \"map\" or \"sky\", got " + json_excerpt(env));
     r.reject_unknown_keys(env, {"map", "sky", "intensity", "rotation", "convention",
-                              "distribution_resolution", "blur", "distribution_exponent"});
+                                "distribution_resolution", "blur", "distribution_exponent"});
     if (env.contains("distribution_resolution")) {
         const auto& res = env["distribution_resolution"];
         const JsonReader rd = r.at("distribution_resolution");
@@ -57,7 +57,7 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
         const auto& s = *sp;
         const JsonReader rs = r.at("sky");
         rs.reject_unknown_keys(s, {"resolution", "sun_elevation", "sun_azimuth", "sun_radius",
-                                 "sun_radiance", "sky_radiance"});
+                                   "sun_radiance", "sky_radiance"});
         SkyParams p;
         if (s.contains("resolution")) {
             const auto& res = s["resolution"];
