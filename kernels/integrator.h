@@ -20,7 +20,7 @@
 #include "portal_guide.h"
 #include "directional_lights.h"
 #include "envmap.h"
-#include "film.h"
+#include "film_accumulate.h"
 #include "normal_bins.h"
 #include "params.h"
 #include "path_state.h"

@@ -4,7 +4,7 @@
 // non-regular, corrupt or oversized files, wrong JSON types) refused with the file and the key
 // path named.
 #include "image/image_io.h"
-#include "kernels/texture.h"
+#include "kernels/texture_lookup.h"
 #include "load/scene.h"
 #include "util/error.h"
 #include "test_data.h"
@@ -266,8 +266,7 @@ TEST(TextureLoad, BadJsonTexturesNameTheKeyPath) {
     const std::string u = load(R"({"albedo": {"texture": "a.png", "filter": "nearest"}})");
     EXPECT_NE(u.find("materials.m.albedo.filter: unknown key (known here:"), std::string::npos)
         << u;
-    const std::string v =
-        load(R"({"albedo": {"checker": {"color0": 0.1, "colour1": 0.5}}})");
+    const std::string v = load(R"({"albedo": {"checker": {"color0": 0.1, "colour1": 0.5}}})");
     EXPECT_NE(v.find("materials.m.albedo.checker.colour1: unknown key; did you mean \"color1\"?"),
               std::string::npos)
         << v;

@@ -135,7 +135,7 @@ Texture make_checker(glm::vec3 colour0, glm::vec3 colour1, int resolution) {
     t.texels.resize(size_t(3) * t.width * t.height);
     for (int y = 0; y < t.height; ++y)
         for (int x = 0; x < t.width; ++x) {
-            // The texel centre's (u, v); row 0 is the top, v = 1 (kernels/texture.h).
+            // The texel centre's (u, v); row 0 is the top, v = 1 (kernels/texture_lookup.h).
             const bool mu = (x + 0.5) / t.width > 0.5, mv = 1.0 - (y + 0.5) / t.height > 0.5;
             const glm::vec3 c = mu == mv ? colour0 : colour1;
             float* p = &t.texels[3 * (size_t(y) * t.width + x)];
