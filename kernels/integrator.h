@@ -23,7 +23,7 @@
 #include "continuation_guide.h"
 #include "directional_lights.h"
 #include "envmap.h"
-#include "film.h"
+#include "film_accumulate.h"
 #include "light_sampling.h"
 #include "params.h"
 #include "path_state.h"

@@ -23,7 +23,7 @@
     X(int, strata_texels)   /* SIS: texels sorted by stratum */                                    \
     X(int, strata_begin)    /* SIS: stratum k owns strata_texels[begin[k] .. begin[k+1]) */        \
     X(float, strata_cdf)    /* SIS: running solid-angle fraction inside each stratum */            \
-    X(int, material_tex)    /* textures of each material, ETK_TEX_SLOTS ints (texture.h) */        \
+    X(int, material_tex)    /* textures of each material, ETK_TEX_SLOTS ints (texture_lookup.h) */ \
     X(float, tri_uv)        /* texture coordinates: (u, v) of 3 corners per triangle */            \
     X(float4, tex_info)     /* per texture: (offset, width, height, channels), uv transform */     \
     X(float, tex_texels)    /* every texture's texels, one flat array */                           \

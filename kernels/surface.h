@@ -8,7 +8,7 @@
 #include "params.h"
 #include "path_state.h"
 #include "sampler.h"
-#include "texture.h"
+#include "texture_lookup.h"
 
 ETK_BEGIN
 

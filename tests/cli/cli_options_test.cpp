@@ -147,7 +147,7 @@ TEST(CliOptions, DocumentedLimitsWrittenInDecimalAreInside) {
                                 dir));
     write_file(dir + "/sky.json", R"({"environment": {"sky": {"resolution": [16, 8],
         "sun_radiance": 1e12, "sky_radiance": 1e12}}, "film": {"width": 4, "height": 2},
-        "render": {"spp": 1}})");
+        "render": {"spp": 1, "max_depth": 1}})");
     expect_ok(ett::run_envtrace(render(dir + "/sky.json", out), dir));
     // Beyond them, the message shows digits that differ from the limit's.
     expect_error(ett::run_envtrace(
@@ -234,7 +234,8 @@ TEST(CliOptions, FilesWithoutFacesAreNotMeshes) {
         write_file(dir + "/m.json", R"({"environment": {"map": ")" + dir +
                                         R"(/sky.pfm"}, "film": {"width": 4, "height": 2},
             "shapes": [{"type": "mesh", "file": ")" +
-                                        dir + "/" + name + R"("}], "render": {"spp": 1}})");
+                                        dir + "/" + name +
+                                        R"("}], "render": {"spp": 1, "max_depth": 1}})");
         expect_error(ett::run_envtrace(render(dir + "/m.json", dir + "/o.exr"), dir),
                      name + ": no triangles to render");
         EXPECT_FALSE(fs::exists(dir + "/o.exr"));
@@ -459,7 +460,7 @@ TEST(CliOptions, PlyWarningsCountLikeWithLike) {
     write_file(dir + "/m.json", R"({"environment": {"map": ")" + dir +
                                     R"(/sky.pfm"}, "film": {"width": 4, "height": 2},
         "shapes": [{"type": "mesh", "file": ")" +
-                                    dir + R"(/p.ply"}], "render": {"spp": 1}})");
+                                    dir + R"(/p.ply"}], "render": {"spp": 1, "max_depth": 1}})");
     const ett::CliRun r = ett::run_envtrace(render(dir + "/m.json", dir + "/o.exr"), dir);
     expect_ok(r);
     EXPECT_NE(r.err.find("1 faces of fewer than three corners skipped"), std::string::npos)

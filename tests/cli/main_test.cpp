@@ -59,7 +59,8 @@ TEST(CliErrors, FuzzFindingLightSetsEndInOneErrorLine) {
     const std::string dir = ett::scratch_dir("cli-findings-lights");
     const std::string scene = dir + "/sky.json";
     std::ofstream(scene) << R"({"environment": {"sky": {"resolution": [8, 4]}},
-                               "film": {"width": 4, "height": 2}, "render": {"spp": 1}})";
+                               "film": {"width": 4, "height": 2},
+                               "render": {"spp": 1, "max_depth": 1}})";
     const std::vector<std::string> sets = findings(".lights.json");
     ASSERT_FALSE(sets.empty()) << "no *.lights.json in " << ENVTRACE_FUZZ_FINDINGS_DIR;
     for (const std::string& lights : sets) {

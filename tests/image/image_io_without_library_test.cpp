@@ -1,5 +1,5 @@
 // host/lib/image/image_io.cpp as a build without OpenImageIO has it (ENVTRACE_OPENIMAGEIO=OFF:
-// image_library_none.cpp in place of image_library_oiio.cpp; tests/CMakeLists.txt links the two
+// image_library_none.cpp in place of the oiio_*.cpp files; tests/CMakeLists.txt links the two
 // here ahead of the library): PFM read and written as ever, whatever the file is called, and
 // every other format refused before anything is read or written, naming the file and the reason.
 #include "image/image_io.h"

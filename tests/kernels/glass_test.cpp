@@ -14,6 +14,7 @@
 //   statistics of strategies_test.cpp.
 // - OpenCL and the native back end: equal up to rounding at depth 1, statistically at depth 6.
 // - the scene file's dielectric material and its errors.
+#include "image/image_io.h"
 #include "render_util.h"
 
 #include <gtest/gtest.h>
@@ -193,6 +194,31 @@ TEST(GlassBackends, DepthOneEqualUpToRoundingDepthSixStatistically) {
     s.settings.seed = 22;
     const auto cpu = ett::render(s, "cpu", 128);
     expect_agree(cl, cpu, "glass: opencl vs cpu depth 6");
+}
+
+// A scene that names no depth sees through glass: a smooth glass ball filling the view in front
+// of a constant map shows the map through it. At depth 1 (the paper's setting, named) only the
+// front face's Fresnel reflection reaches the camera: a dark ball, as every scene without
+// max_depth rendered before the default was raised.
+TEST(GlassScene, DefaultDepthSeesThroughGlass) {
+    const std::string dir = ett::scratch_dir("glass-default-depth");
+    et::write_image(dir + "/const.pfm", 16, 8, 3, std::vector<float>(16 * 8 * 3, kC));
+    auto scene = [&](const std::string& render) {
+        std::ofstream(dir + "/s.json")
+            << R"({"camera": {"eye": [0, 0, 4], "target": [0, 0, 0], "fov": 10},
+  "film": {"width": 8, "height": 8}, "environment": {"map": "const.pfm"},
+  "materials": {"g": {"type": "glass", "ior": 1.5}},
+  "shapes": [{"type": "sphere", "radius": 1, "material": "g"}])"
+            << render << "}";
+        return et::load_scene(dir + "/s.json");
+    };
+    const et::Scene by_default = scene("");
+    EXPECT_GE(by_default.settings.max_depth, 5) << "in, out, and reflections in between";
+    const double seen = ett::image_mean(ett::render(by_default, "cpu", 8, false).mean);
+    EXPECT_GT(seen, 0.75 * kC) << "the map through the ball";
+    const double direct = ett::image_mean(
+        ett::render(scene(R"(, "render": {"max_depth": 1})"), "cpu", 8, false).mean);
+    EXPECT_LT(direct, 0.25 * kC) << "depth 1: the front face's reflection alone";
 }
 
 TEST(GlassScene, DielectricMaterialFromJson) {

@@ -3,6 +3,7 @@
 // index, pair), and the OpenCL kernel produces the host's values bit for bit.
 #include "kernels/sampler.h"
 #include "test_data.h"
+#include "test_kernels.h"
 
 #include <gtest/gtest.h>
 
@@ -167,7 +168,7 @@ TEST(Sampler, ShuffleIsAPermutationOfAlignedBlocks) {
 
 TEST(Sampler, KernelMatchesHostBitForBit) {
     et::ClRuntime& rt = ett::runtime();
-    cl::Program program = rt.build("sampler_test.cl");
+    cl::Program program = ett::build_test_kernel(rt, "sampler_test.cl");
     cl::Kernel kernel(program, "sample_pairs");
     const int n = 4096;
     for (int sampler : {ETK_SAMPLER_SOBOL, ETK_SAMPLER_RANDOM})

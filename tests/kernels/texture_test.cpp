@@ -1,8 +1,9 @@
-// Texture lookup (kernels/texture.h): bilinear between texel centres with repeat addressing,
+// Texture lookup (kernels/texture_lookup.h): bilinear between texel centres with repeat addressing,
 // texture coordinates interpolated from barycentrics, textured material parameters; and the
 // OpenCL kernels (texture_test.cl) agreeing with the host bit for bit.
-#include "kernels/texture.h"
+#include "kernels/texture_lookup.h"
 #include "test_data.h"
+#include "test_kernels.h"
 
 #include <gtest/gtest.h>
 
@@ -176,7 +177,7 @@ TEST(Texture, MaterialParametersComeFromTheirTextures) {
 // included, and for the barycentric interpolation.
 TEST(Texture, OpenClMatchesHostBitForBit) {
     et::ClRuntime& rt = ett::runtime();
-    cl::Program program = rt.build("texture_test.cl");
+    cl::Program program = ett::build_test_kernel(rt, "texture_test.cl");
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(-3.0f, 3.0f);
     const int n = 4096;

@@ -105,6 +105,14 @@ TEST(RenderSettings, DefaultIsCompensated) {
     EXPECT_EQ(et::resolved_heuristic(st), et::MisHeuristic::balance);
 }
 
+// Without a depth a scene renders glass and inter-reflections (12, Cycles' default), and Russian
+// roulette, from rr_depth on, ends most paths long before that.
+TEST(RenderSettings, DefaultDepthIsAPathTracersWithRoulette) {
+    const et::RenderSettings st;
+    EXPECT_EQ(st.max_depth, 12);
+    EXPECT_LT(st.rr_depth, st.max_depth);
+}
+
 TEST(RenderSettings, SplitCounts) {
     for (int n : {1, 2, 4, 64})
         EXPECT_EQ(et::check_split_count(n, "t"), n);

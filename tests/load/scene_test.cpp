@@ -121,16 +121,49 @@ TEST(SceneBadInput, MalformedJsonNamesLineAndColumn) {
                        dir + "/a.json", dir);
 }
 
-TEST(SceneBadInput, UnknownKeysWarnByName) {
+// A misspelt key would render with the default without a word: it is an error naming the key's
+// path, with the known key it is closest to when one is close.
+TEST(SceneBadInput, UnknownKeysAreErrorsNamingThePath) {
     const std::string dir = ett::scratch_dir("scene-unknown");
-    std::string text = scene_json(dir, R"([{"type": "sphere", "radius": 0.5, "colour": "red"}])",
-                                  R"(, "camra": {"eye": [0, 0, 0]})");
-    write_file(dir + "/s.json", text);
-    const CliRun r = run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir);
-    expect_render(r, dir + "/out.exr", 8, 6);
-    EXPECT_NE(r.err.find("warning"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("'camra'"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("'colour'"), std::string::npos) << r.err;
+    struct Case {
+        std::string shapes, extra, expect;
+        bool suggestion;
+    };
+    const Case cases[] = {
+        // Top level, misspelt: suggested.
+        {R"([])", R"(, "camra": {"eye": [0, 0, 0]})",
+         "/s.json: camra: unknown key; did you mean \"camera\"?", true},
+        // Nested in an array element, far from every known key: no suggestion, the keys known.
+        {R"([{"type": "sphere", "radius": 0.5, "colour": "red"}])", "",
+         "/s.json: shapes[0].colour: unknown key (known here: type, center, radius", false},
+        // Deeper: a transform's member.
+        {R"([{"type": "quad", "transform": {"tranlate": [0, 1, 0]}}])", "",
+         "/s.json: shapes[0].transform.tranlate: unknown key; did you mean \"translate\"?", true},
+        // Render settings, case and a swap of letters.
+        {R"([])", R"(, "render": {"max_dpeth": 3})",
+         "/s.json: render.max_dpeth: unknown key; did you mean \"max_depth\"?", true},
+        {R"([])", R"(, "render": {"SPP": 3})",
+         "/s.json: render.SPP: unknown key; did you mean \"spp\"?", true},
+    };
+    for (const Case& c : cases) {
+        write_file(dir + "/s.json", scene_json(dir, c.shapes, c.extra));
+        const CliRun r = run_cli(render_args(dir + "/s.json", dir + "/out.exr"), dir);
+        expect_clean_error(r, c.expect, dir);
+        EXPECT_EQ(r.err.find("did you mean") != std::string::npos, c.suggestion) << r.err;
+    }
+    // A material's misspelt key, through the loader.
+    std::string text = scene_json(dir, "[]");
+    text.replace(text.find(R"("albedo": 0.7)"), 13, R"("albedo": 0.7, "roughnes": 0.2)");
+    write_file(dir + "/m.json", text);
+    try {
+        et::load_scene(dir + "/m.json");
+        ADD_FAILURE() << "a misspelt material key loaded";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find(
+                      "/m.json: materials.m.roughnes: unknown key; did you mean \"roughness\"?"),
+                  std::string::npos)
+            << e.what();
+    }
 }
 
 TEST(SceneBadInput, MissingFiles) {

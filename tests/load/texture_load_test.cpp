@@ -4,7 +4,7 @@
 // non-regular, corrupt or oversized files, wrong JSON types) refused with the file and the key
 // path named.
 #include "image/image_io.h"
-#include "kernels/texture.h"
+#include "kernels/texture_lookup.h"
 #include "load/scene.h"
 #include "util/error.h"
 #include "test_data.h"
@@ -262,12 +262,14 @@ TEST(TextureLoad, BadJsonTexturesNameTheKeyPath) {
     std::filesystem::create_directory(dir + "/folder.png");
     const std::string e = load(R"({"albedo": {"texture": "folder.png"}})");
     EXPECT_NE(e.find("folder.png"), std::string::npos) << e;
-    // Unknown keys are warned about, not fatal.
-    ett::WarningCapture w;
-    EXPECT_NO_THROW(et::load_scene(
-        scene_with_material(dir, R"({"albedo": {"texture": "a.png", "filter": "nearest"}})")));
-    ASSERT_FALSE(w.messages().empty());
-    EXPECT_NE(w.messages()[0].find("filter"), std::string::npos);
+    // Unknown keys are errors naming their path, with a suggestion when one is close.
+    const std::string u = load(R"({"albedo": {"texture": "a.png", "filter": "nearest"}})");
+    EXPECT_NE(u.find("materials.m.albedo.filter: unknown key (known here:"), std::string::npos)
+        << u;
+    const std::string v = load(R"({"albedo": {"checker": {"color0": 0.1, "colour1": 0.5}}})");
+    EXPECT_NE(v.find("materials.m.albedo.checker.colour1: unknown key; did you mean \"color1\"?"),
+              std::string::npos)
+        << v;
 }
 
 // The generated checkerboard looked up through the kernels' lookup is Mitsuba 3's checkerboard:

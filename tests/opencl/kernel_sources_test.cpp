@@ -2,6 +2,7 @@
 // logs of compilers that ignore those directives mapped back to kernels/FILE:LINE.
 #include "opencl/kernel_sources.h"
 #include "util/error.h"
+#include "test_kernels.h"
 
 #include <gtest/gtest.h>
 
@@ -21,6 +22,26 @@ TEST(KernelSources, IncludesExpandOnceWithLineMarkers) {
     EXPECT_NE(src.find("#line 4 \"kernels/envmap_sample.cl\""), std::string::npos);
     EXPECT_EQ(src.find("#include \""), std::string::npos) << "an include was left unexpanded";
     EXPECT_THROW(et::expand_kernel_source("no_such_kernel.cl"), et::Error);
+}
+
+// Test and benchmark programs are not the product's: the envtrace binary cannot build them, a
+// test binary expands its own with the product's headers, each named by its folder.
+TEST(KernelSources, TestProgramsAreEmbeddedApartFromTheProduct) {
+    for (const char* name : {"bvh_test.cl", "sampler_test.cl", "texture_test.cl"}) {
+        SCOPED_TRACE(name);
+        EXPECT_EQ(et::embedded_kernel_sources().count(name), 0u);
+        EXPECT_THROW(et::expand_kernel_source(name), et::Error);
+        ASSERT_EQ(ett::test_kernel_sources().count(name), 1u);
+    }
+    for (const auto& [name, text] : et::embedded_kernel_sources())
+        EXPECT_TRUE(name.find("_test.") == std::string::npos &&
+                    name.find("_bench.") == std::string::npos)
+            << name << ": a test or benchmark program among the product's kernels";
+    const std::string src =
+        et::expand_kernel_source("sampler_test.cl", ett::test_kernel_sources(), "tests/kernels/cl");
+    EXPECT_NE(src.find("#line 1 \"tests/kernels/cl/sampler_test.cl\""), std::string::npos);
+    EXPECT_NE(src.find("#line 1 \"kernels/sampler.h\""), std::string::npos);
+    EXPECT_EQ(src.find("#include \""), std::string::npos) << "an include was left unexpanded";
 }
 
 TEST(KernelSources, LogLocationsOfTheProgramStringMapToFileAndLine) {

@@ -4,6 +4,7 @@
 #include "opencl/kernel_sources.h"
 #include "opencl/opencl_runtime.h"
 #include "test_data.h"
+#include "test_kernels.h"
 
 #include <gtest/gtest.h>
 
@@ -180,6 +181,18 @@ TEST(OpenClRuntime, EveryProgramBuildsWithoutWarnings) {
             continue;
         et::ProgramBuildInfo info;
         ett::runtime().build(name, "", &info);
+        ASSERT_FALSE(info.from_cache) << name;
+        EXPECT_EQ(source_warnings(info.log), "") << name << ":\n" << info.log;
+        ++programs;
+    }
+    EXPECT_GE(programs, 2); // wavefront.cl, envmap_sample.cl
+    // The tests' own programs (tests/kernels/cl), held apart from the product's.
+    for (const auto& [name, text] : ett::test_kernel_sources()) {
+        EXPECT_EQ(et::embedded_kernel_sources().count(name), 0u) << name << " is in the product";
+        et::ProgramBuildInfo info;
+        ett::runtime().build_source(
+            name, et::expand_kernel_source(name, ett::test_kernel_sources(), "tests/kernels/cl"),
+            "", &info);
         ASSERT_FALSE(info.from_cache) << name;
         EXPECT_EQ(source_warnings(info.log), "") << name << ":\n" << info.log;
         ++programs;

@@ -17,6 +17,7 @@
 #include "render_util.h"
 #include "bvh_trace.h"
 #include "test_data.h"
+#include "test_kernels.h"
 
 #include <gtest/gtest.h>
 
@@ -103,7 +104,7 @@ TEST(Oclgrind, PlatformIsSelectableByName) {
 // ---- sampler_test.cl: etk_sample_pair for a run of indices -------------------------------
 
 std::vector<float> sample_pairs(et::ClRuntime& rt, int sampler, uint32_t first, int n) {
-    cl::Program program = rt.build("sampler_test.cl");
+    cl::Program program = ett::build_test_kernel(rt, "sampler_test.cl");
     cl::Kernel k(program, "sample_pairs");
     cl::Buffer out(rt.context(), CL_MEM_WRITE_ONLY, sizeof(float) * 2 * n);
     k.setArg(0, sampler);

@@ -1,7 +1,7 @@
 // BVH traversal (kernels/bvh.h) against brute force: closest hit and any hit, on the host and in
-// an OpenCL kernel (kernels/bvh_test.cl), for random triangle soups, soups of awkward triangles
-// (tiny, huge, slivers, axis-aligned flat, coplanar grids with shared edges, duplicates) and the
-// Stanford bunny.
+// an OpenCL kernel (tests/kernels/cl/bvh_test.cl), for random triangle soups, soups of awkward
+// triangles (tiny, huge, slivers, axis-aligned flat, coplanar grids with shared edges, duplicates)
+// and the Stanford bunny.
 //
 // Brute force runs etk_triangle_hit over every triangle, so on the host the closest distance must
 // be bit-identical; the triangle may differ only at a tie (two triangles at the same t within
@@ -329,7 +329,8 @@ void run_host(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const cha
     EXPECT_GT(closest.hits, n_rays / 4); // the rays do exercise the geometry
 }
 
-// The rays traced by kernels/bvh_test.cl on the OpenCL device: (t, prim bits, b1, b2) each.
+// The rays traced by tests/kernels/cl/bvh_test.cl on the OpenCL device: (t, prim bits, b1, b2)
+// each.
 std::vector<float4> trace_on_device(const Prepared& p, const std::vector<Ray>& rays, int any) {
     std::vector<float4> org, dir;
     for (const Ray& r : rays) {

@@ -1,6 +1,6 @@
-// The film (host/lib/render/film.h, kernels/film.h): the mean, the per-pixel variance from the
-// sums of squares, adding films, and resuming a render from its film: a render split into two
-// runs, the second resuming from the first's film, equals the uninterrupted one bit for bit on
+// The film (host/lib/render/film.h, kernels/film_accumulate.h): the mean, the per-pixel variance
+// from the sums of squares, adding films, and resuming a render from its film: a render split into
+// two runs, the second resuming from the first's film, equals the uninterrupted one bit for bit on
 // both back ends. The exact sums (host/lib/render/film_sums.h): sample sets add in any order
 // and partition to the same bits, so a render split by sample index (MPI ranks, farm tasks)
 // equals the render in one process.

@@ -1,4 +1,5 @@
 #include "bvh_trace.h"
+#include "test_kernels.h"
 
 namespace ett {
 
@@ -6,7 +7,7 @@ std::vector<etk::float4> trace_bvh_kernel(et::ClRuntime& rt, const std::vector<e
                                           const std::vector<etk::float4>& packets,
                                           const std::vector<etk::float4>& org,
                                           const std::vector<etk::float4>& dir, int any_hit) {
-    cl::Program program = rt.build("bvh_test.cl");
+    cl::Program program = build_test_kernel(rt, "bvh_test.cl");
     cl::Kernel k(program, "bvh_trace");
     const int n = static_cast<int>(org.size());
     auto buf = [&](const std::vector<etk::float4>& v) {

@@ -1,4 +1,4 @@
-// kernels/bvh_test.cl run on an OpenCL device: the BVH tests' rays traced there (PoCL in
+// tests/kernels/cl/bvh_test.cl run on an OpenCL device: the BVH tests' rays traced there (PoCL in
 // tests/prepare/bvh_build_test.cpp, Oclgrind in tests/portability/oclgrind_test.cpp).
 #pragma once
 #include "opencl/opencl_runtime.h"

@@ -71,6 +71,7 @@ inline et::Scene base_scene(int w, int h, et::EnvMap env) {
     s.height = h;
     s.env = std::move(env);
     s.settings.sampler = et::SamplerKind::random;
+    s.settings.max_depth = 1; // direct lighting unless a test asks for more
     return s;
 }
 

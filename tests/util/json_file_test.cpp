@@ -140,3 +140,45 @@ TEST(JsonReader, TypesAndRangesWithKeyPaths) {
 }
 
 } // namespace
+
+namespace {
+
+std::string rejection(const json& object, const std::vector<std::string>& known) {
+    try {
+        et::JsonReader("scene.json").at("materials").at(2).reject_unknown_keys(object, known);
+    } catch (const et::Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+} // namespace
+
+// A key nearly like a known one (a letter missing, added, changed, two swapped, another case) is
+// suggested; one far from all of them, or a short one with every letter different, is not.
+TEST(JsonReader, ClosestKeySuggestsOnlyNearOnes) {
+    const std::vector<std::string> known = {"type", "albedo", "roughness", "ior", "k", "eta"};
+    EXPECT_EQ(et::closest_key("roughnes", known), "roughness");
+    EXPECT_EQ(et::closest_key("roughnesss", known), "roughness");
+    EXPECT_EQ(et::closest_key("rougness", known), "roughness");
+    EXPECT_EQ(et::closest_key("albdeo", known), "albedo");
+    EXPECT_EQ(et::closest_key("Albedo", known), "albedo");
+    EXPECT_EQ(et::closest_key("typo", known), "type");
+    EXPECT_EQ(et::closest_key("colour", known), "");
+    EXPECT_EQ(et::closest_key("x", known), "");
+    EXPECT_EQ(et::closest_key("transmission", known), "");
+    EXPECT_EQ(et::closest_key("roughness", {}), "");
+}
+
+TEST(JsonReader, UnknownKeysAreErrorsNamingThePath) {
+    const std::vector<std::string> known = {"type", "albedo", "roughness"};
+    EXPECT_EQ(rejection(json::parse(R"({"type": "plastic", "roughness": 0.2})"), known),
+              "(no error)");
+    EXPECT_EQ(rejection(json::parse(R"({"type": "plastic", "roughnes": 0.2})"), known),
+              "scene.json: materials[2].roughnes: unknown key; did you mean \"roughness\"?");
+    EXPECT_EQ(rejection(json::parse(R"({"colour": [1, 0, 0]})"), known),
+              "scene.json: materials[2].colour: unknown key (known here: type, albedo, "
+              "roughness)");
+    // Not an object: the caller's type check reports it.
+    EXPECT_EQ(rejection(json::parse("[1]"), known), "(no error)");
+}

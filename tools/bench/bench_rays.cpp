@@ -1,6 +1,7 @@
 // Ray traversal throughput: the same rays through envtrace's BVH (native, and the
-// OpenCL back end through kernels/bvh_test.cl), through the BVH as it was before the SAH and 4-wide
-// rewrite (bvh_baseline.*, native) and, when CMake found it, through Embree (an optional benchmark
+// OpenCL back end through tests/kernels/cl/bvh_test.cl), through the BVH as it was before the SAH
+// and 4-wide rewrite (bvh_baseline.*, native) and, when CMake found it, through Embree (an optional
+// benchmark
 // dependency, never one of the renderer). Also: the SAH cost of each tree (traversal 1, triangle
 // 1, relative to the root's area) and, with Embree, the SAH cost of Embree's own builder
 // (rtcBuildBVH, binary, leaves of <= 4) and that tree traced by envtrace's traversal.
@@ -22,6 +23,7 @@
 #include "util/json_file.h"
 #include "util/parallel.h"
 #include "util/timer.h"
+#include "test_kernels.h"
 
 #include <nlohmann/json.hpp>
 
@@ -88,13 +90,13 @@ Tracer native_tracer(const std::vector<float4>& nodes, const std::vector<float4>
         };
 }
 
-// The OpenCL back end: kernels/bvh_test.cl (etk_bvh_traverse, one ray per work-item).
+// The OpenCL back end: tests/kernels/cl/bvh_test.cl (etk_bvh_traverse, one ray per work-item).
 class ClTracer {
   public:
     ClTracer(int device, const std::vector<float4>& nodes, const std::vector<float4>& tris,
              const std::vector<int>& order)
         : rt_(device), order_(order) {
-        program_ = rt_.build("bvh_test.cl");
+        program_ = ett::build_test_kernel(rt_, "bvh_test.cl");
         k_ = cl::Kernel(program_, "bvh_trace");
         nodes_ = buffer(nodes);
         tris_ = buffer(tris);

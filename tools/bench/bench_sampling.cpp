@@ -6,9 +6,10 @@
 //   records: the project's API as it is (EnvSamplerCL::sample_sequence vs
 //            sample_env_host_sequence): every sample's direction, pdf, radiance and cell come back
 //            to the host (40 bytes a sample), so this also measures allocation and copying.
-//   reduce:  benchmark-only kernels/envmap_sample_bench.cl and its native twin here: the same
+//   reduce:  benchmark-only tools/bench/envmap_sample_bench.cl and its native twin here: the same
 //            sampling, each work-item / loop iteration summing `per_item` consecutive samples'
 //            radiance and pdf, so the output is small and both sides measure sampling.
+#include "bench_kernels.h"
 #include "bench_maps.h"
 #include "util/parallel.h"
 #include "render/env_sampling.h"
@@ -58,7 +59,7 @@ Fixture& fixture(const std::string& map) {
         f->desc = f->env.desc();
         et::ClRuntime& rt = runtime();
         f->sampler = std::make_unique<et::EnvSamplerCL>(rt, f->env);
-        f->bench_program = rt.build("envmap_sample_bench.cl");
+        f->bench_program = etb::build_bench_kernel(rt, "envmap_sample_bench.cl");
         f->reduce = cl::Kernel(f->bench_program, "envmap_sample_reduce");
         f->dist = cl::Buffer(rt.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
                              f->env.dist.table.size() * sizeof(float), f->env.dist.table.data());

@@ -2,7 +2,7 @@
 //  - environment sampling's share of a frame: the frame's light samples (one per shaded hit, as
 //    counted by the schedule) drawn on their own, natively (sample values; + etk_env_sample, in
 //    the sample_lights stage's batches where the render draws them so;
-//    + the radiance lookup) and on the device (kernels/envmap_sample_bench.cl), each right
+//    + the radiance lookup) and on the device (tools/bench/envmap_sample_bench.cl), each right
 //    after a render of the frame; and in situ: the shade stage (with the sample_lights stage that
 //    draws its light samples ahead) of the same render against the shade stage with --strategy
 //    uniform (etk_sample_uniform_sphere instead of etk_env_sample);
@@ -13,6 +13,7 @@
 // keys tools/bench/render_benchmarks.py reads.
 // Usage: render_probes SCENE [--max-depth D] [--runs R] [--spp N] [--strategy S] [--envtrace BIN]
 //                      [--json F]
+#include "bench_kernels.h"
 #include "kernels/envmap.h"
 #include "load/scene.h"
 #include "opencl/opencl_runtime.h"
@@ -140,7 +141,7 @@ double native_env_sampling(const et::DeviceScene& ds, long long n, int threads, 
 class ClEnvSampling {
   public:
     ClEnvSampling(const et::DeviceScene& ds, int device, long long n) : rt_(device) {
-        program_ = rt_.build("envmap_sample_bench.cl");
+        program_ = etb::build_bench_kernel(rt_, "envmap_sample_bench.cl");
         k_ = cl::Kernel(program_, "envmap_sample_reduce");
         auto& ctx = rt_.context();
         dist_ =

@@ -1,5 +1,5 @@
 // The image formats other than PFM, for image_io.cpp alone: read and written through
-// OpenImageIO (image_library_oiio.cpp) or, in a build without it (CMake ENVTRACE_OPENIMAGEIO=OFF,
+// OpenImageIO (the oiio_*.cpp files) or, in a build without it (CMake ENVTRACE_OPENIMAGEIO=OFF,
 // for machines such as GPU nodes that lack its ~270 libraries), refused with an error that names
 // the file (image_library_none.cpp). PFM is read and written in image_io.cpp by either build.
 #pragma once

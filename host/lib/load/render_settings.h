@@ -88,7 +88,11 @@ void check_split(const RenderSettings& st);
 struct RenderSettings {
     // From the scene's "render" block, overridden by the command line.
     int spp = 16;
-    int max_depth = 1;
+    // Deep enough for glass (in, out, and what lies behind) and for mirrors and metals to show
+    // each other, as Cycles' default of 12; Russian roulette past rr_depth ends most paths long
+    // before it. 1 is direct lighting only, the paper's setting, which a scene or the command line
+    // names.
+    int max_depth = 12;
     // compensated: above the paper's MIS (mis) or within 6% of it on every scene measured, at no
     // extra cost per sample on any device (docs/history/results-journal.md, "The default
     // strategy"). The visibility strategy gains more in rooms and around occluders but pays for its

@@ -55,7 +55,7 @@ glm::mat4 read_transform(const json& s, const JsonReader& r) {
         return m;
     const json& t = *tp;
     const JsonReader rt = r.at("transform");
-    rt.warn_unknown_keys(t, {"translate", "rotate", "scale", "matrix"});
+    rt.reject_unknown_keys(t, {"translate", "rotate", "scale", "matrix"});
     const double big = 1e30;
     if (t.contains("matrix")) {
         // A full 4x4 matrix, row-major (as Mitsuba writes them); nothing else alongside it.
@@ -169,7 +169,8 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
     Material m;
     m.name = name;
     r.expect_object(j);
-    r.warn_unknown_keys(j, {"type", "albedo", "specular", "roughness", "ior", "tint", "eta", "k"});
+    r.reject_unknown_keys(j,
+                          {"type", "albedo", "specular", "roughness", "ior", "tint", "eta", "k"});
     const std::string type = r.string(j, "type", "diffuse");
     if (type == "diffuse") {
         m.type = ETK_MAT_DIFFUSE;
@@ -259,13 +260,13 @@ Scene load_scene(const std::string& path) {
     Scene scene;
     scene.path = path;
     const std::string dir = std::filesystem::path(path).parent_path().string();
-    r.warn_unknown_keys(
+    r.reject_unknown_keys(
         j, {"camera", "film", "environment", "materials", "shapes", "render", "output"});
 
     if (const json* cp = r.object(j, "camera")) {
         const json& c = *cp;
         const JsonReader rc = r.at("camera");
-        rc.warn_unknown_keys(c, {"eye", "target", "up", "fov"});
+        rc.reject_unknown_keys(c, {"eye", "target", "up", "fov"});
         scene.camera.eye = read_vec3(c, "eye", scene.camera.eye, rc, false);
         scene.camera.target = read_vec3(c, "target", scene.camera.target, rc, false);
         scene.camera.up = read_vec3(c, "up", scene.camera.up, rc, false);
@@ -281,16 +282,16 @@ Scene load_scene(const std::string& path) {
     }
     if (const json* fp = r.object(j, "film")) {
         const JsonReader rf = r.at("film");
-        rf.warn_unknown_keys(*fp, {"width", "height"});
+        rf.reject_unknown_keys(*fp, {"width", "height"});
         scene.width = read_int(*fp, "width", scene.width, 1, 16384, rf);
         scene.height = read_int(*fp, "height", scene.height, 1, 16384, rf);
     }
     if (const json* sp = r.object(j, "render")) {
         const json& s = *sp;
         const JsonReader rr = r.at("render");
-        rr.warn_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
-                                 "time_limit", "paths", "bsdf_sampling", "light_samples",
-                                 "bsdf_samples", "rr_depth"});
+        rr.reject_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
+                                   "time_limit", "paths", "bsdf_sampling", "light_samples",
+                                   "bsdf_samples", "rr_depth"});
         auto& st = scene.settings;
         st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
         st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
@@ -366,14 +367,14 @@ Scene load_scene(const std::string& path) {
             const std::string type = rs.string(s, "type", "");
             int mat = material_of(s, rs);
             if (type == "mesh") {
-                rs.warn_unknown_keys(s, {"type", "file", "material", "transform"});
+                rs.reject_unknown_keys(s, {"type", "file", "material", "transform"});
                 if (!s.contains("file"))
                     rs.fail("a mesh needs \"file\" (an OBJ, PLY, glTF or GLB file)");
                 const glm::mat4 transform = read_transform(s, rs);
                 std::string file = resolve_data_file(rs.string(s, "file", ""), dir);
                 load_mesh(file, transform, mat, scene.materials, scene.triangles, &scene.textures);
             } else if (type == "sphere") {
-                rs.warn_unknown_keys(
+                rs.reject_unknown_keys(
                     s, {"type", "center", "radius", "material", "segments", "smooth"});
                 glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
                 require_in_range(c, rs.at("center"));
@@ -420,7 +421,7 @@ Scene load_scene(const std::string& path) {
                 T.uvs.resize(3 * (T.size() - sphere.size()), glm::vec2(0.0f));
                 T.uvs.insert(T.uvs.end(), sphere.uvs.begin(), sphere.uvs.end());
             } else if (type == "quad") {
-                rs.warn_unknown_keys(s, {"type", "center", "size", "material", "transform"});
+                rs.reject_unknown_keys(s, {"type", "center", "size", "material", "transform"});
                 glm::vec3 c = read_vec3(s, "center", glm::vec3(0.0f), rs, false);
                 require_in_range(c, rs.at("center"));
                 float hx = 5.0f, hz = 5.0f; // "size": edge length or [x extent, z extent]

@@ -14,8 +14,8 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     const JsonReader r = JsonReader(where).at("environment");
     if (!env.is_object())
         r.fail("expected an object with \"map\" or \"sky\", got " + json_excerpt(env));
-    r.warn_unknown_keys(env, {"map", "sky", "intensity", "rotation", "convention",
-                              "distribution_resolution", "blur", "distribution_exponent"});
+    r.reject_unknown_keys(env, {"map", "sky", "intensity", "rotation", "convention",
+                                "distribution_resolution", "blur", "distribution_exponent"});
     if (env.contains("distribution_resolution")) {
         const auto& res = env["distribution_resolution"];
         const JsonReader rd = r.at("distribution_resolution");
@@ -56,8 +56,8 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     } else if (const nlohmann::json* sp = r.object(env, "sky")) {
         const auto& s = *sp;
         const JsonReader rs = r.at("sky");
-        rs.warn_unknown_keys(s, {"resolution", "sun_elevation", "sun_azimuth", "sun_radius",
-                                 "sun_radiance", "sky_radiance"});
+        rs.reject_unknown_keys(s, {"resolution", "sun_elevation", "sun_azimuth", "sun_radius",
+                                   "sun_radiance", "sky_radiance"});
         SkyParams p;
         if (s.contains("resolution")) {
             const auto& res = s["resolution"];

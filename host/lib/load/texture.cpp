@@ -135,7 +135,7 @@ Texture make_checker(glm::vec3 colour0, glm::vec3 colour1, int resolution) {
     t.texels.resize(size_t(3) * t.width * t.height);
     for (int y = 0; y < t.height; ++y)
         for (int x = 0; x < t.width; ++x) {
-            // The texel centre's (u, v); row 0 is the top, v = 1 (kernels/texture.h).
+            // The texel centre's (u, v); row 0 is the top, v = 1 (kernels/texture_lookup.h).
             const bool mu = (x + 0.5) / t.width > 0.5, mv = 1.0 - (y + 0.5) / t.height > 0.5;
             const glm::vec3 c = mu == mv ? colour0 : colour1;
             float* p = &t.texels[3 * (size_t(y) * t.width + x)];
@@ -151,7 +151,7 @@ int read_texture_param(const nlohmann::json& j, const char* key, TextureUse use,
         return -1;
     const nlohmann::json& t = *it;
     const JsonReader rt = r.at(key);
-    rt.warn_unknown_keys(t, {"texture", "checker", "uv_scale", "uv_offset"});
+    rt.reject_unknown_keys(t, {"texture", "checker", "uv_scale", "uv_offset"});
     const bool file = t.contains("texture"), checker = t.contains("checker");
     if (file == checker)
         rt.fail("a texture needs exactly one of \"texture\" (an image file) and \"checker\"");
@@ -175,7 +175,7 @@ int read_texture_param(const nlohmann::json& j, const char* key, TextureUse use,
     const JsonReader rc = rt.at("checker");
     const nlohmann::json& c = t["checker"];
     rc.expect_object(c);
-    rc.warn_unknown_keys(c, {"color0", "color1", "resolution"});
+    rc.reject_unknown_keys(c, {"color0", "color1", "resolution"});
     const glm::vec3 c0 = read_colour(c, "color0", glm::vec3(0.4f), rc);
     const glm::vec3 c1 = read_colour(c, "color1", glm::vec3(0.2f), rc);
     const int res = static_cast<int>(rc.integer(c, "resolution", 32, 1, 2048));

@@ -1,7 +1,7 @@
 // Material textures as the loaders make them: image files read through OpenImageIO (colour
 // textures decoded from sRGB, data textures such as roughness as stored) and the generated
 // checkerboard, held once per distinct source in a scene's TextureSet. The kernels look them
-// up bilinearly with repeat addressing (kernels/texture.h).
+// up bilinearly with repeat addressing (kernels/texture_lookup.h).
 #pragma once
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>

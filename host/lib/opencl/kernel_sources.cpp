@@ -11,17 +11,34 @@
 namespace et {
 namespace {
 
-void expand(const std::string& name, std::set<std::string>& done, std::string& out) {
-    const auto& sources = embedded_kernel_sources();
-    auto it = sources.find(name);
-    if (it == sources.end())
-        throw Error("kernel source '" + name + "' is not embedded in this build");
+struct Sources {
+    const std::map<std::string, std::string>* own; // looked up first; may be null
+    std::string own_dir;
+};
+
+void expand(const std::string& name, const Sources& from, std::set<std::string>& done,
+            std::string& out) {
+    const std::string* text = nullptr;
+    std::string path;
+    if (from.own)
+        if (auto it = from.own->find(name); it != from.own->end()) {
+            text = &it->second;
+            path = from.own_dir + "/" + name;
+        }
+    if (!text) {
+        const auto& sources = embedded_kernel_sources();
+        auto it = sources.find(name);
+        if (it == sources.end())
+            throw Error("kernel source '" + name + "' is not embedded in this build");
+        text = &it->second;
+        path = "kernels/" + name;
+    }
     if (!done.insert(name).second)
         return;
-    std::istringstream in(it->second);
+    std::istringstream in(*text);
     std::string line;
     int number = 0;
-    out += "#line 1 \"kernels/" + name + "\"\n";
+    out += "#line 1 \"" + path + "\"\n";
     while (std::getline(in, line)) {
         ++number;
         auto first = line.find_first_not_of(" \t");
@@ -29,8 +46,8 @@ void expand(const std::string& name, std::set<std::string>& done, std::string& o
             auto q0 = line.find('"', first);
             auto q1 = q0 == std::string::npos ? q0 : line.find('"', q0 + 1);
             if (q1 != std::string::npos) {
-                expand(line.substr(q0 + 1, q1 - q0 - 1), done, out);
-                out += "#line " + std::to_string(number + 1) + " \"kernels/" + name + "\"\n";
+                expand(line.substr(q0 + 1, q1 - q0 - 1), from, done, out);
+                out += "#line " + std::to_string(number + 1) + " \"" + path + "\"\n";
                 continue;
             }
         }
@@ -44,7 +61,16 @@ void expand(const std::string& name, std::set<std::string>& done, std::string& o
 std::string expand_kernel_source(const std::string& name) {
     std::set<std::string> done;
     std::string out;
-    expand(name, done, out);
+    expand(name, {nullptr, ""}, done, out);
+    return out;
+}
+
+std::string expand_kernel_source(const std::string& name,
+                                 const std::map<std::string, std::string>& own,
+                                 const std::string& own_dir) {
+    std::set<std::string> done;
+    std::string out;
+    expand(name, {&own, own_dir}, done, out);
     return out;
 }
 

@@ -104,8 +104,8 @@ void add_texture_coordinates(const Scene& scene, const std::vector<int>& order, 
         }
 }
 
-// Every texture into one flat buffer behind a two-float4 header each (kernels/texture.h), and
-// each material's texture slots. TextureSet has kept the total within what the device indexes.
+// Every texture into one flat buffer behind a two-float4 header each (kernels/texture_lookup.h),
+// and each material's texture slots. TextureSet has kept the total within what the device indexes.
 void add_textures(const Scene& scene, DeviceScene& d) {
     auto bits = [](uint32_t v) {
         float f;

@@ -133,6 +133,10 @@ LightSet read_lights(const std::string& path) {
     LightSet set;
     if (!j.is_object() || !j.contains("lights") || !j["lights"].is_array())
         r.fail("not a light set (expected an object with a 'lights' array)");
+    // The keys write_lights writes: a hand-edited set's misspelt key is an error, not ignored.
+    r.reject_unknown_keys(j,
+                          {"method", "power_rule", "map", "count", "map_power",
+                           "precompute_seconds", "selection_seconds", "total_seconds", "lights"});
     // Powers as the brightest map could give (4 pi x kMaxRadiance), so renders stay finite.
     const double max_value = 4.0 * M_PI * kMaxRadiance;
     auto vec = [&](const nlohmann::json& v, const JsonReader& rv, double lo) {
@@ -151,6 +155,7 @@ LightSet read_lights(const std::string& path) {
     for (const auto& l : j["lights"]) {
         const JsonReader ri = rl.at(i);
         ri.expect_object(l);
+        ri.reject_unknown_keys(l, {"direction", "power", "solid_angle"});
         if (!l.contains("direction") || !l.contains("power"))
             ri.fail("needs 'direction' and 'power'");
         DirectionalLight d;

@@ -5,6 +5,7 @@
 #include "util/output_batch.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -183,25 +184,40 @@ void write_json_file(const std::string& path, const json& j, int indent) {
     batch.commit();
 }
 
-void warn_unknown_keys(const json& object, const std::vector<std::string>& known,
-                       const std::string& where) {
-    if (!object.is_object())
-        return;
-    std::string unknown;
-    int listed = 0, more = 0;
-    for (auto it = object.begin(); it != object.end(); ++it)
-        if (std::find(known.begin(), known.end(), it.key()) == known.end()) {
-            if (listed < 8) {
-                unknown += (unknown.empty() ? "'" : ", '") + excerpt(it.key(), 40) + "'";
-                ++listed;
-            } else {
-                ++more;
+std::string closest_key(const std::string& key, const std::vector<std::string>& known) {
+    // Optimal string alignment distance over lower-cased bytes.
+    const auto lower = [](std::string t) {
+        for (char& c : t)
+            c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        return t;
+    };
+    const std::string a = lower(key);
+    std::string best;
+    size_t best_distance = std::string::npos;
+    for (const std::string& candidate : known) {
+        const std::string b = lower(candidate);
+        std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
+        for (size_t i = 0; i <= a.size(); ++i)
+            d[i][0] = i;
+        for (size_t j = 0; j <= b.size(); ++j)
+            d[0][j] = j;
+        for (size_t i = 1; i <= a.size(); ++i)
+            for (size_t j = 1; j <= b.size(); ++j) {
+                const size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+                d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+                if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+                    d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
             }
+        if (d[a.size()][b.size()] < best_distance) {
+            best_distance = d[a.size()][b.size()];
+            best = candidate;
         }
-    if (more)
-        unknown += " and " + std::to_string(more) + " more";
-    if (!unknown.empty())
-        warn(where + ": unknown key(s) " + unknown + " ignored");
+    }
+    // About one edit in three characters, at least one: "roughnes" and "colr" are found, "fov"
+    // is not taken for "eye".
+    const size_t allowed = std::max<size_t>(1, (std::min(a.size(), best.size()) + 1) / 3);
+    // Never a key with every character replaced ("x" for "k").
+    return best_distance <= allowed && best_distance < a.size() ? best : std::string();
 }
 
 // JsonReader
@@ -315,9 +331,21 @@ const json* JsonReader::object(const json& j, const char* key) const {
     return &*it;
 }
 
-void JsonReader::warn_unknown_keys(const json& object,
-                                   const std::vector<std::string>& known) const {
-    et::warn_unknown_keys(object, known, where());
+void JsonReader::reject_unknown_keys(const json& object,
+                                     const std::vector<std::string>& known) const {
+    if (!object.is_object())
+        return;
+    for (auto it = object.begin(); it != object.end(); ++it) {
+        if (std::find(known.begin(), known.end(), it.key()) != known.end())
+            continue;
+        const std::string near = closest_key(it.key(), known);
+        if (!near.empty())
+            at(it.key()).fail("unknown key; did you mean \"" + near + "\"?");
+        std::string list;
+        for (const std::string& k : known)
+            list += (list.empty() ? "" : ", ") + k;
+        at(it.key()).fail("unknown key (known here: " + list + ")");
+    }
 }
 
 } // namespace et

@@ -36,9 +36,9 @@ std::string excerpt(const std::string& text, size_t max = 60);
 // strings quoted and cut to ~60 characters, arrays and objects by type and size only.
 std::string json_excerpt(const nlohmann::json& value);
 
-// Warns once about keys of `object` that are not in `known`, naming them and where they are.
-void warn_unknown_keys(const nlohmann::json& object, const std::vector<std::string>& known,
-                       const std::string& where);
+// The entry of `known` closest to `key` by edit distance (case-insensitive; a swap of two
+// neighbours counts once), or "" when none is close enough to be a likely misspelling.
+std::string closest_key(const std::string& key, const std::vector<std::string>& known);
 
 // Typed access to the members of a parsed file, with errors "FILE: key.path: problem (got X)".
 // Numbers must be finite and in range; integers must be integral (64, 64.0 and 6.4e1 are the
@@ -73,8 +73,11 @@ class JsonReader {
     // The object member `key` (checked to be an object), or nullptr when absent.
     const nlohmann::json* object(const nlohmann::json& j, const char* key) const;
 
-    void warn_unknown_keys(const nlohmann::json& object,
-                           const std::vector<std::string>& known) const;
+    // Throws "FILE: path.key: unknown key; did you mean "k"?" for the first key of `object`
+    // that is not in `known` (the suggestion only when one is close, else the keys known here):
+    // a misspelt key would otherwise render with the default without a word.
+    void reject_unknown_keys(const nlohmann::json& object,
+                             const std::vector<std::string>& known) const;
 
   private:
     std::string file_, path_;

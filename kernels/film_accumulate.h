@@ -2,8 +2,8 @@
 // squares. Enough to form the mean, to estimate each pixel's variance, to save and resume a
 // render, and to add two films. The host side is host/lib/render/film.h. The first hit's AOVs
 // (film_albedo, film_normal) are written by aov.h.
-#ifndef ETK_FILM_H
-#define ETK_FILM_H
+#ifndef ETK_FILM_ACCUMULATE_H
+#define ETK_FILM_ACCUMULATE_H
 #include "compat.h"
 #include "path_state.h"
 

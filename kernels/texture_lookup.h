@@ -9,8 +9,8 @@
 // (1: grey, replicated to RGB; 3: RGB). Texture coordinates follow OBJ: v = 0 is the image's
 // bottom row. material_tex holds four ints per material: its albedo, specular and roughness
 // textures (-1: none) and one unused slot.
-#ifndef ETK_TEXTURE_H
-#define ETK_TEXTURE_H
+#ifndef ETK_TEXTURE_LOOKUP_H
+#define ETK_TEXTURE_LOOKUP_H
 #include "bsdf.h"
 #include "compat.h"
 #include "path_state.h"

@@ -1,6 +1,6 @@
 // Test kernel: etk_texture at n texture coordinates and etk_hit_uv at n barycentrics, to compare
 // with the host bit for bit (tests/kernels/texture_test.cpp).
-#include "texture.h"
+#include "texture_lookup.h"
 
 __kernel void texture_lookup(__global const float4* info, __global const float* texels, int tex,
                              __global const float2* uv, int n, __global float4* out) {
