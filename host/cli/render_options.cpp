@@ -251,7 +251,9 @@ RenderSettings settings_for(const RenderArgs& a, const Globals& g, RenderSetting
     warn_idle_options(a, st);
     const bool direct_only = st.strategy == Strategy::sis || st.strategy == Strategy::lights;
     if (direct_only && st.max_depth != 1) {
-        warn("--lights and --strategy sis render direct lighting only: using --max-depth 1");
+        // Said only where a depth was named (command line or scene): the default is no choice.
+        if (a.max_depth > 0 || st.max_depth != RenderSettings{}.max_depth)
+            warn("--lights and --strategy sis render direct lighting only: using --max-depth 1");
         st.max_depth = 1;
     }
     check_split(st);
