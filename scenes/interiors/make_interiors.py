@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Writes the interior scenes of the visibility strategy (issue 11): rooms whose only light is a
+"""Writes the interior scenes of the visibility strategy: rooms whose only light is a
 procedural sun and sky seen through openings, so that most directions the map's distribution
 picks are blocked. Geometry is generated here (OBJ + MTL beside each scene JSON); nothing is
 copied from outside data.
