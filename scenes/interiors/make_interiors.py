@@ -12,66 +12,11 @@ window_room: a closed 6 x 3 x 5 m room with two windows in its south wall (the s
   the ceiling, a box below it; the sun at 65 degrees."""
 import json
 import os
+import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-
-
-class Obj:
-    def __init__(self):
-        self.v, self.f = [], []
-
-    def quad(self, a, b, c, d, mtl):
-        """A rectangle a-b-c-d (counter-clockwise seen from the side its normal points to)."""
-        base = len(self.v) + 1
-        self.v += [a, b, c, d]
-        self.f.append((mtl, [base, base + 1, base + 2, base + 3]))
-
-    def box(self, lo, hi, mtl, skip=()):
-        x0, y0, z0 = lo
-        x1, y1, z1 = hi
-        faces = {
-            "-x": [(x0, y0, z0), (x0, y0, z1), (x0, y1, z1), (x0, y1, z0)],
-            "+x": [(x1, y0, z0), (x1, y1, z0), (x1, y1, z1), (x1, y0, z1)],
-            "-y": [(x0, y0, z0), (x1, y0, z0), (x1, y0, z1), (x0, y0, z1)],
-            "+y": [(x0, y1, z0), (x0, y1, z1), (x1, y1, z1), (x1, y1, z0)],
-            "-z": [(x0, y0, z0), (x0, y1, z0), (x1, y1, z0), (x1, y0, z0)],
-            "+z": [(x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)],
-        }
-        for k, q in faces.items():
-            if k not in skip:
-                self.quad(*q, mtl)
-
-    def write(self, name, materials):
-        with open(os.path.join(HERE, name + ".mtl"), "w") as f:
-            f.write("# written by make_interiors.py\n")
-            for m, kd in materials.items():
-                f.write(f"newmtl {m}\nKd {kd[0]} {kd[1]} {kd[2]}\nKs 0 0 0\n\n")
-        with open(os.path.join(HERE, name + ".obj"), "w") as f:
-            f.write(f"# written by make_interiors.py\nmtllib {name}.mtl\n")
-            for v in self.v:
-                f.write("v %g %g %g\n" % v)
-            cur = None
-            for m, idx in self.f:
-                if m != cur:
-                    f.write(f"usemtl {m}\n")
-                    cur = m
-                f.write("f " + " ".join(map(str, idx)) + "\n")
-
-
-def wall_with_holes(o, axis_pts, holes, mtl):
-    """A wall in the plane z = z0 from x0..x1, y0..y1 with rectangular holes [(hx0, hx1, hy0,
-    hy1)], split into rectangles: full-height strips between holes, and above/below each hole.
-    Faces +Z (into a room that lies at z > z0)."""
-    (x0, x1, y0, y1, z0) = axis_pts
-    xs = [x0] + [c for h in sorted(holes) for c in (h[0], h[1])] + [x1]
-    def rect(a, b, c, d):  # x a..b, y c..d, facing +z
-        o.quad((a, c, z0), (b, c, z0), (b, d, z0), (a, d, z0), mtl)
-    for k in range(0, len(xs), 2):
-        if xs[k + 1] > xs[k]:
-            rect(xs[k], xs[k + 1], y0, y1)
-    for hx0, hx1, hy0, hy1 in holes:
-        rect(hx0, hx1, y0, hy0)
-        rect(hx0, hx1, hy1, y1)
+sys.path.insert(0, os.path.join(HERE, "..", "..", "tools", "experiments"))
+from room_geometry import Obj, wall_with_holes  # noqa: E402
 
 
 def scene_json(name, camera, sky, spp=64):
@@ -97,9 +42,9 @@ def window_room():
     o.box((2.2, 0.0, 2.0), (3.8, 0.75, 3.0), "table")                   # table (a block)
     o.box((0.2, 0.0, 4.2), (1.4, 1.8, 4.8), "cabinet")                  # tall cabinet
     o.box((4.2, 0.0, 3.6), (5.7, 0.45, 4.3), "bench")                   # low bench
-    o.write("window_room", {"floor": (0.55, 0.45, 0.35), "ceiling": (0.8, 0.8, 0.8),
+    o.write(HERE, "window_room", {"floor": (0.55, 0.45, 0.35), "ceiling": (0.8, 0.8, 0.8),
                              "wall": (0.75, 0.75, 0.72), "table": (0.5, 0.3, 0.15),
-                             "cabinet": (0.3, 0.4, 0.6), "bench": (0.6, 0.2, 0.2)})
+                             "cabinet": (0.3, 0.4, 0.6), "bench": (0.6, 0.2, 0.2)}, "make_interiors.py")
     # The sun to the south (-Z) at 30 degrees: azimuth picks where it stands (sky.h).
     sky = {"resolution": [1024, 512], "sun_elevation": 30, "sun_azimuth": 20,
            "sun_radius": 0.8, "sun_radiance": 3000, "sky_radiance": 1}
@@ -124,8 +69,8 @@ def skylight_room():
     ceil(0, a, a, b)
     ceil(b, W, a, b)
     o.box((1.8, 0.0, 1.0), (3.2, 0.9, 2.0), "box")
-    o.write("skylight_room", {"floor": (0.5, 0.5, 0.5), "ceiling": (0.8, 0.8, 0.8),
-                               "wall": (0.7, 0.72, 0.75), "box": (0.7, 0.5, 0.3)})
+    o.write(HERE, "skylight_room", {"floor": (0.5, 0.5, 0.5), "ceiling": (0.8, 0.8, 0.8),
+                               "wall": (0.7, 0.72, 0.75), "box": (0.7, 0.5, 0.3)}, "make_interiors.py")
     sky = {"resolution": [1024, 512], "sun_elevation": 65, "sun_azimuth": 20,
            "sun_radius": 0.8, "sun_radiance": 3000, "sky_radiance": 1}
     cam = {"eye": [0.4, 1.7, 4.6], "target": [2.6, 0.6, 1.5], "up": [0, 1, 0], "fov": 70}
