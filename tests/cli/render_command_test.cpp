@@ -95,6 +95,14 @@ std::vector<std::string> temporaries_in(const std::string& dir) {
     return out;
 }
 
+// Two images' pixels bit for bit (float == would call NaN unequal and -0 equal).
+void expect_same_image(const std::string& a, const std::string& b) {
+    const et::RgbImage x = et::read_rgb_image(a), y = et::read_rgb_image(b);
+    ASSERT_EQ(x.rgb.size(), y.rgb.size()) << a << " and " << b;
+    EXPECT_EQ(std::memcmp(x.rgb.data(), y.rgb.data(), x.rgb.size() * sizeof(float)), 0)
+        << a << " and " << b << " differ";
+}
+
 void expect_exit(const ett::CliRun& r, int code) {
     ASSERT_FALSE(r.timed_out) << "hung";
     ASSERT_TRUE(r.exited()) << "killed by signal " << WTERMSIG(r.status) << "; stderr: " << r.err;
@@ -161,11 +169,8 @@ TEST(RenderCommand, KilledRenderResumesBitIdentical) {
                                        {"--spp", std::to_string(total), "--seed", "7"}),
                                   dir, 120),
                 0);
+    expect_same_image(dir + "/resumed.exr", dir + "/whole.exr");
     const et::RgbImage a = et::read_rgb_image(dir + "/resumed.exr");
-    const et::RgbImage b = et::read_rgb_image(dir + "/whole.exr");
-    ASSERT_EQ(a.rgb.size(), b.rgb.size());
-    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0)
-        << "the resumed render differs from the uninterrupted one";
     double sum = 0;
     for (float v : a.rgb)
         sum += v;
@@ -292,10 +297,7 @@ TEST(RenderCommand, TimeLimitAbandonsThePassInFlight) {
     }
     if (spp != "1")
         expect_exit(ett::run_envtrace(args(scene, dir + "/ref.exr", {"--spp", spp}), dir, 120), 0);
-    const et::RgbImage a = et::read_rgb_image(dir + "/ref.exr");
-    const et::RgbImage b = et::read_rgb_image(dir + "/out.exr");
-    ASSERT_EQ(a.rgb.size(), b.rgb.size());
-    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0);
+    expect_same_image(dir + "/ref.exr", dir + "/out.exr");
 }
 
 // A resumed render with a time limit shorter than a pass still adds a round: the limit never
@@ -429,11 +431,7 @@ TEST(RenderCommand, InterruptedRenderLeavesAStateThatResumesBitIdentical) {
                                        {"--spp", std::to_string(total), "--seed", "7"}),
                                   dir, 120),
                 0);
-    const et::RgbImage a = et::read_rgb_image(dir + "/out.exr");
-    const et::RgbImage b = et::read_rgb_image(dir + "/whole.exr");
-    ASSERT_EQ(a.rgb.size(), b.rgb.size());
-    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0)
-        << "the resumed render differs from the uninterrupted one";
+    expect_same_image(dir + "/out.exr", dir + "/whole.exr");
     // A render that ends on its own keeps no state it was not asked for.
     expect_exit(ett::run_envtrace(args(scene, dir + "/plain.exr", {"--spp", "2"}), dir), 0);
     EXPECT_FALSE(fs::exists(dir + "/plain.envtrace-state"));
@@ -482,10 +480,7 @@ TEST(RenderCommand, ExposureChangesOnlyThePreview) {
     const double bright = render_at("bright", "2");
     EXPECT_LT(dark, plain);
     EXPECT_LT(plain, bright);
-    const et::RgbImage a = et::read_rgb_image(dir + "/dark.exr");
-    const et::RgbImage b = et::read_rgb_image(dir + "/bright.exr");
-    ASSERT_EQ(a.rgb.size(), b.rgb.size());
-    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0);
+    expect_same_image(dir + "/dark.exr", dir + "/bright.exr");
     expect_exit(ett::run_envtrace(args(scene, dir + "/x.exr", {"--exposure", "nan"}), dir), 1);
 }
 

@@ -85,8 +85,6 @@ Renderer::Renderer(const DeviceScene& scene, const DeviceFactory& make_device)
         (scene.settings.light_batch == LightBatch::automatic && device_->prefers_light_batches());
     light_batch_ = scene.params.light_batch != 0 && batches_wanted;
     policy_ = make_learning_policy(scene, batches_wanted);
-    if (policy_)
-        stats_.learning = policy_->stats();
 }
 
 void Renderer::count(const RayCounts& c) {
@@ -165,7 +163,6 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         // (An abandoned measuring pass leaves this pass whole; abandoned_ stops what follows.)
         policy_->after_pass(next_learning_pass_, sample_index, film_, pass_timer.seconds(),
                             *device_, [this](const etk::EtkParams& q) { return measure(q); });
-        stats_.learning = policy_->stats();
         ++next_learning_pass_;
     }
     count(c);
