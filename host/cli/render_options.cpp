@@ -69,7 +69,9 @@ void add_estimator_options(CLI::App& cmd, RenderArgs& a) {
                    "light | bsdf | mis (the paper's) | compensated (MIS, the light distribution "
                    "compensated below the first vertex) | visibility (MIS, learns what blocks "
                    "the map) | cosine (compensated, the first vertex's light from the map x the "
-                   "cosine to its normal) | uniform | sis (structured importance sampling)")
+                   "cosine to its normal) | auto (visibility's learning, kept only where a "
+                   "measurement shows it beats compensated) | uniform | sis (structured "
+                   "importance sampling)")
         ->check(listed_in_text(strategy_names()))
         ->default_str(scene_or("strategy", name_of(d.strategy)));
     cmd.add_option("--sis-samples", a.sis_samples,
@@ -227,8 +229,9 @@ void apply_overrides(const RenderArgs& a, const Globals& g, RenderSettings& st) 
 void warn_idle_options(const RenderArgs& a, const RenderSettings& st) {
     if (a.sis_samples_given && st.strategy != Strategy::sis)
         warn("--sis-samples applies to --strategy sis only: ignored");
-    if (!a.guide_verdict.empty() && st.strategy != Strategy::visibility)
-        warn("--guide-verdict applies to --strategy visibility only: ignored");
+    if (!a.guide_verdict.empty() && st.strategy != Strategy::visibility &&
+        st.strategy != Strategy::automatic)
+        warn("--guide-verdict applies to --strategy visibility and auto only: ignored");
     if (st.backend == Backend::cpu && a.device_given)
         warn("--device picks an OpenCL device: ignored with --backend cpu");
     if (st.backend == Backend::cpu && a.paths_given)

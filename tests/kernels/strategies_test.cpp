@@ -228,6 +228,24 @@ TEST(Strategies, VisibilityConvergesInAnInterior) {
     expect_agree(mis, visibility, "interior: mis vs visibility");
 }
 
+// The auto strategy converges to the paper's image whichever its verdict: the tables after it
+// (a verdict at no cost), or compensated for every pass after the verdict's (at a cost no error
+// ratio reaches), its learning passes and its verdict's passes of the tables kept in the image.
+TEST(Strategies, AutoConvergesWhicheverItsVerdict) {
+    ETT_DATA_FILE(path, "envmaps/pisa.hdr");
+    const et::EnvMap env = et::load_envmap(path, {});
+    const int spp = 256;
+    const auto mis = ett::render(interior(env, "mis", 1), "cpu", spp);
+    for (const double cost : {0.0, 1e30}) {
+        const auto automatic =
+            ett::render(interior(env, "auto", 4), "cpu", spp, true, [cost](et::DeviceScene& d) {
+                d.guide_options.verdict_cost = d.guide_options.verdict_cost_guided = cost;
+            });
+        EXPECT_EQ(automatic.verdict, cost > 0.0 ? "compensated" : "tables");
+        expect_agree(mis, automatic, "interior: mis vs auto, verdict " + automatic.verdict);
+    }
+}
+
 // The same with every learned cell taking 1/8 of a light sample, so that the light sample's
 // count enters every weight that has a light density in it -- the light sample's own, and the
 // escaped continuation's (etk_escaped): leaving it out of either biases the image.

@@ -47,7 +47,7 @@ et::GuideVerdict measure(double mis, double tables, double cost,
 TEST(GuideVerdict, TablesStayWhereMisErrsByMoreThanTheirCost) {
     // Errors 1.44 : 1 -- the tables stay at a cost of 1.25, not at 1.5.
     const et::GuideVerdict cheap = measure(0.12, 0.1, 1.25), dear = measure(0.12, 0.1, 1.5);
-    EXPECT_NEAR(cheap.mis_error() / cheap.tables_error(), 1.44, 0.015);
+    EXPECT_NEAR(cheap.fallback_error() / cheap.tables_error(), 1.44, 0.015);
     EXPECT_TRUE(cheap.tables_win());
     EXPECT_FALSE(dear.tables_win());
     // Equal errors: MIS, the cheaper, whatever the cost above 1.
@@ -55,7 +55,7 @@ TEST(GuideVerdict, TablesStayWhereMisErrsByMoreThanTheirCost) {
     // Far noisier MIS (a room lit through an opening).
     const et::GuideVerdict room = measure(0.5, 0.1, 1.5);
     EXPECT_TRUE(room.tables_win());
-    EXPECT_NEAR(room.mis_error() / room.tables_error(), 25.0, 0.25);
+    EXPECT_NEAR(room.fallback_error() / room.tables_error(), 25.0, 0.25);
 }
 
 TEST(GuideVerdict, AFireflyDoesNotDecide) {
@@ -66,7 +66,7 @@ TEST(GuideVerdict, AFireflyDoesNotDecide) {
             f[4 * 2000] = f[4 * 2000 + 1] = f[4 * 2000 + 2] = 1000.0f;
     };
     const et::GuideVerdict v = measure(0.1, 0.1, 1.25, firefly);
-    EXPECT_LT(v.mis_error(), 1.05 * v.tables_error());
+    EXPECT_LT(v.fallback_error(), 1.05 * v.tables_error());
     EXPECT_FALSE(v.tables_win());
 }
 
@@ -80,7 +80,7 @@ TEST(GuideVerdict, DroppedSamplesAndBlackFilmsAreNoEvidence) {
         for (int t = 0; t < 2; ++t)
             black.add(t, k, zero.data());
     EXPECT_FALSE(black.tables_win());
-    EXPECT_EQ(black.mis_error(), 0.0);
+    EXPECT_EQ(black.fallback_error(), 0.0);
     // A pixel whose samples were all dropped (w = 0) in one block is left out, not read as 0.
     auto drop = [](int t, int k, std::vector<float>& f) {
         if (t == 1 && k < kPasses / 2)
@@ -88,7 +88,7 @@ TEST(GuideVerdict, DroppedSamplesAndBlackFilmsAreNoEvidence) {
     };
     const et::GuideVerdict v = measure(0.12, 0.1, 1.25, drop);
     EXPECT_TRUE(v.tables_win());
-    EXPECT_TRUE(std::isfinite(v.mis_error()) && std::isfinite(v.tables_error()));
+    EXPECT_TRUE(std::isfinite(v.fallback_error()) && std::isfinite(v.tables_error()));
 }
 
 TEST(GuideVerdict, RefusesPassesOutOfOrderAndOddCounts) {

@@ -121,6 +121,7 @@ struct RenderResult {
     int spp = 0;
     // The visibility strategy's learned cells that take fewer light samples, per count.
     std::map<float, uint64_t> light_counts;
+    std::string verdict; // a learning strategy's verdict ("tables", the fallback's name, "none")
     // Variance of the mean of pixel channel i.
     double var_mean(size_t i) const { return var[i] / spp; }
 };
@@ -158,7 +159,11 @@ inline RenderResult render(const et::Scene& scene, const std::string& backend, i
     out.mean = r->image();
     // The film drops non-finite samples instead of writing NaN; none may occur.
     EXPECT_EQ(r->stats().nonfinite_samples, 0u) << backend << ": non-finite samples dropped";
-    out.light_counts = learning_light_counts(r->stats());
+    const et::RenderStats stats = r->stats();
+    out.light_counts = learning_light_counts(stats);
+    out.verdict = stats.learning.is_object() && stats.learning.contains("verdict")
+                      ? stats.learning["verdict"].get<std::string>()
+                      : "none";
     out.var.assign(n, 0.0);
     if (variance && spp > 1)
         for (size_t i = 0; i < n; ++i)

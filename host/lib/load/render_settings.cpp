@@ -20,6 +20,7 @@ constexpr Named<Strategy> kStrategies[] = {{Strategy::light, "light"},
                                            {Strategy::compensated, "compensated"},
                                            {Strategy::visibility, "visibility"},
                                            {Strategy::cosine, "cosine"},
+                                           {Strategy::automatic, "auto"},
                                            {Strategy::lights, "lights"}};
 constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::automatic, "auto"},
                                                {MisHeuristic::balance, "balance"},
@@ -72,7 +73,7 @@ E parse_in(const Named<E> (&table)[N], const std::string& s, const std::string& 
     throw Error(what + ": unknown " + kind + " '" + shown + "' (use " + choices + ")");
 }
 
-constexpr size_t kUserStrategies = 8; // all but "lights"
+constexpr size_t kUserStrategies = 9; // all but "lights"
 
 } // namespace
 
@@ -110,7 +111,8 @@ std::vector<std::string> light_batch_names() {
 namespace {
 // The MIS strategies beyond the paper's estimator: what `auto` gives them, it never gives `mis`.
 bool beyond_the_paper(Strategy s) {
-    return s == Strategy::compensated || s == Strategy::visibility || s == Strategy::cosine;
+    return s == Strategy::compensated || s == Strategy::visibility || s == Strategy::cosine ||
+           s == Strategy::automatic;
 }
 } // namespace
 

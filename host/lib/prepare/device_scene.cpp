@@ -289,7 +289,8 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     d.map_width = scene.env.image.width;
     d.map_height = scene.env.image.height;
     d.map_build_seconds = scene.env.build_seconds;
-    if (p.light_first == ETK_LIGHT_COMPENSATED || p.light_deeper == ETK_LIGHT_COMPENSATED)
+    if (p.light_first == ETK_LIGHT_COMPENSATED || p.light_deeper == ETK_LIGHT_COMPENSATED ||
+        st.strategy == Strategy::automatic) // its fallback's
         d.env_dist_comp = compensate_distribution(scene.env.dist).table;
     d.env_dist = std::move(scene.env.dist.table);
     EnvBlackMask black = env_black_mask(scene.env.image);
@@ -298,7 +299,9 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     p.env.lit_sr = black.lit_solid_angle;
     d.env_black = std::move(black.bits);
     d.env_texels = std::move(scene.env.image.rgb);
-    if (st.strategy == Strategy::visibility)
+    if (st.strategy == Strategy::automatic)
+        d.guide_options = auto_visibility_options();
+    if (st.strategy == Strategy::visibility || st.strategy == Strategy::automatic)
         add_visibility_guide(scene, d);
     if (st.strategy == Strategy::cosine) {
         // One table per bin of normals, in the visibility strategy's slots (kernels/normal_bins.h).

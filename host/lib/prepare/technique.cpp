@@ -39,6 +39,7 @@ Technique technique_of(Strategy s) {
     case Strategy::lights:
         return {ETK_LIGHT_SET, ETK_LIGHT_SET, false, false, false};
     case Strategy::visibility:
+    case Strategy::automatic:
         return {ETK_LIGHT_LEARNED, ETK_LIGHT_LEARNED, true, true, false};
     case Strategy::cosine:
         return {ETK_LIGHT_BINNED, ETK_LIGHT_COMPENSATED, true, true, true};

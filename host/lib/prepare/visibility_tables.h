@@ -5,6 +5,7 @@
 // (render/visibility_cache.h) rewrites the cells' tables with the same writers.
 #pragma once
 #include "kernels/portal_guide.h"
+#include "load/render_settings.h"
 #include "kernels/visibility_guide.h"
 
 #include <array>
@@ -82,7 +83,15 @@ struct VisibilityOptions {
     int verdict_after = 16;
     double verdict_cost = 1.25;
     double verdict_cost_guided = 1.4;
+    // What the verdict weighs the tables against, and what renders after a verdict against them:
+    // the paper's MIS for the visibility strategy, compensated for auto (auto_visibility_options).
+    Strategy fallback = Strategy::mis;
 };
+
+// The auto strategy's options: the visibility strategy's tables, measured early against
+// compensated, the default's estimator without learning, so that a scene where learning does
+// not pay stops paying for it after a few passes.
+VisibilityOptions auto_visibility_options();
 
 // The cost the verdict weighs the tables' error by: verdict_cost_guided where the render guides
 // its continuations as well (EtkParams::guide_continuation), verdict_cost otherwise.

@@ -9,15 +9,15 @@
 //
 // Which of the two a scene is, is measured, not modelled: `passes` passes of the tables after
 // some learning (VisibilityOptions::verdict_after; part of the image, as any) and as many passes
-// of the paper's MIS, rendered only to measure (sample indices of their own, renderer.h), each in
+// of the fallback (the paper's MIS, or compensated for auto), rendered only to measure (sample indices of their own, renderer.h), each in
 // two blocks of passes / 2 consecutive samples. Per pixel and technique, half the squared
 // difference of its two blocks' means estimates the error of a block-sized estimate, relative to
 // the squared mean of the pixel's 5 x 5 neighbourhood (plus 1% of the image's mean, so black
 // pixels do not divide by zero, as tools/experiments' relative MSE); the mean over the image of
 // each technique's value, every pixel's capped at the 99.9% quantile (a firefly in one block
-// must not decide), is its error. The tables stay when MIS's error is at least `cost` times theirs
-// (the time they cost per sample); otherwise the passes that follow render the paper's MIS, with
-// its batched map samples. MIS's passes are not kept: in a room lit through a window, 8 of them
+// must not decide), is its error. The tables stay when the fallback's error is at least `cost`
+// times theirs (the time they cost per sample); otherwise the passes that follow render the
+// fallback, with its batched map samples. The fallback's passes are not kept: in a room lit through a window, 8 of them
 // among 300 passes of the tables would add 20% to the image's variance.
 //
 // Blocks of consecutive samples, not the samples' variance: the Sobol' points stratify each
@@ -40,12 +40,12 @@ namespace et {
 class GuideVerdict {
   public:
     GuideVerdict(int width, int height, int passes, double cost);
-    // Adds the film of pass k (0 .. passes - 1, in order) of technique t (0: MIS, 1: the
-    // tables): film_sum per pixel, RGB and w the samples it holds.
+    // Adds the film of pass k (0 .. passes - 1, in order) of technique t (0: the fallback, 1:
+    // the tables): film_sum per pixel, RGB and w the samples it holds.
     void add(int t, int k, const float* film_sum_rgba);
     // After the last pass: the verdict and the two errors it compared.
     bool tables_win() const;
-    double mis_error() const { return error_[0]; }
+    double fallback_error() const { return error_[0]; }
     double tables_error() const { return error_[1]; }
 
   private:

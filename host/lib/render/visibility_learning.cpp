@@ -188,9 +188,9 @@ class VisibilityRecorder : public WaveRecorder {
 
 VisibilityLearning::VisibilityLearning(const DeviceScene& scene, bool batches)
     : scene_(scene), options_(scene.guide_options) {
-    etk::EtkParams mis = scene.params;
-    set_technique(mis, Strategy::mis);
-    mis_light_batch_ = technique_batches_light_samples(mis) && batches;
+    etk::EtkParams fallback = scene.params;
+    set_technique(fallback, options_.fallback);
+    fallback_light_batch_ = technique_batches_light_samples(fallback) && batches;
     options_.continuation = scene.params.guide_continuation != 0;
     std::array<float, 6> box;
     const float* table = scene.guide_cells.data() +
@@ -207,27 +207,28 @@ int VisibilityLearning::verdict_start() const {
 }
 
 int VisibilityLearning::learning_passes() const {
-    // The passes the tables learn from and the verdict's; a verdict for MIS ends the learning.
+    // The passes the tables learn from and the verdict's; a verdict for the fallback ends the
+    // learning.
     const int verdict_end =
         options_.verdict_passes > 0 ? verdict_start() + options_.verdict_passes : 0;
     return dropped_ ? verdict_end : std::max(options_.learning_passes, verdict_end);
 }
 
-bool VisibilityLearning::mis_pass(uint32_t sample_index) const {
-    return sample_index >= kVerdictMisBase || dropped_;
+bool VisibilityLearning::fallback_pass(uint32_t sample_index) const {
+    return sample_index >= kVerdictFallbackBase || dropped_;
 }
 
 bool VisibilityLearning::learns_tables(uint32_t sample_index) const {
-    return !mis_pass(sample_index) && sample_index < uint32_t(options_.learning_passes);
+    return !fallback_pass(sample_index) && sample_index < uint32_t(options_.learning_passes);
 }
 
 void VisibilityLearning::configure(etk::EtkParams& p, uint32_t sample_index, bool learn) const {
     p.guide_ready = ready_ ? 1 : 0;
-    // The verdict's measuring passes and, after a verdict for it, every pass: the paper's
+    // The verdict's measuring passes and, after a verdict for it, every pass: the fallback
     // estimator, with the strategy's MIS heuristic and GGX sampling.
-    if (mis_pass(sample_index)) {
-        set_technique(p, Strategy::mis);
-        p.light_batch = mis_light_batch_ ? 1 : 0;
+    if (fallback_pass(sample_index)) {
+        set_technique(p, options_.fallback);
+        p.light_batch = fallback_light_batch_ ? 1 : 0;
         p.guide_ready = 0;
     }
     p.guide_learn = learn && learns_tables(sample_index) ? 1 : 0;
@@ -272,7 +273,7 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film&
     const int64_t verdict_pass = int64_t(sample_index) - verdict_start();
     if (verdict_pass < 0 || verdict_pass >= options_.verdict_passes)
         return true;
-    // The verdict's passes of the tables, then MIS's, then the choice.
+    // The verdict's passes of the tables, then the fallback's, then the choice.
     if (!verdict_)
         verdict_ = std::make_unique<GuideVerdict>(
             film.width(), film.height(), options_.verdict_passes,
@@ -291,7 +292,7 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film&
 bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
     for (int k = 0; k < options_.verdict_passes; ++k) {
         etk::EtkParams p = scene_.params;
-        p.sample_index = kVerdictMisBase + static_cast<uint32_t>(k);
+        p.sample_index = kVerdictFallbackBase + static_cast<uint32_t>(k);
         configure(p, p.sample_index, false);
         const Film* film = measure(p);
         if (!film)
@@ -300,7 +301,7 @@ bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
     }
     dropped_ = !verdict_->tables_win();
     chosen_ = dropped_ ? 0 : 1;
-    verdict_mis_error_ = verdict_->mis_error();
+    verdict_fallback_error_ = verdict_->fallback_error();
     verdict_tables_error_ = verdict_->tables_error();
     verdict_.reset();
     return true;
@@ -323,11 +324,11 @@ nlohmann::json VisibilityLearning::stats() const {
             {"cells_with_fewer_light_samples", counts},
             {"verdict", chosen_ < 0 ? "none"
                         : chosen_   ? "tables"
-                                    : "mis"},
+                                    : name_of(options_.fallback)},
             {"verdict_passes", options_.verdict_passes},
             {"verdict_cost", verdict_cost_for(options_, scene_.params.guide_continuation != 0)},
             {"verdict_seconds", verdict_seconds_},
-            {"verdict_mis_error", verdict_mis_error_},
+            {"verdict_fallback_error", verdict_fallback_error_},
             {"verdict_tables_error", verdict_tables_error_}};
 }
 

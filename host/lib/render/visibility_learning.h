@@ -2,8 +2,9 @@
 // continuation_guide.h) as a learning policy: during its learning passes every bounce's shadow-ray
 // records and every wave's continuation records go to the visibility cache (visibility_cache.h);
 // after passes 1, 2, 4 ... L the cells' tables are rebuilt and uploaded; after the verdict's
-// passes of the tables, as many passes of the paper's MIS measure it (guide_verdict.h), and the
-// cheaper one per error renders the rest of the image.
+// passes of the tables, as many passes of the fallback (the paper's MIS for the visibility
+// strategy, compensated for auto: VisibilityOptions::fallback) measure it (guide_verdict.h), and
+// the cheaper one per error renders the rest of the image.
 #pragma once
 #include "render/guide_verdict.h"
 #include "render/learning_policy.h"
@@ -30,32 +31,32 @@ class VisibilityLearning : public LearningPolicy {
     void add_record_time(double seconds, int threads);
 
   private:
-    // The verdict's passes of the paper's MIS use sample indices of their own, never kept: they
-    // measure MIS without adding its variance to the image.
-    static constexpr uint32_t kVerdictMisBase = 0x80000000u;
-    // Whether pass `sample_index` renders the paper's MIS: a verdict's measuring pass, or any
-    // pass after a verdict for MIS.
-    bool mis_pass(uint32_t sample_index) const;
+    // The verdict's passes of the fallback use sample indices of their own, never kept: they
+    // measure it without adding its variance to the image.
+    static constexpr uint32_t kVerdictFallbackBase = 0x80000000u;
+    // Whether pass `sample_index` renders the fallback: a verdict's measuring pass, or any pass
+    // after a verdict for it.
+    bool fallback_pass(uint32_t sample_index) const;
     bool learns_tables(uint32_t sample_index) const;
     int verdict_start() const; // the first of the verdict's passes of the tables
     // The tables after learning pass `pass`, where the schedule rebuilds them.
     void update_tables(int pass, WavefrontDevice& device);
-    // The verdict's passes of MIS, then the choice. False where one was abandoned.
+    // The verdict's passes of the fallback, then the choice. False where one was abandoned.
     bool give_verdict(const MeasuringPass& measure);
 
     const DeviceScene& scene_;
     VisibilityOptions options_;
-    bool mis_light_batch_; // the sample_lights stage for the passes of MIS
+    bool fallback_light_batch_; // the sample_lights stage for the fallback's passes
     bool ready_ = false;   // the cells' tables hold something learned
-    bool dropped_ = false; // the verdict chose MIS: the passes after it render MIS
+    bool dropped_ = false; // the verdict chose the fallback: the passes after it render it
     std::unique_ptr<VisibilityCache> cache_;
     std::unique_ptr<GuideVerdict> verdict_;
     // Figures (stats()).
     mutable std::mutex mutex_; // record_seconds_, record_threads_
     double learning_seconds_ = 0, update_seconds_ = 0, record_seconds_ = 0, verdict_seconds_ = 0;
-    int record_threads_ = 0, chosen_ = -1; // the verdict: 1 tables, 0 MIS, -1 not (yet) given
+    int record_threads_ = 0, chosen_ = -1; // the verdict: 1 tables, 0 fallback, -1 not yet
     uint64_t records_ = 0, continuation_records_ = 0, host_bytes_ = 0, device_bytes_ = 0;
-    double verdict_mis_error_ = 0, verdict_tables_error_ = 0;
+    double verdict_fallback_error_ = 0, verdict_tables_error_ = 0;
     std::map<float, uint64_t> light_counts_;
 };
 
