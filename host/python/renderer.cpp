@@ -1,0 +1,132 @@
+// The Renderer: a scene held in memory, rendered progressively on one film (ProgressiveRender),
+// edited without reading any file again. An edit restarts the film: the scene's meshes, maps
+// (texels and distributions) and textures stay in memory; the device scene (BVH, buffers), the
+// strategy's tables and the renderer are made again on the next render.
+#include "bindings.h"
+#include "interruptible.h"
+#include "scene_object.h"
+
+#include "render/film_layers.h"
+#include "render/noise_estimate.h"
+#include "session/cluster.h"
+#include "session/progressive_render.h"
+#include "util/error.h"
+
+#include <pybind11/stl.h>
+
+#include <csignal>
+#include <memory>
+#include <utility>
+
+namespace et::py_bind {
+namespace {
+
+// One process's cluster for every renderer (MPI is never started by the module).
+const Cluster& single_process() {
+    static Cluster cluster(nullptr, nullptr);
+    return cluster;
+}
+
+// What the Renderer sets beyond the scene's "render" block: as the command line's options.
+struct DeviceOptions {
+    std::string backend = "opencl";
+    int device = 0, threads = 0;
+    bool aovs = false;
+};
+
+class PyRenderer {
+  public:
+    PyRenderer(const PyScene& scene, const DeviceOptions& options)
+        : scene_(scene), options_(options) {
+        settings(); // bad options fail here, not at the first render
+    }
+
+    void render(int spp) {
+        if (spp < 1 || spp > (1 << 24))
+            throw Error("spp " + std::to_string(spp) + ": must be within [1, 16777216]");
+        if (!film_)
+            film_ = std::make_unique<ProgressiveRender>(single_process(), scene_.scene, settings(),
+                                                        scene_.scene.path);
+        ProgressiveRender& film = *film_;
+        run_interruptible([&film, spp] { film.render_to(spp); },
+                          [&film] { film.request_stop(SIGINT); });
+    }
+
+    void edit(const std::string& edit_json, const std::string& where) {
+        scene_.edit(edit_json, where);
+        settings(); // the edited settings are checked now
+        film_.reset();
+    }
+
+    int spp() const { return film_ ? film_->spp() : 0; }
+    const FilmSums& sums() const {
+        if (!film_ || film_->spp() == 0)
+            throw Error(scene_.scene.path + ": nothing rendered yet (call render first)");
+        return film_->result().sums;
+    }
+    py::array_t<float> image() const {
+        const FilmSums& s = sums();
+        return to_array(s.mean(), {s.height(), s.width(), 3});
+    }
+    py::array_t<float> variance() const {
+        const FilmSums& s = sums();
+        return to_array(s.variance_of_mean(), {s.height(), s.width(), 3});
+    }
+    std::pair<std::vector<std::string>, py::array_t<float>> layers() const {
+        const FilmSums& s = sums();
+        FilmLayers l = film_layers(s);
+        const auto channels = static_cast<py::ssize_t>(l.names.size());
+        return {l.names, to_array(std::move(l.pixels), {s.height(), s.width(), channels})};
+    }
+    double noise() const { return relative_error(sums()); }
+    std::string stats() const {
+        sums();
+        return report_json(film_->report()).dump();
+    }
+    const PyScene& scene() const { return scene_; }
+
+  private:
+    // The scene's settings with the device options, checked as the command line checks them.
+    RenderSettings settings() const {
+        RenderSettings st = scene_.scene.settings;
+        st.backend = parse_backend(options_.backend, "backend");
+        st.device = options_.device;
+        st.threads = options_.threads;
+        st.aovs = options_.aovs;
+        if (st.strategy == Strategy::sis)
+            throw Error("strategy sis: renders through the command line (envtrace render "
+                        "--strategy sis), which sets its strata and depth");
+        check_split(st);
+        return st;
+    }
+
+    PyScene scene_;
+    DeviceOptions options_;
+    std::unique_ptr<ProgressiveRender> film_; // null: restart on the next render
+};
+
+} // namespace
+
+void bind_renderer(py::module_& m) {
+    py::class_<PyRenderer>(m, "Renderer", "A scene rendered progressively on one film")
+        .def(py::init([](const PyScene& scene, const std::string& backend, int device, int threads,
+                         bool aovs) {
+                 return std::make_unique<PyRenderer>(scene,
+                                                     DeviceOptions{backend, device, threads, aovs});
+             }),
+             py::arg("scene"), py::arg("backend") = "opencl", py::arg("device") = 0,
+             py::arg("threads") = 0, py::arg("aovs") = false)
+        .def("render", &PyRenderer::render, py::arg("spp"),
+             "Renders until the film holds spp samples per pixel (Ctrl-C stops, keeping it)")
+        .def("edit", &PyRenderer::edit, py::arg("edit_json"), py::arg("where") = "edit",
+             "Edits the scene (the scene file's schema) and restarts the film")
+        .def_property_readonly("spp", &PyRenderer::spp)
+        .def("image", &PyRenderer::image)
+        .def("variance", &PyRenderer::variance)
+        .def("layers", &PyRenderer::layers)
+        .def("noise", &PyRenderer::noise)
+        .def("stats", &PyRenderer::stats)
+        .def_property_readonly("scene", &PyRenderer::scene);
+}
+
+} // namespace et::py_bind
