@@ -14,6 +14,7 @@
 
 #include <pybind11/stl.h>
 
+#include <atomic>
 #include <csignal>
 #include <memory>
 #include <utility>
@@ -44,15 +45,21 @@ class PyRenderer {
     void render(int spp) {
         if (spp < 1 || spp > (1 << 24))
             throw Error("spp " + std::to_string(spp) + ": must be within [1, 16777216]");
-        if (!film_)
-            film_ = std::make_unique<ProgressiveRender>(single_process(), scene_.scene, settings(),
+        const Busy busy(*this);
+        if (!film_) {
+            const RenderSettings st = settings();
+            Scene scene = scene_.scene;  // a copy: the edits' base stays
+            py::gil_scoped_release free; // preparing takes a while (BVH, strategy tables)
+            film_ = std::make_unique<ProgressiveRender>(single_process(), std::move(scene), st,
                                                         scene_.scene.path);
+        }
         ProgressiveRender& film = *film_;
         run_interruptible([&film, spp] { film.render_to(spp); },
                           [&film] { film.request_stop(SIGINT); });
     }
 
     void edit(const std::string& edit_json, const std::string& where) {
+        const Busy busy(*this);
         scene_.edit(edit_json, where);
         settings(); // the edited settings are checked now
         film_.reset();
@@ -86,6 +93,18 @@ class PyRenderer {
     const PyScene& scene() const { return scene_; }
 
   private:
+    // A render runs with the GIL released: another Python thread could call in meanwhile, and
+    // the film is not to be rendered twice at once or edited under the render.
+    struct Busy {
+        explicit Busy(PyRenderer& r) : r_(r) {
+            if (r_.busy_.exchange(true))
+                throw Error(r_.scene_.scene.path + ": the renderer is rendering (in another "
+                                                   "thread); one call at a time");
+        }
+        ~Busy() { r_.busy_ = false; }
+        PyRenderer& r_;
+    };
+
     // The scene's settings with the device options, checked as the command line checks them.
     RenderSettings settings() const {
         RenderSettings st = scene_.scene.settings;
@@ -103,6 +122,7 @@ class PyRenderer {
     PyScene scene_;
     DeviceOptions options_;
     std::unique_ptr<ProgressiveRender> film_; // null: restart on the next render
+    std::atomic<bool> busy_{false};
 };
 
 } // namespace
