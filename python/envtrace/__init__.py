@@ -18,12 +18,9 @@ docs/python.md is the reference.
 from ._envtrace import Error, EnvironmentMap, LightSet, __version__
 from ._images import read_image, write_image
 from ._render import Renderer, render
+from ._denoise import denoise  # a marked place: wired to the library's denoiser once merged
 from ._scene import load_scene
 from ._tools import compare, load_map
-
-# The denoiser (Open Image Denoise, loaded by the library) is wired here once it is merged:
-# envtrace.denoise(color, albedo=None, normal=None) -> H x W x 3.
-denoise = None
 
 __all__ = [
     "Error",
