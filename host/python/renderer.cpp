@@ -22,7 +22,8 @@
 namespace et::py_bind {
 namespace {
 
-// One process's cluster for every renderer (MPI is never started by the module).
+// The process's cluster, shared by every renderer: one process (started by mpirun it would be a
+// rank, and a progressive render refuses to go on there: RenderSession::extend).
 const Cluster& single_process() {
     static Cluster cluster(nullptr, nullptr);
     return cluster;
@@ -44,7 +45,9 @@ class PyRenderer {
 
     void render(int spp) {
         if (spp < 1 || spp > (1 << 24))
-            throw Error("spp " + std::to_string(spp) + ": must be within [1, 16777216]");
+            throw Error("spp " + std::to_string(spp) +
+                        ": the film's samples must stay within [1, "
+                        "16777216]");
         const Busy busy(*this);
         if (!film_) {
             const RenderSettings st = settings();
@@ -60,8 +63,10 @@ class PyRenderer {
 
     void edit(const std::string& edit_json, const std::string& where) {
         const Busy busy(*this);
-        scene_.edit(edit_json, where);
-        settings(); // the edited settings are checked now
+        PyScene edited = scene_; // all or nothing: the settings are checked before it is kept
+        edited.edit(edit_json, where);
+        settings_of(edited.scene);
+        scene_ = std::move(edited);
         film_.reset();
     }
 
@@ -106,8 +111,9 @@ class PyRenderer {
     };
 
     // The scene's settings with the device options, checked as the command line checks them.
-    RenderSettings settings() const {
-        RenderSettings st = scene_.scene.settings;
+    RenderSettings settings() const { return settings_of(scene_.scene); }
+    RenderSettings settings_of(const Scene& scene) const {
+        RenderSettings st = scene.settings;
         st.backend = parse_backend(options_.backend, "backend");
         st.device = options_.device;
         st.threads = options_.threads;
