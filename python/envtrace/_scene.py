@@ -3,7 +3,7 @@
 A dict goes through the same loader as a file: it is written as JSON, with its arrays taken out
 and handed over in memory. A "mesh" shape may give "vertices" (N x 3), "indices" (M x 3) and
 optionally "normals" (N x 3) and "uvs" (N x 2) instead of "file"; the environment's "map" may be
-an H x W x 3 linear RGB array instead of a file name. Relative paths in a dict resolve against
+an H x W x 3 linear RGB array (or an envtrace.load_map result) instead of a file name. Relative paths in a dict resolve against
 base_dir (default: the current folder).
 """
 
@@ -52,7 +52,10 @@ def split_arrays(doc):
     env = doc.get("environment")
     if isinstance(env, dict) and "map" in env and not isinstance(env["map"], str):
         doc["environment"] = env = dict(env)
-        maps["environment"] = env.pop("map")
+        texels = env.pop("map")
+        if isinstance(texels, _envtrace.EnvironmentMap):  # envtrace.load_map's: its texels
+            texels = texels.pixels
+        maps["environment"] = texels
         env["arrays"] = "environment"
     return doc, meshes, maps
 
