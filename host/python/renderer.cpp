@@ -16,6 +16,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <exception>
 #include <memory>
 #include <utility>
 
@@ -43,7 +44,9 @@ class PyRenderer {
         settings(); // bad options fail here, not at the first render
     }
 
-    void render(int spp) {
+    // `progress`: None, or called as progress(spp, seconds) after each pass kept (on the render's
+    // thread, holding the GIL); an exception it raises stops the render and is raised here.
+    void render(int spp, const py::object& progress) {
         if (spp < 1 || spp > (1 << 24))
             throw Error("spp " + std::to_string(spp) +
                         ": the film's samples must stay within [1, "
@@ -57,8 +60,22 @@ class PyRenderer {
                                                         scene_.scene.path);
         }
         ProgressiveRender& film = *film_;
-        run_interruptible([&film, spp] { film.render_to(spp); },
+        SessionCallbacks cb;
+        std::exception_ptr raised;
+        if (!progress.is_none())
+            cb.progress = [&](int done, double seconds) {
+                py::gil_scoped_acquire gil;
+                try {
+                    progress(done, seconds);
+                } catch (const py::error_already_set&) {
+                    raised = std::current_exception();
+                    film.request_stop(SIGINT);
+                }
+            };
+        run_interruptible([&film, &cb, spp] { film.render_to(spp, cb); },
                           [&film] { film.request_stop(SIGINT); });
+        if (raised)
+            std::rethrow_exception(raised);
     }
 
     void edit(const std::string& edit_json, const std::string& where) {
@@ -142,7 +159,7 @@ void bind_renderer(py::module_& m) {
              }),
              py::arg("scene"), py::arg("backend") = "opencl", py::arg("device") = 0,
              py::arg("threads") = 0, py::arg("aovs") = false)
-        .def("render", &PyRenderer::render, py::arg("spp"),
+        .def("render", &PyRenderer::render, py::arg("spp"), py::arg("progress") = py::none(),
              "Renders until the film holds spp samples per pixel (Ctrl-C stops, keeping it)")
         .def("edit", &PyRenderer::edit, py::arg("edit_json"), py::arg("where") = "edit",
              "Edits the scene (the scene file's schema) and restarts the film")

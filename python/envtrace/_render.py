@@ -39,15 +39,17 @@ class Renderer:
 
     # Rendering and its results.
 
-    def render(self, spp=None):
+    def render(self, spp=None, progress=None):
         """Adds spp samples per pixel (default: the scene's render.spp) and returns the image
-        (H x W x 3 float32, linear). Ctrl-C stops the render and keeps its film (the samples of
-        the passes finished): KeyboardInterrupt is raised, image() returns the film, and the
-        next render continues it."""
+        (H x W x 3 float32, linear). progress: called as progress(spp, seconds) after each pass
+        (the film's samples, this call's seconds); an exception it raises stops the render.
+        Ctrl-C stops the render and keeps its film (the samples of the passes finished):
+        KeyboardInterrupt is raised, image() returns the film, and the next render continues
+        it."""
         spp = self._r.scene.spp if spp is None else int(spp)
         if spp < 1:
             raise _envtrace.Error(f"spp {spp}: must be at least 1")
-        self._r.render(self._r.spp + spp)
+        self._r.render(self._r.spp + spp, progress)
         return self._r.image()
 
     @property

@@ -89,6 +89,21 @@ def test_interrupt_keeps_the_film_and_continues():
     assert not np.array_equal(kept, img)
 
 
+def test_progress_reports_each_pass_and_its_exception_stops():
+    r = envtrace.Renderer(DEFAULT, backend="cpu", **FILM)
+    seen = []
+    r.render(3, progress=lambda spp, seconds: seen.append(spp))
+    assert seen == [1, 2, 3]
+
+    def stop_at_5(spp, seconds):
+        if spp == 5:
+            raise ValueError("enough")
+
+    with pytest.raises(ValueError, match="enough"):
+        r.render(100, progress=stop_at_5)
+    assert r.spp == 5
+
+
 def test_edits_equal_a_fresh_load():
     r = envtrace.Renderer(default_dict(), backend="cpu", base_dir=SCENES)
     r.render(2)
