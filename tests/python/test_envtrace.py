@@ -59,6 +59,10 @@ def test_aov_layers_as_the_command_line_writes_them(tmp_path):
     for name in ("albedo", "normal", "depth", "variance"):
         assert np.array_equal(aovs[name], ref[name]), name
     assert aovs["depth"].shape == (24, 32)
+    envtrace.write_image(tmp_path / "layers.exr", ref)  # a dict of layers: a multi-layer EXR
+    again = envtrace.read_image(tmp_path / "layers.exr")
+    assert sorted(again) == sorted(ref)
+    assert all(np.array_equal(again[name], ref[name]) for name in ref)
 
 
 @pytest.mark.parametrize("strategy", ["compensated", "visibility"])
