@@ -288,6 +288,31 @@ RgbImage read_rgb_image(const std::string& path, bool colour) {
     return img;
 }
 
+ImageChannels read_image_channels(const std::string& path) {
+    ImageChannels out;
+    const uint64_t file_bytes = check_regular_file(path, kMaxImageBytes, "image");
+    if (file_bytes > 0 && !(lower_extension(path) == ".pfm" || has_pfm_magic(path)) &&
+        image_detail::library_available()) {
+        std::FILE* f = std::fopen(path.c_str(), "rb");
+        unsigned char magic[4] = {};
+        const bool exr = f && std::fread(magic, 1, 4, f) == 4 && magic[0] == 0x76 &&
+                         magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
+        if (f)
+            std::fclose(f);
+        if (exr) {
+            out.pixels = image_detail::read_channels_with_library(path, file_bytes, out.width,
+                                                                  out.height, out.names);
+            return out;
+        }
+    }
+    RgbImage rgb = read_rgb_image(path);
+    out.width = rgb.width;
+    out.height = rgb.height;
+    out.names = {"R", "G", "B"};
+    out.pixels = std::move(rgb.rgb);
+    return out;
+}
+
 void check_writable_format(const std::string& path) {
     const fs::path target(path);
     std::error_code ec;

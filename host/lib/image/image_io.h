@@ -26,6 +26,16 @@ struct RgbImage {
 // texture): 8- and 16-bit values as stored, not decoded.
 RgbImage read_rgb_image(const std::string& path, bool colour = true);
 
+// Every channel of an image, by name (an envtrace render's layers: film_layers.h): an OpenEXR
+// file's channels as stored, in the file's order; any other format's as read_rgb_image reads it,
+// named R, G, B. Throws et::Error naming the file and the problem.
+struct ImageChannels {
+    int width = 0, height = 0;
+    std::vector<std::string> names;
+    std::vector<float> pixels; // row-major, names.size() floats per pixel, row 0 at the top
+};
+ImageChannels read_image_channels(const std::string& path);
+
 // read_rgb_image a band of rows at a time, from the top, so that a caller can work on the first
 // rows while later ones decode (load_envmap builds the distribution meanwhile).
 class RgbImageReader {

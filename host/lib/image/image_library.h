@@ -30,6 +30,12 @@ bool library_available();
 // Opens a file that is not PFM; file_bytes is its size (already checked). Throws et::Error.
 std::unique_ptr<RowSource> open_with_library(const std::string& path, uint64_t file_bytes,
                                              bool colour);
+// Every channel of a file that is not PFM, as stored (float, no sRGB decoding), with the
+// checks open_with_library makes first: `names` gets the channel names, the result the pixels
+// interleaved. Throws et::Error naming `path`.
+std::vector<float> read_channels_with_library(const std::string& path, uint64_t file_bytes,
+                                              int& width, int& height,
+                                              std::vector<std::string>& names);
 // Throws et::Error "PATH: ..." unless the library can write `ext` (".exr", ".png", ...).
 void check_library_writer(const std::string& path, const std::string& ext);
 // Writes the finite pixels to `file` as float (`floating`) or 8-bit values; messages name `path`,

@@ -23,6 +23,11 @@ std::unique_ptr<RowSource> open_with_library(const std::string& path, uint64_t, 
     refuse(path, "read image");
 }
 
+std::vector<float> read_channels_with_library(const std::string& path, uint64_t, int&, int&,
+                                              std::vector<std::string>&) {
+    refuse(path, "read image");
+}
+
 void check_library_writer(const std::string& path, const std::string&) {
     refuse(path, "write");
 }

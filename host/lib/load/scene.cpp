@@ -5,6 +5,7 @@
 #include "util/json_file.h"
 #include "util/checked_size.h"
 #include "kernels/bsdf.h"
+#include "load/scene_blocks.h"
 #include "load/scene_environment.h"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -164,6 +165,8 @@ void require_in_range(const glm::vec3& v, const JsonReader& r) {
                " (float ray tests; scale the scene down)");
 }
 
+} // namespace
+
 Material read_material(const std::string& name, const json& j, const JsonReader& r,
                        const std::string& dir, TextureSet& textures) {
     Material m;
@@ -250,72 +253,75 @@ Material read_material(const std::string& name, const json& j, const JsonReader&
     return m;
 }
 
-} // namespace
+Camera read_camera(const json& c, const JsonReader& rc, Camera camera) {
+    rc.reject_unknown_keys(c, {"eye", "target", "up", "fov"});
+    camera.eye = read_vec3(c, "eye", camera.eye, rc, false);
+    camera.target = read_vec3(c, "target", camera.target, rc, false);
+    camera.up = read_vec3(c, "up", camera.up, rc, false);
+    camera.fov_deg = read_float(c, "fov", camera.fov_deg, 0.01f, 179.0f, rc);
+    for (const glm::vec3& v : {camera.eye, camera.target, camera.up})
+        if (glm::any(glm::greaterThan(glm::abs(v), glm::vec3(1e30f))))
+            rc.fail("eye, target and up must be within [-1e30, 1e30]");
+    require_in_range(camera.eye, rc.at("eye"));
+    glm::vec3 f = camera.target - camera.eye;
+    if (!(glm::length(f) > 0.0f) ||
+        !(glm::length(glm::cross(f, camera.up)) > 1e-6f * glm::length(f)))
+        rc.fail("eye, target and up must span a view (eye != target, up not along the view)");
+    return camera;
+}
+
+void read_render_block(const json& s, const JsonReader& rr, RenderSettings& st) {
+    rr.reject_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
+                               "time_limit", "paths", "bsdf_sampling", "light_samples",
+                               "bsdf_samples", "rr_depth"});
+    st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
+    st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
+    st.rr_depth = read_int(s, "rr_depth", st.rr_depth, 0, 1000, rr);
+    if (s.contains("strategy"))
+        st.strategy = parse_strategy(rr.string(s, "strategy", ""), rr.at("strategy").where());
+    if (s.contains("heuristic"))
+        st.heuristic = parse_heuristic(rr.string(s, "heuristic", ""), rr.at("heuristic").where());
+    if (s.contains("sampler"))
+        st.sampler = parse_sampler(rr.string(s, "sampler", ""), rr.at("sampler").where());
+    if (s.contains("bsdf_sampling"))
+        st.bsdf_sampling =
+            parse_bsdf_sampling(rr.string(s, "bsdf_sampling", ""), rr.at("bsdf_sampling").where());
+    st.seed = static_cast<uint32_t>(rr.integer(s, "seed", st.seed, 0, 4294967295LL));
+    st.time_limit = rr.number(s, "time_limit", st.time_limit, 0.0, 1e7);
+    st.paths = read_int(s, "paths", st.paths, 0, 1 << 26, rr);
+    st.light_samples =
+        check_split_count(read_int(s, "light_samples", st.light_samples, 1, ETK_MAX_SPLIT, rr),
+                          rr.at("light_samples").where());
+    st.bsdf_samples =
+        check_split_count(read_int(s, "bsdf_samples", st.bsdf_samples, 1, ETK_MAX_SPLIT, rr),
+                          rr.at("bsdf_samples").where());
+}
 
 Scene load_scene(const std::string& path) {
-    json j = read_json_file(path, "scene file");
+    const json j = read_json_file(path, "scene file");
+    return load_scene_json(j, path, std::filesystem::path(path).parent_path().string());
+}
+
+Scene load_scene_json(const json& j, const std::string& path, const std::string& dir,
+                      const SceneInputs& inputs) {
     const JsonReader r(path);
     if (!j.is_object())
         r.fail("the scene must be a JSON object, got " + json_excerpt(j));
     Scene scene;
     scene.path = path;
-    const std::string dir = std::filesystem::path(path).parent_path().string();
     r.reject_unknown_keys(
         j, {"camera", "film", "environment", "materials", "shapes", "render", "output"});
 
-    if (const json* cp = r.object(j, "camera")) {
-        const json& c = *cp;
-        const JsonReader rc = r.at("camera");
-        rc.reject_unknown_keys(c, {"eye", "target", "up", "fov"});
-        scene.camera.eye = read_vec3(c, "eye", scene.camera.eye, rc, false);
-        scene.camera.target = read_vec3(c, "target", scene.camera.target, rc, false);
-        scene.camera.up = read_vec3(c, "up", scene.camera.up, rc, false);
-        scene.camera.fov_deg = read_float(c, "fov", scene.camera.fov_deg, 0.01f, 179.0f, rc);
-        for (const glm::vec3& v : {scene.camera.eye, scene.camera.target, scene.camera.up})
-            if (glm::any(glm::greaterThan(glm::abs(v), glm::vec3(1e30f))))
-                rc.fail("eye, target and up must be within [-1e30, 1e30]");
-        require_in_range(scene.camera.eye, rc.at("eye"));
-        glm::vec3 f = scene.camera.target - scene.camera.eye;
-        if (!(glm::length(f) > 0.0f) ||
-            !(glm::length(glm::cross(f, scene.camera.up)) > 1e-6f * glm::length(f)))
-            rc.fail("eye, target and up must span a view (eye != target, up not along the view)");
-    }
+    if (const json* cp = r.object(j, "camera"))
+        scene.camera = read_camera(*cp, r.at("camera"), scene.camera);
     if (const json* fp = r.object(j, "film")) {
         const JsonReader rf = r.at("film");
         rf.reject_unknown_keys(*fp, {"width", "height"});
         scene.width = read_int(*fp, "width", scene.width, 1, 16384, rf);
         scene.height = read_int(*fp, "height", scene.height, 1, 16384, rf);
     }
-    if (const json* sp = r.object(j, "render")) {
-        const json& s = *sp;
-        const JsonReader rr = r.at("render");
-        rr.reject_unknown_keys(s, {"spp", "max_depth", "strategy", "heuristic", "sampler", "seed",
-                                   "time_limit", "paths", "bsdf_sampling", "light_samples",
-                                   "bsdf_samples", "rr_depth"});
-        auto& st = scene.settings;
-        st.spp = read_int(s, "spp", st.spp, 1, 1 << 24, rr);
-        st.max_depth = read_int(s, "max_depth", st.max_depth, 1, 1000, rr);
-        st.rr_depth = read_int(s, "rr_depth", st.rr_depth, 0, 1000, rr);
-        if (s.contains("strategy"))
-            st.strategy = parse_strategy(rr.string(s, "strategy", ""), rr.at("strategy").where());
-        if (s.contains("heuristic"))
-            st.heuristic =
-                parse_heuristic(rr.string(s, "heuristic", ""), rr.at("heuristic").where());
-        if (s.contains("sampler"))
-            st.sampler = parse_sampler(rr.string(s, "sampler", ""), rr.at("sampler").where());
-        if (s.contains("bsdf_sampling"))
-            st.bsdf_sampling = parse_bsdf_sampling(rr.string(s, "bsdf_sampling", ""),
-                                                   rr.at("bsdf_sampling").where());
-        st.seed = static_cast<uint32_t>(rr.integer(s, "seed", st.seed, 0, 4294967295LL));
-        st.time_limit = rr.number(s, "time_limit", st.time_limit, 0.0, 1e7);
-        st.paths = read_int(s, "paths", st.paths, 0, 1 << 26, rr);
-        st.light_samples =
-            check_split_count(read_int(s, "light_samples", st.light_samples, 1, ETK_MAX_SPLIT, rr),
-                              rr.at("light_samples").where());
-        st.bsdf_samples =
-            check_split_count(read_int(s, "bsdf_samples", st.bsdf_samples, 1, ETK_MAX_SPLIT, rr),
-                              rr.at("bsdf_samples").where());
-    }
+    if (const json* sp = r.object(j, "render"))
+        read_render_block(*sp, r.at("render"), scene.settings);
     scene.output = r.string(j, "output", "");
     if (j.contains("output") && scene.output.empty()) // as an empty map is
         r.at("output").fail("is empty: name the image to write (.exr, .hdr or .pfm), or leave "
@@ -323,7 +329,7 @@ Scene load_scene(const std::string& path) {
 
     if (!j.contains("environment"))
         r.fail("no \"environment\": a scene needs a map or a sky to be lit by");
-    scene.env = load_scene_environment(j["environment"], dir, path, {});
+    scene.env = load_scene_environment(j["environment"], dir, path, {}, &inputs.maps);
 
     std::map<std::string, int> by_name;
     if (const json* mp = r.object(j, "materials")) {
@@ -367,10 +373,21 @@ Scene load_scene(const std::string& path) {
             const std::string type = rs.string(s, "type", "");
             int mat = material_of(s, rs);
             if (type == "mesh") {
-                rs.reject_unknown_keys(s, {"type", "file", "material", "transform"});
+                rs.reject_unknown_keys(s, {"type", "file", "arrays", "material", "transform"});
+                const glm::mat4 transform = read_transform(s, rs);
+                if (s.contains("arrays")) {
+                    if (s.contains("file"))
+                        rs.fail("has both \"file\" and \"arrays\": give one");
+                    const std::string name = rs.string(s, "arrays", "");
+                    const auto it = inputs.meshes.find(name);
+                    if (it == inputs.meshes.end())
+                        rs.at("arrays").fail("names no mesh given in memory with the scene");
+                    append_mesh_arrays(it->second, rs.where(), transform, mat, scene.materials,
+                                       scene.triangles);
+                    continue;
+                }
                 if (!s.contains("file"))
                     rs.fail("a mesh needs \"file\" (an OBJ, PLY, glTF or GLB file)");
-                const glm::mat4 transform = read_transform(s, rs);
                 std::string file = resolve_data_file(rs.string(s, "file", ""), dir);
                 load_mesh(file, transform, mat, scene.materials, scene.triangles, &scene.textures);
             } else if (type == "sphere") {

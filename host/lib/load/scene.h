@@ -3,12 +3,16 @@
 // (docs/scene-format.md documents the format).
 #pragma once
 #include "load/environment_map.h"
+#include "load/mesh_arrays.h"
 #include "load/render_settings.h"
 #include "load/texture.h"
 
 #include <glm/glm.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -56,6 +60,18 @@ struct Scene {
 // about unknown keys, dropped degenerate triangles and odd OBJ content.
 Scene load_scene(const std::string& path);
 
+// Inputs given in memory with a scene rather than as files (the Python module's arrays), by
+// name: a "mesh" shape's "arrays" names a mesh, the environment's "arrays" a map.
+struct SceneInputs {
+    std::map<std::string, MeshArrays> meshes;
+    std::map<std::string, RgbImage> maps; // linear RGB, lat-long
+};
+
+// The scene of a JSON document, as load_scene reads a file's: `path` names it in messages (and
+// in the scene), files resolve against `dir`.
+Scene load_scene_json(const nlohmann::json& j, const std::string& path, const std::string& dir,
+                      const SceneInputs& inputs = {});
+
 // Appends an OBJ file (triangulated, with its texture coordinates; materials from its MTL unless
 // `override_material` >= 0). The MTL's map_Kd, map_Ks and map_Pr / map_Ns (roughness) are read
 // into `textures`; without a TextureSet they are ignored.
@@ -73,6 +89,14 @@ void load_ply(const std::string& path, const glm::mat4& transform, int override_
 // warning).
 void load_gltf(const std::string& path, const glm::mat4& transform, int override_material,
                std::vector<Material>& materials, TriangleSoup& out);
+
+// Appends an in-memory mesh as load_ply appends a file's (the same transform of positions and
+// normals, the same default material, the same triangles dropped, a mirroring transform's
+// winding turned back); `where` names it in messages. Throws et::Error for an index out of
+// range, per-vertex arrays of another length, a non-finite position or no triangle left.
+void append_mesh_arrays(const MeshArrays& mesh, const std::string& where,
+                        const glm::mat4& transform, int override_material,
+                        std::vector<Material>& materials, TriangleSoup& out);
 
 // Appends a mesh file by its extension: .ply, .gltf / .glb, else OBJ (load_obj).
 void load_mesh(const std::string& path, const glm::mat4& transform, int override_material,

@@ -9,12 +9,56 @@
 
 namespace et {
 
+namespace {
+
+// Where the map stands: its intensity, rotation and convention ("intensity", "rotation",
+// "convention"), over `p` for keys absent.
+struct EnvPlacement {
+    float scale = 1.0f, rotation = 0.0f;
+    LatLongConvention convention = LatLongConvention::envtrace;
+};
+
+EnvPlacement read_placement(const nlohmann::json& env, const JsonReader& r, EnvPlacement p) {
+    p.scale = static_cast<float>(r.number(env, "intensity", p.scale, 0.0, 1e30));
+    p.rotation = static_cast<float>(r.number(env, "rotation", p.rotation, -1e6, 1e6));
+    if (env.contains("convention")) {
+        const JsonReader rc = r.at("convention");
+        if (!parse_convention(rc.string(env["convention"]), p.convention))
+            rc.fail("expected \"envtrace\", \"mitsuba\" or \"blender\", got " +
+                    json_excerpt(env["convention"]));
+    }
+    return p;
+}
+
+void place(EnvMap& map, const EnvPlacement& p, const JsonReader& r) {
+    map.scale = p.scale;
+    map.rotation_degrees = p.rotation;
+    map.convention = p.convention;
+    bound_intensity(map, r.at("intensity").where());
+}
+
+} // namespace
+
+void edit_scene_environment(EnvMap& map, const nlohmann::json& env, const std::string& where) {
+    const JsonReader r = JsonReader(where).at("environment");
+    if (!env.is_object())
+        r.fail("expected an object, got " + json_excerpt(env));
+    for (const char* key :
+         {"map", "arrays", "sky", "distribution_resolution", "blur", "distribution_exponent"})
+        if (env.contains(key))
+            r.at(key).fail("changes the map or its distribution: load the scene again with it "
+                           "(an edit changes \"intensity\", \"rotation\" and \"convention\")");
+    r.reject_unknown_keys(env, {"intensity", "rotation", "convention"});
+    place(map, read_placement(env, r, {map.scale, map.rotation_degrees, map.convention}), r);
+}
+
 EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scene_dir,
-                              const std::string& where, DistributionOptions options) {
+                              const std::string& where, DistributionOptions options,
+                              const std::map<std::string, RgbImage>* maps) {
     const JsonReader r = JsonReader(where).at("environment");
     if (!env.is_object())
         r.fail("expected an object with \"map\" or \"sky\", got " + json_excerpt(env));
-    r.reject_unknown_keys(env, {"map", "sky", "intensity", "rotation", "convention",
+    r.reject_unknown_keys(env, {"map", "arrays", "sky", "intensity", "rotation", "convention",
                                 "distribution_resolution", "blur", "distribution_exponent"});
     if (env.contains("distribution_resolution")) {
         const auto& res = env["distribution_resolution"];
@@ -35,19 +79,17 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
         static_cast<float>(r.number(env, "blur", options.blur_sigma, 0.0, kMaxBlurSigma));
     options.exponent = static_cast<float>(
         r.number(env, "distribution_exponent", options.exponent, kMinDistributionExponent, 1.0));
-    const float scale = static_cast<float>(r.number(env, "intensity", 1.0, 0.0, 1e30));
-    const float rotation = static_cast<float>(r.number(env, "rotation", 0.0, -1e6, 1e6));
-    LatLongConvention convention = LatLongConvention::envtrace;
-    if (env.contains("convention")) {
-        const JsonReader rc = r.at("convention");
-        if (!parse_convention(rc.string(env["convention"]), convention))
-            rc.fail("expected \"envtrace\", \"mitsuba\" or \"blender\", got " +
-                    json_excerpt(env["convention"]));
-    }
+    const EnvPlacement placement = read_placement(env, r, {});
     EnvMap map;
-    if (env.contains("map") && env.contains("sky"))
-        r.fail("has both \"map\" and \"sky\": give one");
-    if (env.contains("map")) {
+    if (int(env.contains("map")) + int(env.contains("sky")) + int(env.contains("arrays")) > 1)
+        r.fail("has more than one of \"map\", \"arrays\" and \"sky\": give one");
+    if (env.contains("arrays")) {
+        const std::string name = r.string(env, "arrays", "");
+        const auto it = maps ? maps->find(name) : std::map<std::string, RgbImage>::const_iterator{};
+        if (!maps || it == maps->end())
+            r.at("arrays").fail("names no map given in memory with the scene");
+        map = make_envmap(name, it->second, options);
+    } else if (env.contains("map")) {
         const std::string name = r.string(env, "map", "");
         if (name.empty())
             r.at("map").fail("the file name is empty");
@@ -81,10 +123,7 @@ EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scen
     } else {
         r.fail("needs \"map\" (a lat-long image) or \"sky\" (procedural sun and sky)");
     }
-    map.scale = scale;
-    map.rotation_degrees = rotation;
-    map.convention = convention;
-    bound_intensity(map, r.at("intensity").where());
+    place(map, placement, r);
     return map;
 }
 

@@ -5,10 +5,20 @@
 
 #include <nlohmann/json.hpp>
 
+#include <map>
+#include <string>
+
 namespace et {
 
-// `where` names the scene file for messages; files resolve against scene_dir, then ENVTRACE_DATA.
+// `where` names the scene file for messages; files resolve against scene_dir, then ENVTRACE_DATA;
+// "arrays" names one of `maps` (a scene's in-memory inputs, scene.h).
 EnvMap load_scene_environment(const nlohmann::json& env, const std::string& scene_dir,
-                              const std::string& where, DistributionOptions options);
+                              const std::string& where, DistributionOptions options,
+                              const std::map<std::string, RgbImage>* maps = nullptr);
+
+// An edit of a loaded map's block: "intensity", "rotation" and "convention" over its current
+// values. The texels and the distribution stay (neither depends on them); keys that would change
+// them are refused.
+void edit_scene_environment(EnvMap& map, const nlohmann::json& env, const std::string& where);
 
 } // namespace et

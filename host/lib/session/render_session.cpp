@@ -81,6 +81,17 @@ void RenderSession::start() {
     resumed_from_ = done_;
 }
 
+void RenderSession::extend(int64_t end) {
+    if (options_.partial || cluster_.size() > 1)
+        throw Error(options_.scene + ": only a whole render of one process renders on");
+    if (stopped_)
+        throw Error(options_.scene + ": a stop abandoned a pass: this session renders no more");
+    end_ = std::max(end, first_ + done_);
+    stop_request_ = 0;
+    signal_ = 0;
+    noise_reached_ = false;
+}
+
 int RenderSession::stop_signal() const {
     const int caught = InterruptHandler::signal();
     return caught ? caught : stop_request_.load();

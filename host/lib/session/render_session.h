@@ -82,6 +82,13 @@ class RenderSession {
     SessionResult run(const SessionCallbacks& callbacks = {});
     // Asks a running session to stop as a signal `sig` would (safe from another thread).
     void request_stop(int sig) { stop_request_ = sig; }
+    // A progressive front end's next call (rank of one, a whole render): moves the range's end to
+    // sample `end` and clears a stop request, so that run() adds samples done() .. end-1 to the
+    // same film, the bits of one run to `end`. Throws et::Error where the renderer cannot go on
+    // (a stop abandoned a pass: continue from state_of(sums) in a new session).
+    void extend(int64_t end);
+    // Whether a stop abandoned a pass, so that this session renders no more.
+    bool abandoned() const { return stopped_; }
 
     const Renderer& renderer() const { return *renderer_; }
     const PreparedRender& prepared() const { return prepared_; }
