@@ -58,8 +58,8 @@ void add_output_options(CLI::App& cmd, RenderArgs& a) {
                  "Also write OUT.denoised.EXT, the image denoised by Open Image Denoise 2 guided "
                  "by the albedo and normal (the preview shows it; tools/setup installs it)");
     cmd.add_option("--live-preview", a.live_preview,
-                   "Rewrite the preview of the film so far every SECONDS of rendering (0: every "
-                   "pass), atomically, for an image viewer to watch it converge")
+                   "Every this many seconds of rendering (0: every pass), rewrite the preview "
+                   "of the film so far, atomically, for an image viewer to watch it converge")
         ->check(finite_range(0.0, 1e7))
         ->default_str("none");
     cmd.add_flag("--live-image", a.live_image,

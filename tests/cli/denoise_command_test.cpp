@@ -10,10 +10,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <thread>
 
 namespace fs = std::filesystem;
 
@@ -78,6 +82,38 @@ TEST(DenoiseCommand, LowersTheErrorAt16Spp) {
         << "relative MSE: noisy " << noisy << ", denoised " << denoised;
     EXPECT_TRUE(fs::exists(dir + "/out.png"));
     EXPECT_NE(read_text(dir + "/stats.json").find("\"denoiser\""), std::string::npos);
+}
+
+// An interrupted render's outputs are denoised too: SIGINT once the live preview shows that
+// rendering runs; the image and its denoised twin hold the same samples.
+TEST(DenoiseCommand, InterruptedRenderIsDenoisedToo) {
+    const std::string why = ett::error_of([] { et::check_denoiser(); });
+    if (!why.empty())
+        GTEST_SKIP() << why;
+    const std::string dir = ett::scratch_dir("denoise_interrupted");
+    const std::string scene = write_scene(dir);
+    const std::string out = dir + "/out";
+    fs::create_directories(out);
+    const ett::CliProcess p =
+        ett::start_envtrace(render_args(scene, out + "/r.exr",
+                                        {"--spp", "16000000", "--denoise", "--live-preview", "0"}),
+                            dir);
+    for (int i = 0; i < 12000 && !fs::exists(out + "/r.png"); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ASSERT_TRUE(fs::exists(out + "/r.png")) << "no live preview within 60 s";
+    kill(p.pid, SIGINT);
+    const ett::CliRun r = ett::finish_envtrace(p, 120);
+    ASSERT_TRUE(r.exited() && r.code() == 128 + SIGINT) << r.err;
+    const et::RgbImage noisy = et::read_rgb_image(out + "/r.exr");
+    const et::RgbImage denoised = et::read_rgb_image(out + "/r.denoised.exr");
+    EXPECT_EQ(denoised.width, noisy.width);
+    EXPECT_NE(denoised.rgb, noisy.rgb);
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(out))
+        names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names,
+              (std::vector<std::string>{"r.denoised.exr", "r.envtrace-state", "r.exr", "r.png"}));
 }
 
 // Simulated absence: ENVTRACE_OIDN names a file that is not there.

@@ -14,6 +14,14 @@
 #define ENVTRACE_OIDN_VENV ""
 #endif
 
+#if defined(__SANITIZE_ADDRESS__)
+#define ENVTRACE_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define ENVTRACE_ASAN 1
+#endif
+#endif
+
 namespace et {
 namespace {
 
@@ -75,6 +83,11 @@ struct Loaded {
 
 // The search of oidn_library.h, in order; the first library that loads is kept.
 Loaded load() {
+#ifdef ENVTRACE_ASAN
+    // OIDN's TBB loads its helpers with RTLD_DEEPBIND, which AddressSanitizer's runtime refuses
+    // (ending the process), unless told it runs under a sanitizer.
+    setenv("TBB_ENABLE_SANITIZERS", "1", 0);
+#endif
     Loaded r;
     void* lib = nullptr;
     const char* env = std::getenv("ENVTRACE_OIDN");
