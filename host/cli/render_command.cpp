@@ -75,8 +75,10 @@ std::string output_name(const RenderArgs& a, const Scene& scene, bool root) {
 // What --denoise and --live-preview add to the outputs.
 void plan_image_extras(const RenderArgs& a, const SessionOptions& so, RenderOutputs& o) {
     if (so.partial && (a.denoise || a.live_preview >= 0))
-        throw Error(std::string(a.denoise ? "--denoise" : "--live-preview") +
-                    " works on a whole render's image: a --sample-range task writes none");
+        throw Error(
+            std::string(a.denoise ? "--denoise" : "--live-preview") +
+            " works on a whole render's image: a --sample-range task writes none" +
+            (a.denoise ? " (render the tasks with --aovs, then 'envtrace merge --denoise')" : ""));
     if (a.live_image && a.live_preview < 0)
         throw Error("--live-image rewrites the image with each live preview: add "
                     "--live-preview SECONDS");

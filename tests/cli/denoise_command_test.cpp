@@ -116,6 +116,33 @@ TEST(DenoiseCommand, InterruptedRenderIsDenoisedToo) {
               (std::vector<std::string>{"r.denoised.exr", "r.envtrace-state", "r.exr", "r.png"}));
 }
 
+// Farm tasks rendered with --aovs, merged with --denoise: the denoised twin of the merged image.
+TEST(DenoiseCommand, MergedFarmTasksAreDenoised) {
+    const std::string why = ett::error_of([] { et::check_denoiser(); });
+    if (!why.empty())
+        GTEST_SKIP() << why;
+    const std::string dir = ett::scratch_dir("denoise_merge");
+    const std::string scene = write_scene(dir);
+    const ett::CliRun task = ett::run_envtrace(
+        render_args(scene, dir + "/t.exr", {"--sample-range", "0:4", "--denoise"}), dir);
+    EXPECT_EQ(task.code(), 1);
+    EXPECT_NE(task.err.find("merge --denoise"), std::string::npos) << task.err;
+    for (const std::string range : {"0:4", "4:8"}) {
+        const ett::CliRun r = ett::run_envtrace(
+            render_args(scene, dir + "/t.exr", {"--sample-range", range, "--aovs"}), dir);
+        ASSERT_EQ(r.code(), 0) << r.err;
+    }
+    const ett::CliRun merge = ett::run_envtrace(
+        {"merge", dir + "/t.samples-0-4.envtrace-state", dir + "/t.samples-4-8.envtrace-state",
+         "-o", dir + "/m.exr", "--denoise"},
+        dir);
+    ASSERT_EQ(merge.code(), 0) << merge.err;
+    const et::RgbImage noisy = et::read_rgb_image(dir + "/m.exr");
+    const et::RgbImage denoised = et::read_rgb_image(dir + "/m.denoised.exr");
+    EXPECT_EQ(denoised.height, noisy.height);
+    EXPECT_NE(denoised.rgb, noisy.rgb);
+}
+
 // Simulated absence: ENVTRACE_OIDN names a file that is not there.
 TEST(DenoiseCommand, WithoutTheDenoiserFailsBeforeRendering) {
     const std::string dir = ett::scratch_dir("denoise_missing");

@@ -31,6 +31,15 @@ bool writes_state(const RenderOutputs& o, const SessionResult& result) {
     return o.keep_state || result.signal != 0;
 }
 
+RgbImage denoise_film(const FilmSums& sums, const RgbImage& mean) {
+    if (!sums.has_aovs())
+        return denoise(mean, {}, {});
+    AovImages aov = sums.aov_images();
+    const int w = sums.width(), h = sums.height();
+    return denoise(mean, RgbImage{w, h, std::move(aov.albedo)},
+                   RgbImage{w, h, std::move(aov.normal)});
+}
+
 void check_outputs_possible(const RenderOutputs& o) {
     if (!o.partial && !o.denoised.empty())
         check_denoiser();
@@ -50,16 +59,6 @@ void write_linear(OutputBatch& batch, const RenderOutputs& o, const FilmSums& su
     } else {
         write_image(batch, o.image, w, h, 3, mean, meta);
     }
-}
-
-// The film's mean denoised, guided by its albedo and normal where it has them.
-RgbImage denoise_film(const FilmSums& sums, const RgbImage& film) {
-    if (!sums.has_aovs())
-        return denoise(film, {}, {});
-    AovImages aov = sums.aov_images();
-    const int w = sums.width(), h = sums.height();
-    return denoise(film, RgbImage{w, h, std::move(aov.albedo)},
-                   RgbImage{w, h, std::move(aov.normal)});
 }
 
 void write_preview(OutputBatch* batch, const RenderOutputs& o, const RgbImage& shown) {

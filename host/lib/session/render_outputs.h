@@ -1,6 +1,7 @@
 // The files a render writes, all-or-nothing (util/output_batch.h): the linear image with its
 // metadata and AOV layers, the tone-mapped preview, the stats JSON and the resumable state.
 #pragma once
+#include "image/image_io.h"
 #include "session/render_report.h"
 #include "session/render_session.h"
 #include "util/output_batch.h"
@@ -43,6 +44,10 @@ std::unique_ptr<OutputBatch> reserve_outputs(const RenderOutputs& o, bool resume
 
 // Whether a render with `result` leaves its state behind.
 bool writes_state(const RenderOutputs& o, const SessionResult& result);
+
+// The film's mean (`mean`, sums.mean()) denoised (image/denoise.h), guided by the film's albedo
+// and normal where it holds AOVs; throws et::Error as denoise() does.
+RgbImage denoise_film(const FilmSums& sums, const RgbImage& mean);
 
 // Throws et::Error before a render whose outputs could not be written as planned: here, a
 // denoised image without a denoiser (the message says how to install one).
