@@ -110,4 +110,26 @@ TEST(LivePreview, WritesOnlyWhenDue) {
     EXPECT_FALSE(fs::exists(o.image)) << "the linear image only with live_image";
 }
 
+// A preview that cannot be written is warned about once and stops the live previews, not the
+// render.
+TEST(LivePreview, AFailedWriteWarnsAndTheRenderGoesOn) {
+    const std::string dir = ett::scratch_dir("live_preview_fails");
+    et::RenderOutputs o;
+    o.image = dir + "/out.exr";
+    o.preview = dir + "/gone/out.png"; // a folder that is not there
+    o.live_interval = 0.0;
+    const auto p = prepared_room(3);
+    et::RenderSession session(single(), *p, {});
+    session.start();
+    et::LivePreview live(o, session);
+    et::SessionCallbacks cb;
+    cb.progress = [&](int spp, double seconds) { live.update(spp, seconds); };
+    ett::WarningCapture warnings;
+    const et::SessionResult r = session.run(cb);
+    EXPECT_EQ(r.spp, 3);
+    EXPECT_EQ(live.writes(), 1);
+    ASSERT_EQ(warnings.messages().size(), 1u);
+    EXPECT_NE(warnings.messages()[0].find("no more live previews"), std::string::npos);
+}
+
 } // namespace

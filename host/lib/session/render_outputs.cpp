@@ -4,6 +4,8 @@
 #include "image/image_io.h"
 #include "image/preview.h"
 #include "render/film_layers.h"
+#include "session/cluster.h"
+#include "util/error.h"
 #include "util/json_file.h"
 #include "util/timer.h"
 
@@ -120,17 +122,25 @@ LivePreview::LivePreview(const RenderOutputs& o, const RenderSession& session)
 
 void LivePreview::update(int spp, double seconds) {
     const RenderOutputs& o = outputs_;
-    if (o.live_interval < 0 || o.partial || (writes_ > 0 && seconds - last_ < o.live_interval))
+    if (failed_ || o.live_interval < 0 || o.partial ||
+        (writes_ > 0 && seconds - last_ < o.live_interval))
         return;
     last_ = seconds;
     ++writes_;
     const FilmSums& sums = session_.renderer().sums();
     const RgbImage film{sums.width(), sums.height(), sums.mean()};
-    if (!o.preview.empty())
-        write_preview(nullptr, o, film);
-    if (o.live_image)
-        write_image(o.image, film.width, film.height, 3, film.rgb,
-                    {{"envtrace:spp", std::to_string(spp)}, {"envtrace:live_preview", "1"}});
+    // A preview that cannot be written (a full disk) is no reason to lose the render.
+    const std::string error = attempt([&] {
+        if (!o.preview.empty())
+            write_preview(nullptr, o, film);
+        if (o.live_image)
+            write_image(o.image, film.width, film.height, 3, film.rgb,
+                        {{"envtrace:spp", std::to_string(spp)}, {"envtrace:live_preview", "1"}});
+    });
+    if (!error.empty()) {
+        failed_ = true;
+        warn(error + ": no more live previews; the render goes on");
+    }
 }
 
 } // namespace et

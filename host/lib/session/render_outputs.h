@@ -68,7 +68,8 @@ OutputsWritten write_outputs(OutputBatch& batch, const RenderOutputs& o,
 class LivePreview {
   public:
     LivePreview(const RenderOutputs& o, const RenderSession& session);
-    // From the session's progress callback (rank 0, between rounds): writes when due.
+    // From the session's progress callback (rank 0, between rounds): writes when due. A write
+    // that fails is warned about, and ends the live previews, not the render.
     void update(int spp, double seconds);
     int writes() const { return writes_; }
 
@@ -77,6 +78,7 @@ class LivePreview {
     const RenderSession& session_;
     double last_ = 0.0;
     int writes_ = 0;
+    bool failed_ = false; // a write failed: warned once, no more tried
 };
 
 } // namespace et
