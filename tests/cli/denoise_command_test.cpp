@@ -132,10 +132,10 @@ TEST(DenoiseCommand, MergedFarmTasksAreDenoised) {
             render_args(scene, dir + "/t.exr", {"--sample-range", range, "--aovs"}), dir);
         ASSERT_EQ(r.code(), 0) << r.err;
     }
-    const ett::CliRun merge = ett::run_envtrace(
-        {"merge", dir + "/t.samples-0-4.envtrace-state", dir + "/t.samples-4-8.envtrace-state",
-         "-o", dir + "/m.exr", "--denoise"},
-        dir);
+    const ett::CliRun merge = ett::run_envtrace({"merge", dir + "/t.samples-0-4.envtrace-state",
+                                                 dir + "/t.samples-4-8.envtrace-state", "-o",
+                                                 dir + "/m.exr", "--denoise"},
+                                                dir);
     ASSERT_EQ(merge.code(), 0) << merge.err;
     const et::RgbImage noisy = et::read_rgb_image(dir + "/m.exr");
     const et::RgbImage denoised = et::read_rgb_image(dir + "/m.denoised.exr");
