@@ -55,8 +55,9 @@ void add_output_options(CLI::App& cmd, RenderArgs& a) {
     cmd.add_flag("--aovs", a.aovs,
                  "Write albedo, normal (N), depth (Z) and variance layers into the EXR");
     cmd.add_flag("--denoise", a.denoise,
-                 "Also write OUT.denoised.EXT, the image denoised by Open Image Denoise 2 guided "
-                 "by the albedo and normal (the preview shows it; tools/setup installs it)");
+                 "Also write OUT.denoised.EXT: the image denoised by Open Image Denoise 2, "
+                 "guided by the albedo and normal; the preview shows it (tools/setup installs "
+                 "OIDN)");
     cmd.add_option("--live-preview", a.live_preview,
                    "Every this many seconds of rendering (0: every pass), rewrite the preview "
                    "of the film so far, atomically, for an image viewer to watch it converge")
