@@ -37,6 +37,8 @@ inline CLI::Validator finite_range(double lo, double hi) {
 // The image and its twin of an output name: out.exr -> (out.exr, out.png); out.png -> (out.exr,
 // out.png); .hdr and .pfm like .exr. Throws et::Error for another extension.
 std::pair<std::string, std::string> output_names(const std::string& out);
+// The denoised twin of an image: out.exr -> out.denoised.exr (.hdr, .pfm alike).
+std::string denoised_name(const std::string& image);
 
 void add_devices_command(CLI::App& app, Globals& g);
 void add_sample_command(CLI::App& app, Globals& g);

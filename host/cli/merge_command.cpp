@@ -5,11 +5,13 @@
 // film size are refused, as are overlapping ranges (samples counted twice) and, unless
 // --allow-gaps, missing samples.
 #include "commands.h"
+#include "image/denoise.h"
 #include "image/image_io.h"
 #include "image/preview.h"
 #include "render/film_layers.h"
 #include "render/noise_estimate.h"
 #include "render/render_state.h"
+#include "session/render_outputs.h"
 #include "util/error.h"
 #include "util/output_batch.h"
 
@@ -25,6 +27,7 @@ struct MergeArgs {
     std::vector<std::string> parts;
     std::string output, state;
     bool allow_gaps = false;
+    bool denoise = false;
 };
 
 struct Part {
@@ -44,6 +47,11 @@ void run(const MergeArgs& a) {
     check_writable_format(exr_name);
     if (!png_name.empty())
         check_writable_format(png_name);
+    const std::string denoised = a.denoise ? denoised_name(exr_name) : "";
+    if (a.denoise) {
+        check_writable_format(denoised);
+        check_denoiser();
+    }
     std::vector<Part> parts;
     for (const std::string& path : a.parts) {
         parts.push_back({path, read_render_state(path)});
@@ -126,6 +134,8 @@ void run(const MergeArgs& a) {
         targets.push_back(png_name);
     if (!a.state.empty())
         targets.push_back(a.state);
+    if (a.denoise)
+        targets.push_back(denoised);
     OutputBatch outputs(targets);
     const int w = merged.sums.width(), h = merged.sums.height();
     const std::vector<float> img = merged.sums.mean();
@@ -146,16 +156,21 @@ void run(const MergeArgs& a) {
         write_image(outputs, exr_name, w, h, 3, img, meta);
     }
     RgbImage film{w, h, img};
+    if (a.denoise) { // as render --denoise does (session/render_outputs.h)
+        film = denoise_film(merged.sums, film);
+        meta.emplace_back("envtrace:denoiser", check_denoiser());
+        write_image(outputs, denoised, w, h, 3, film.rgb, meta);
+    }
     if (!png_name.empty())
         write_image(outputs, png_name, w, h, 3, tone_map(film, 1.0f));
     if (!a.state.empty())
         write_render_state(outputs, a.state, merged);
     outputs.commit();
-    std::printf("merged %zu part%s (%s%s) into %s%s%s%s%s: %d spp\n", parts.size(),
+    std::printf("merged %zu part%s (%s%s) into %s%s%s%s%s%s%s: %d spp\n", parts.size(),
                 parts.size() == 1 ? "" : "s", samples_text(0, covered).c_str(),
-                gaps.empty() ? "" : ", with gaps", exr_name.c_str(),
-                png_name.empty() ? "" : " and ", png_name.c_str(), a.state.empty() ? "" : " and ",
-                a.state.c_str(), merged.spp);
+                gaps.empty() ? "" : ", with gaps", exr_name.c_str(), a.denoise ? " and " : "",
+                denoised.c_str(), png_name.empty() ? "" : " and ", png_name.c_str(),
+                a.state.empty() ? "" : " and ", a.state.c_str(), merged.spp);
 }
 
 } // namespace
@@ -172,6 +187,9 @@ void add_merge_command(CLI::App& app, Globals&) {
                     "Also write the merged film as a render state (to resume or merge further)");
     cmd->add_flag("--allow-gaps", a->allow_gaps,
                   "Write the image even if some sample indices are in no part");
+    cmd->add_flag("--denoise", a->denoise,
+                  "Also write OUT.denoised.EXT as 'render --denoise' does (guided by the AOVs of "
+                  "parts rendered with --aovs; the preview shows it)");
     cmd->callback([a] { run(*a); });
 }
 

@@ -29,4 +29,10 @@ std::pair<std::string, std::string> output_names(const std::string& out) {
                 "' (use .exr, .hdr, .pfm, or .png / .jpg for the preview beside an .exr)");
 }
 
+std::string denoised_name(const std::string& image) {
+    fs::path p(image);
+    const fs::path ext = p.extension();
+    return p.replace_extension(".denoised" + ext.string()).string();
+}
+
 } // namespace et::cli

@@ -72,17 +72,40 @@ std::string output_name(const RenderArgs& a, const Scene& scene, bool root) {
     return out.string();
 }
 
+// What --denoise and --live-preview add to the outputs.
+void plan_image_extras(const RenderArgs& a, const SessionOptions& so, RenderOutputs& o) {
+    if (so.partial && (a.denoise || a.live_preview >= 0))
+        throw Error(
+            std::string(a.denoise ? "--denoise" : "--live-preview") +
+            " works on a whole render's image: a --sample-range task writes none" +
+            (a.denoise ? " (render the tasks with --aovs, then 'envtrace merge --denoise')" : ""));
+    if (a.live_image && a.live_preview < 0)
+        throw Error("--live-image rewrites the image with each live preview: add "
+                    "--live-preview SECONDS");
+    if (a.live_preview >= 0 && o.preview.empty() && !a.live_image)
+        throw Error("--live-preview: this build writes no PNG preview (without OpenImageIO): "
+                    "add --live-image to rewrite the linear image instead");
+    o.aov_layers = a.aovs;
+    if (a.denoise) {
+        o.denoised = denoised_name(o.image);
+        check_writable_format(o.denoised);
+    }
+    o.live_interval = a.live_preview;
+    o.live_image = a.live_image;
+}
+
 // The outputs' names, checked before any time is spent rendering.
-RenderOutputs plan_outputs(const RenderArgs& a, const Scene& scene, const RenderSettings& st,
-                           const SessionOptions& so, bool root) {
+RenderOutputs plan_outputs(const RenderArgs& a, const Scene& scene, const SessionOptions& so,
+                           bool root) {
     RenderOutputs o;
     std::tie(o.image, o.preview) = output_names(output_name(a, scene, root));
-    if (st.aovs && !so.partial && fs::path(o.image).extension() != ".exr")
+    if (a.aovs && !so.partial && fs::path(o.image).extension() != ".exr")
         throw Error(o.image + ": --aovs writes its layers into an OpenEXR image: name an "
                               ".exr output (-o)");
     check_writable_format(o.image);
     if (!o.preview.empty())
         check_writable_format(o.preview);
+    plan_image_extras(a, so, o);
     o.keep_state = a.checkpoint >= 0 || a.resume || so.partial;
     if (!a.state.empty() && !o.keep_state)
         throw Error("--state " + a.state +
@@ -112,7 +135,9 @@ void set_up(const RenderArgs& a, const Globals& g, Setup& s) {
         throw Error("--strategy sis visits one stratum per sample: --sample-range (" +
                     a.sample_range + ") must start and end at multiples of --sis-samples (" +
                     std::to_string(st.sis_samples) + ")");
-    s.outputs = plan_outputs(a, scene, st, s.options, cl.root());
+    s.outputs = plan_outputs(a, scene, s.options, cl.root());
+    if (cl.root())
+        check_outputs_possible(s.outputs); // the denoiser, before any time is spent
     s.options.state_path = s.outputs.state;
     s.prepared = prepare_render(std::move(scene), st);
     print_prepared(a.scene, *s.prepared);
@@ -133,11 +158,15 @@ void set_up(const RenderArgs& a, const Globals& g, Setup& s) {
 // Renders on every rank; a first SIGINT/SIGTERM (InterruptHandler) stops the session, which
 // keeps the rounds before it, and the outputs are then written under the same handler: a
 // second signal ends the process at once, writing nothing more.
-SessionResult render(RenderSession& session, const Cluster& cl) {
+SessionResult render(RenderSession& session, const RenderOutputs& outputs, const Cluster& cl) {
     Progress progress(static_cast<int>(session.end() - session.first()),
                       session.settings().time_limit);
+    LivePreview live(outputs, session);
     SessionCallbacks cb;
-    cb.progress = [&](int done, double seconds) { progress.update(done, seconds); };
+    cb.progress = [&](int done, double seconds) {
+        progress.update(done, seconds);
+        live.update(done, seconds);
+    };
     cb.progress_total = [&](int total) { progress.set_total(total); };
     cb.note = [](const std::string& line) { std::fprintf(stderr, "envtrace: %s\n", line.c_str()); };
     SessionResult r = session.run(cl.root() ? cb : SessionCallbacks{});
@@ -160,14 +189,15 @@ void run(const RenderArgs& a, Globals& g) {
     s.session->start();
     print_start(*s.session, s.build, cl);
     InterruptHandler interrupts;
-    const SessionResult r = render(*s.session, cl);
+    const SessionResult r = render(*s.session, s.outputs, cl);
     print_stop(*s.session, s.outputs, r, cl);
+    OutputsWritten written;
     cl.check(attempt([&] {
         if (cl.root())
-            write_outputs(*s.batch, s.outputs, *s.session, r,
-                          render_report({*s.session, r, s.build, cl.size()}));
+            written = write_outputs(*s.batch, s.outputs, *s.session, r,
+                                    render_report({*s.session, r, s.build, cl.size()}));
     }));
-    print_summary(*s.session, s.outputs, r, total.seconds(), cl);
+    print_summary(*s.session, s.outputs, r, written, total.seconds(), cl);
     if (r.signal)
         g.exit_code = 128 + r.signal;
 }

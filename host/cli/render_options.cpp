@@ -54,6 +54,17 @@ void add_output_options(CLI::App& cmd, RenderArgs& a) {
         ->capture_default_str();
     cmd.add_flag("--aovs", a.aovs,
                  "Write albedo, normal (N), depth (Z) and variance layers into the EXR");
+    cmd.add_flag("--denoise", a.denoise,
+                 "Also write OUT.denoised.EXT: the image denoised by Open Image Denoise 2, "
+                 "guided by the albedo and normal; the preview shows it (tools/setup installs "
+                 "OIDN)");
+    cmd.add_option("--live-preview", a.live_preview,
+                   "Every this many seconds of rendering (0: every pass), rewrite the preview "
+                   "of the film so far, atomically, for an image viewer to watch it converge")
+        ->check(finite_range(0.0, 1e7))
+        ->default_str("none");
+    cmd.add_flag("--live-image", a.live_image,
+                 "With --live-preview: rewrite the linear image (OUT.exr) each time too");
     cmd.add_option("--stats", a.stats_file, "Write the render summary as JSON")
         ->default_str("none");
 }
@@ -222,7 +233,7 @@ void apply_overrides(const RenderArgs& a, const Globals& g, RenderSettings& st) 
     st.threads = a.threads;
     st.sis_samples = a.sis_samples;
     st.lights = a.lights;
-    st.aovs = a.aovs;
+    st.aovs = a.aovs || a.denoise; // the denoiser's guides
 }
 
 // Options this render does not use: said, not silently dropped.

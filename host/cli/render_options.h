@@ -28,9 +28,12 @@ struct RenderArgs {
     double exposure = 0.0;     // --exposure: EV of the preview
     long long seed = -1;
     double time_limit = -1.0;
-    double checkpoint = -1.0;  // --checkpoint: seconds between saved states (< 0: none)
-    double noise_target = 0.0; // --noise-target: stop at this relative error (0: none)
-    bool aovs = false;         // --aovs: albedo, normal, depth and variance layers in the EXR
+    double checkpoint = -1.0;   // --checkpoint: seconds between saved states (< 0: none)
+    double noise_target = 0.0;  // --noise-target: stop at this relative error (0: none)
+    bool aovs = false;          // --aovs: albedo, normal, depth and variance layers in the EXR
+    bool denoise = false;       // --denoise: OUT.denoised.EXT too (the film keeps AOVs for it)
+    double live_preview = -1.0; // --live-preview: seconds between previews of the film so far
+    bool live_image = false;    // --live-image: the linear image too
     bool resume = false;
     std::string state;        // --state: the state file (default: beside the image)
     std::string sample_range; // --sample-range A:B: a farm task, samples A .. B-1

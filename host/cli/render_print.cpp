@@ -67,7 +67,7 @@ void print_stop(const RenderSession& s, const RenderOutputs& o, const SessionRes
 }
 
 void print_summary(const RenderSession& s, const RenderOutputs& o, const SessionResult& r,
-                   double total, const Cluster& cl) {
+                   const OutputsWritten& w, double total, const Cluster& cl) {
     const RenderStats& st = r.stats;
     const DeviceScene& ds = s.prepared().scene;
     const double target = s.options().noise_target;
@@ -94,9 +94,12 @@ void print_summary(const RenderSession& s, const RenderOutputs& o, const Session
                     o.state.c_str(), r.first, r.first + r.spp - 1, o.stats.empty() ? "" : " and ",
                     o.stats.c_str(), total);
     else
-        std::printf("\nwrote %s%s%s%s%s at %d spp (total %.2f s)\n", o.image.c_str(),
+        std::printf("\nwrote %s%s%s%s%s%s%s at %d spp (total %.2f s)\n", o.image.c_str(),
+                    o.denoised.empty() ? "" : " and ", o.denoised.c_str(),
                     o.preview.empty() ? "" : " and ", o.preview.c_str(),
                     state ? " and the state " : "", state ? o.state.c_str() : "", r.spp, total);
+    if (!w.denoiser.empty())
+        std::printf("denoised in %.3f s by %s\n", w.denoise_seconds, w.denoiser.c_str());
     if (target > 0 && cl.root())
         std::printf("noise target %g %s at %d spp: estimated relative error %.4g\n", target,
                     r.noise_reached ? "reached" : "NOT reached", r.spp, r.noise_error);

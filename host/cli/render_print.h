@@ -15,8 +15,8 @@ void print_start(const RenderSession& s, const ProgramBuildInfo& build, const Cl
 // Why the render stopped early, on stderr, and where its state is for --resume.
 void print_stop(const RenderSession& s, const RenderOutputs& o, const SessionResult& r,
                 const Cluster& cl);
-// The summary on stdout: rates, stage times, what was written.
+// The summary on stdout: rates, stage times, what was written (and denoised).
 void print_summary(const RenderSession& s, const RenderOutputs& o, const SessionResult& r,
-                   double total, const Cluster& cl);
+                   const OutputsWritten& w, double total, const Cluster& cl);
 
 } // namespace et::cli
