@@ -17,10 +17,12 @@
 // side. --native-only leaves out the older BVH and the trees of Embree's builder (their builds
 // take minutes on millions of triangles). --cpu-time times the process's CPU seconds (all
 // threads) instead of wall time: Mrays per CPU-second, steadier on a machine whose cores other
-// processes share (not for the OpenCL row: PoCL's idle workers may spin).
+// processes share (not for the OpenCL row: PoCL's idle workers may spin). --embree-config
+// passes a configuration string to rtcNewDevice ("isa=avx2": Embree's AVX2 kernels on a host
+// with AVX-512, whose 16-wide ones it picks by default; "verbose=1" prints its choice).
 //
 // Usage: bench_rays SCENE [--spp N] [--runs R] [--threads T] [--no-opencl] [--native-only]
-//                   [--cpu-time] [--json F]
+//                   [--cpu-time] [--embree-config S] [--json F]
 #include "bvh_baseline.h"
 #include "kernels/integrator.h"
 #include "load/scene.h"
@@ -179,8 +181,8 @@ struct Embree {
     RTCScene scene = nullptr;
     double build_seconds = 0;
 
-    explicit Embree(const et::TriangleSoup& soup) {
-        device = rtcNewDevice(nullptr);
+    Embree(const et::TriangleSoup& soup, const std::string& config) {
+        device = rtcNewDevice(config.empty() ? nullptr : config.c_str());
         if (!device)
             throw std::runtime_error("Embree: rtcNewDevice failed");
         scene = rtcNewScene(device);
@@ -453,7 +455,7 @@ constexpr bool kSetAnyHit[kSets] = {false, true, false};
 } // namespace
 
 int main(int argc, char** argv) try {
-    std::string scene_path, json_file;
+    std::string scene_path, json_file, embree_config;
     int spp = 16, runs = 5, threads = 0;
     bool use_cl = true, native_only = false, cpu_time = false;
     for (int i = 1; i < argc; ++i) {
@@ -471,6 +473,8 @@ int main(int argc, char** argv) try {
             threads = std::stoi(next());
         else if (a == "--no-opencl")
             use_cl = false;
+        else if (a == "--embree-config")
+            embree_config = next();
         else if (a == "--cpu-time")
             cpu_time = true;
         else if (a == "--native-only")
@@ -482,7 +486,8 @@ int main(int argc, char** argv) try {
     }
     if (scene_path.empty())
         throw std::runtime_error("usage: bench_rays SCENE [--spp N] [--runs R] [--threads T] "
-                                 "[--no-opencl] [--native-only] [--cpu-time] [--json F]");
+                                 "[--no-opencl] [--native-only] [--cpu-time] [--embree-config S] "
+                                 "[--json F]");
     threads = et::thread_count(threads);
     et::Scene scene = et::load_scene(scene_path);
     const et::TriangleSoup soup = scene.triangles;
@@ -530,7 +535,7 @@ int main(int argc, char** argv) try {
     }
     int embree_row = -1;
 #ifdef ENVTRACE_HAVE_EMBREE
-    Embree embree(soup);
+    Embree embree(soup, embree_config);
     embree_row = static_cast<int>(entries.size());
     entries.push_back({"Embree rtcIntersect1/rtcOccluded1", embree.tracer(threads), -1,
                        embree.build_seconds, 0, 0});
