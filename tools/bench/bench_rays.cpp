@@ -9,11 +9,20 @@
 // Rays: the scene's camera rays (one per sample, pixel jitter from the sampler at the scene's seed)
 // and, at every camera hit on a non-delta surface, the shadow ray of the shade stage at depth 0
 // (etk_env_sample of sample pair 1, from the offset surface origin; dropped when below the
-// geometric or shading surface, as the shade stage does). Generated once, then each tracer runs
-// over the same arrays; camera rays are closest-hit, shadow rays any-hit, both with tmax 3e38.
-// Each run times every tracer once, interleaved, so the ratios of a run are side by side.
+// geometric or shading surface, as the shade stage does) and a diffuse bounce ray (cosine-
+// distributed about the geometric normal on the camera's side, from a fixed-seed hash: incoherent
+// rays that start on the surface, as a path's later segments do). Generated once, then each tracer
+// runs over the same arrays; camera and bounce rays are closest-hit, shadow rays any-hit, all with
+// tmax 3e38. Each run times every tracer once, interleaved, so the ratios of a run are side by
+// side. --native-only leaves out the older BVH and the trees of Embree's builder (their builds
+// take minutes on millions of triangles). --cpu-time times the process's CPU seconds (all
+// threads) instead of wall time: Mrays per CPU-second, steadier on a machine whose cores other
+// processes share (not for the OpenCL row: PoCL's idle workers may spin). --embree-config
+// passes a configuration string to rtcNewDevice ("isa=avx2": Embree's AVX2 kernels on a host
+// with AVX-512, whose 16-wide ones it picks by default; "verbose=1" prints its choice).
 //
-// Usage: bench_rays SCENE [--spp N] [--runs R] [--threads T] [--no-opencl] [--json F]
+// Usage: bench_rays SCENE [--spp N] [--runs R] [--threads T] [--no-opencl] [--native-only]
+//                   [--cpu-time] [--embree-config S] [--json F]
 #include "bvh_baseline.h"
 #include "kernels/integrator.h"
 #include "load/scene.h"
@@ -33,6 +42,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <ctime>
 #include <cstdio>
 #include <functional>
 #include <map>
@@ -54,6 +64,14 @@ struct Rays {
 // A tracer writes, per ray, the soup index of the triangle hit (closest) or 1/0 (any hit), -1 for
 // none. The result vectors let the tracers be checked against each other.
 using Tracer = std::function<void(const Rays&, bool any, std::vector<int>&)>;
+
+// Seconds of CPU time used by the whole process (all threads): with --cpu-time, what a tracer
+// costs stays put when other processes share the cores (wall time counts their slices too).
+double process_cpu_seconds() {
+    timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -77,17 +95,22 @@ template <typename F> void parallel_for(int threads, size_t n, F&& f) {
 
 // A native tracer over any traversal function with etk_bvh_traverse's signature.
 template <typename Traverse>
+Tracer native_tracer(const float4* nodes, const float4* tris, const std::vector<int>& order,
+                     int threads, Traverse traverse) {
+    return [nodes, tris, &order, threads, traverse](const Rays& r, bool any,
+                                                    std::vector<int>& out) {
+        parallel_for(threads, r.size(), [&](size_t i) {
+            etk::EtkHit h;
+            const int hit =
+                traverse(nodes, tris, xyz(r.org[i]), xyz(r.dir[i]), r.org[i].w, any ? 1 : 0, &h);
+            out[i] = !hit ? -1 : any ? 1 : order[h.prim];
+        });
+    };
+}
+template <typename Traverse>
 Tracer native_tracer(const std::vector<float4>& nodes, const std::vector<float4>& tris,
                      const std::vector<int>& order, int threads, Traverse traverse) {
-    return
-        [&nodes, &tris, &order, threads, traverse](const Rays& r, bool any, std::vector<int>& out) {
-            parallel_for(threads, r.size(), [&](size_t i) {
-                etk::EtkHit h;
-                const int hit = traverse(nodes.data(), tris.data(), xyz(r.org[i]), xyz(r.dir[i]),
-                                         r.org[i].w, any ? 1 : 0, &h);
-                out[i] = !hit ? -1 : any ? 1 : order[h.prim];
-            });
-        };
+    return native_tracer(nodes.data(), tris.data(), order, threads, traverse);
 }
 
 // The OpenCL back end: tests/kernels/cl/bvh_test.cl (etk_bvh_traverse, one ray per work-item).
@@ -145,8 +168,8 @@ class ClTracer {
     const std::vector<int>& order_;
     cl::Program program_;
     cl::Kernel k_;
-    cl::Buffer nodes_, tris_, org_[2], dir_[2], out_[2];
-    size_t n_[2] = {0, 0};
+    cl::Buffer nodes_, tris_, org_[3], dir_[3], out_[3];
+    size_t n_[3] = {0, 0, 0};
     int last_slot_ = 0;
     bool last_any_ = false;
     std::vector<int>* last_out_ = nullptr;
@@ -158,8 +181,8 @@ struct Embree {
     RTCScene scene = nullptr;
     double build_seconds = 0;
 
-    explicit Embree(const et::TriangleSoup& soup) {
-        device = rtcNewDevice(nullptr);
+    Embree(const et::TriangleSoup& soup, const std::string& config) {
+        device = rtcNewDevice(config.empty() ? nullptr : config.c_str());
         if (!device)
             throw std::runtime_error("Embree: rtcNewDevice failed");
         scene = rtcNewScene(device);
@@ -377,12 +400,23 @@ Rays make_camera_rays(const et::DeviceScene& ds, int spp) {
     return r;
 }
 
-// The shadow rays of the camera hits (see the header); traced with the current BVH.
-Rays make_shadow_rays(const et::DeviceScene& ds, const Rays& cam, int spp) {
+// A uniform float in [0, 1) from a ray index and a stream (a fixed hash: the same rays every run).
+float hash01(uint32_t i, uint32_t stream) {
+    uint32_t h = i * 0x9e3779b9u ^ (stream + 0x7f4a7c15u) * 0x85ebca6bu;
+    h ^= h >> 16;
+    h *= 0x7feb352du;
+    h ^= h >> 15;
+    h *= 0x846ca68bu;
+    h ^= h >> 16;
+    return static_cast<float>(h >> 8) * (1.0f / 16777216.0f);
+}
+
+// The shadow and diffuse-bounce rays of the camera hits (see the header); traced with the
+// current BVH.
+void make_secondary_rays(const et::DeviceScene& ds, const Rays& cam, Rays& shadow, Rays& bounce) {
     const etk::EtkScene S = ds.view();
     etk::EtkParams p = ds.params;
     const size_t pixels = static_cast<size_t>(ds.width()) * ds.height();
-    Rays r;
     for (size_t i = 0; i < cam.size(); ++i) {
         p.sample_index = static_cast<etk::uint>(i / pixels);
         const int pixel = static_cast<int>(i % pixels);
@@ -391,6 +425,17 @@ Rays make_shadow_rays(const et::DeviceScene& ds, const Rays& cam, int spp) {
                                    xyz(cam.dir[i]), 3.0e38f, 0, &h))
             continue;
         const etk::EtkSurface s = etk::etk_surface_at(S, p, xyz(cam.org[i]), xyz(cam.dir[i]), h);
+        // Cosine about ng on the viewer's side (s.origin's side: ng faces the viewer).
+        const float u1 = hash01(static_cast<uint32_t>(i), 1),
+                    u2 = hash01(static_cast<uint32_t>(i), 2);
+        const float r = std::sqrt(u1), phi = 6.2831853f * u2;
+        const glm::vec3 n(s.ng.x, s.ng.y, s.ng.z);
+        const glm::vec3 a = std::fabs(n.x) > 0.5f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+        const glm::vec3 t = glm::normalize(glm::cross(a, n)), b = glm::cross(n, t);
+        const glm::vec3 w = glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b +
+                                           std::sqrt(std::max(0.0f, 1.0f - u1)) * n);
+        bounce.org.push_back(etk::make_float4(s.origin.x, s.origin.y, s.origin.z, 3.0e38f));
+        bounce.dir.push_back(etk::make_float4(w.x, w.y, w.z, 0.0f));
         if (etk::etk_bsdf_is_delta(s.m))
             continue;
         const etk::EtkEnvSample ls =
@@ -398,19 +443,21 @@ Rays make_shadow_rays(const et::DeviceScene& ds, const Rays& cam, int spp) {
         const etk::float3 wi = etk::etk_to_local(ls.dir, s.t, s.b, s.ns);
         if (!(ls.pdf > 0.0f) || !(wi.z > 0.0f) || !(etk::dot(ls.dir, s.ng) > 0.0f))
             continue;
-        r.org.push_back(etk::make_float4(s.origin.x, s.origin.y, s.origin.z, 3.0e38f));
-        r.dir.push_back(etk::make_float4(ls.dir.x, ls.dir.y, ls.dir.z, 0.0f));
+        shadow.org.push_back(etk::make_float4(s.origin.x, s.origin.y, s.origin.z, 3.0e38f));
+        shadow.dir.push_back(etk::make_float4(ls.dir.x, ls.dir.y, ls.dir.z, 0.0f));
     }
-    (void)spp;
-    return r;
 }
+
+constexpr int kSets = 3;
+const char* const kSetNames[kSets] = {"camera", "shadow", "bounce"};
+constexpr bool kSetAnyHit[kSets] = {false, true, false};
 
 } // namespace
 
 int main(int argc, char** argv) try {
-    std::string scene_path, json_file;
+    std::string scene_path, json_file, embree_config;
     int spp = 16, runs = 5, threads = 0;
-    bool use_cl = true;
+    bool use_cl = true, native_only = false, cpu_time = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         auto next = [&]() -> std::string {
@@ -426,6 +473,12 @@ int main(int argc, char** argv) try {
             threads = std::stoi(next());
         else if (a == "--no-opencl")
             use_cl = false;
+        else if (a == "--embree-config")
+            embree_config = next();
+        else if (a == "--cpu-time")
+            cpu_time = true;
+        else if (a == "--native-only")
+            native_only = true;
         else if (a == "--json")
             json_file = next();
         else
@@ -433,7 +486,8 @@ int main(int argc, char** argv) try {
     }
     if (scene_path.empty())
         throw std::runtime_error("usage: bench_rays SCENE [--spp N] [--runs R] [--threads T] "
-                                 "[--no-opencl] [--json F]");
+                                 "[--no-opencl] [--native-only] [--cpu-time] [--embree-config S] "
+                                 "[--json F]");
     threads = et::thread_count(threads);
     et::Scene scene = et::load_scene(scene_path);
     const et::TriangleSoup soup = scene.triangles;
@@ -444,12 +498,10 @@ int main(int argc, char** argv) try {
     const et::Bvh cur = et::build_bvh(soup);
     if (cur.nodes.size() != ds.nodes.size())
         throw std::runtime_error("the BVH build is not deterministic");
-    const baseline::Bvh base = baseline::build_bvh(soup);
-    const std::vector<float4> base_tris = et::flatten_triangles(soup, base.order);
 
-    Rays sets[2];
+    Rays sets[kSets];
     sets[0] = make_camera_rays(ds, spp);
-    sets[1] = make_shadow_rays(ds, sets[0], spp);
+    make_secondary_rays(ds, sets[0], sets[1], sets[2]);
 
     struct Entry {
         std::string name;
@@ -463,37 +515,51 @@ int main(int argc, char** argv) try {
          native_tracer(ds.nodes, ds.packets, cur.order, threads, &etk::etk_bvh_traverse),
          cur.sah_cost, cur.build_seconds, static_cast<int>(ds.nodes.size() * sizeof(float4)),
          static_cast<int>(ds.packets.size() * sizeof(float4))});
-    entries.push_back(
-        {"baseline native (main d2e3a75)",
-         native_tracer(base.nodes, base_tris, base.order, threads, &baseline::bvh_traverse),
-         base.sah_cost, base.build_seconds, static_cast<int>(base.nodes.size() * sizeof(float4)),
-         static_cast<int>(base_tris.size() * sizeof(float4))});
+    baseline::Bvh base;
+    std::vector<float4> base_tris;
+    if (!native_only) {
+        base = baseline::build_bvh(soup);
+        base_tris = et::flatten_triangles(soup, base.order);
+        entries.push_back(
+            {"baseline native (main d2e3a75)",
+             native_tracer(base.nodes, base_tris, base.order, threads, &baseline::bvh_traverse),
+             base.sah_cost, base.build_seconds,
+             static_cast<int>(base.nodes.size() * sizeof(float4)),
+             static_cast<int>(base_tris.size() * sizeof(float4))});
+    }
     std::unique_ptr<ClTracer> cl;
     if (use_cl) {
         cl = std::make_unique<ClTracer>(st.device, ds.nodes, ds.packets, cur.order);
-        for (int k = 0; k < 2; ++k)
+        for (int k = 0; k < kSets; ++k)
             cl->load(sets[k], k);
     }
+    int embree_row = -1;
 #ifdef ENVTRACE_HAVE_EMBREE
-    Embree embree(soup);
+    Embree embree(soup, embree_config);
+    embree_row = static_cast<int>(entries.size());
     entries.push_back({"Embree rtcIntersect1/rtcOccluded1", embree.tracer(threads), -1,
                        embree.build_seconds, 0, 0});
     double ebuild_m = 0, ebuild_h = 0;
-    const et::Bvh emb_m =
-        embree_built_tree(embree.device, soup, RTC_BUILD_QUALITY_MEDIUM, &ebuild_m);
-    const et::Bvh emb_h = embree_built_tree(embree.device, soup, RTC_BUILD_QUALITY_HIGH, &ebuild_h);
-    const std::vector<float4> emb_m_packets = et::flatten_packets(soup, emb_m);
-    const std::vector<float4> emb_h_packets = et::flatten_packets(soup, emb_h);
-    entries.push_back(
-        {"envtrace traversal, Embree-built tree (binned SAH)",
-         native_tracer(emb_m.nodes, emb_m_packets, emb_m.order, threads, &etk::etk_bvh_traverse),
-         emb_m.sah_cost, ebuild_m, static_cast<int>(emb_m.nodes.size() * sizeof(float4)),
-         static_cast<int>(emb_m_packets.size() * sizeof(float4))});
-    entries.push_back(
-        {"envtrace traversal, Embree-built tree (spatial splits)",
-         native_tracer(emb_h.nodes, emb_h_packets, emb_h.order, threads, &etk::etk_bvh_traverse),
-         emb_h.sah_cost, ebuild_h, static_cast<int>(emb_h.nodes.size() * sizeof(float4)),
-         static_cast<int>(emb_h_packets.size() * sizeof(float4))});
+    et::Bvh emb_m, emb_h;
+    std::vector<float4> emb_m_packets, emb_h_packets;
+    if (!native_only) {
+        emb_m = embree_built_tree(embree.device, soup, RTC_BUILD_QUALITY_MEDIUM, &ebuild_m);
+        emb_h = embree_built_tree(embree.device, soup, RTC_BUILD_QUALITY_HIGH, &ebuild_h);
+        emb_m_packets = et::flatten_packets(soup, emb_m);
+        emb_h_packets = et::flatten_packets(soup, emb_h);
+        entries.push_back({"envtrace traversal, Embree-built tree (binned SAH)",
+                           native_tracer(emb_m.nodes, emb_m_packets, emb_m.order, threads,
+                                         &etk::etk_bvh_traverse),
+                           emb_m.sah_cost, ebuild_m,
+                           static_cast<int>(emb_m.nodes.size() * sizeof(float4)),
+                           static_cast<int>(emb_m_packets.size() * sizeof(float4))});
+        entries.push_back({"envtrace traversal, Embree-built tree (spatial splits)",
+                           native_tracer(emb_h.nodes, emb_h_packets, emb_h.order, threads,
+                                         &etk::etk_bvh_traverse),
+                           emb_h.sah_cost, ebuild_h,
+                           static_cast<int>(emb_h.nodes.size() * sizeof(float4)),
+                           static_cast<int>(emb_h_packets.size() * sizeof(float4))});
+    }
 #endif
     const int n_native = static_cast<int>(entries.size());
     const int n_all = n_native + (cl ? 1 : 0);
@@ -503,70 +569,111 @@ int main(int argc, char** argv) try {
     if (cl)
         names.push_back("envtrace OpenCL (" + cl->name() + ")");
 
-    // results[set][tracer] of the last run, checked against tracer 0.
-    std::vector<std::vector<std::vector<int>>> results(2, std::vector<std::vector<int>>(n_all));
-    std::vector<std::vector<std::vector<double>>> mrays(2, std::vector<std::vector<double>>(n_all));
-    std::vector<std::vector<double>> total(n_all);
-    for (int run = 0; run < runs; ++run) {
-        std::vector<double> secs(n_all, 0.0);
-        for (int k = 0; k < 2; ++k)
+    // results[set][tracer] of the last run, checked against tracer 0; seconds[set][tracer] per run.
+    std::vector<std::vector<std::vector<int>>> results(kSets, std::vector<std::vector<int>>(n_all));
+    std::vector<std::vector<std::vector<double>>> seconds(kSets,
+                                                          std::vector<std::vector<double>>(n_all));
+    size_t all_rays = 0;
+    for (const Rays& r : sets)
+        all_rays += r.size();
+    for (int run = 0; run < runs; ++run)
+        for (int k = 0; k < kSets; ++k)
             for (int e = 0; e < n_all; ++e) {
                 std::vector<int>& out = results[k][e];
                 out.assign(sets[k].size(), -2);
                 et::Timer t;
+                const double cpu0 = process_cpu_seconds();
                 if (e < n_native)
-                    entries[e].trace(sets[k], k == 1, out);
+                    entries[e].trace(sets[k], kSetAnyHit[k], out);
                 else
-                    cl->trace(k, k == 1, out);
-                const double s = t.seconds();
+                    cl->trace(k, kSetAnyHit[k], out);
+                seconds[k][e].push_back(cpu_time ? process_cpu_seconds() - cpu0 : t.seconds());
                 if (e >= n_native)
                     cl->read_back();
-                mrays[k][e].push_back(sets[k].size() / s * 1e-6);
-                secs[e] += s;
             }
-        for (int e = 0; e < n_all; ++e)
-            total[e].push_back((sets[0].size() + sets[1].size()) / secs[e] * 1e-6);
-    }
+    // Medians over runs: Mrays/s per set and over all rays; ratios to tracer `ref` per run.
+    auto mrays = [&](int k, int e) {
+        std::vector<double> v;
+        for (double s : seconds[k][e])
+            v.push_back(sets[k].size() / s * 1e-6);
+        return median(v);
+    };
+    auto secs_all = [&](int e, int run) {
+        double s = 0;
+        for (int k = 0; k < kSets; ++k)
+            s += seconds[k][e][run];
+        return s;
+    };
+    auto mrays_all = [&](int e) {
+        std::vector<double> v;
+        for (int r = 0; r < runs; ++r)
+            v.push_back(all_rays / secs_all(e, r) * 1e-6);
+        return median(v);
+    };
+    auto ratio = [&](int k, int e, int ref) { // throughput of e / throughput of ref
+        std::vector<double> v;
+        for (int r = 0; r < runs; ++r)
+            v.push_back(k < 0 ? secs_all(ref, r) / secs_all(e, r)
+                              : seconds[k][ref][r] / seconds[k][e][r]);
+        return median(v);
+    };
 
-    std::printf("%s: %zu triangles, %dx%d, %d spp, %d threads; %zu camera + %zu shadow rays; "
-                "medians of %d runs\n",
+    std::printf("%s: %zu triangles, %dx%d, %d spp, %d threads; %zu camera + %zu shadow + %zu "
+                "bounce rays; medians of %d runs%s\n",
                 scene_path.c_str(), soup.size(), ds.width(), ds.height(), spp, threads,
-                sets[0].size(), sets[1].size(), runs);
-    std::printf("%-56s %9s %9s %9s %8s %8s %9s %9s %9s\n", "tracer", "camera", "shadow", "all",
-                "/native", "SAH", "build ms", "nodes KB", "tris KB");
+                sets[0].size(), sets[1].size(), sets[2].size(), runs,
+                cpu_time ? " (Mrays per CPU-second)" : "");
+    std::printf("%-56s %8s %8s %8s %8s %8s %8s %9s %9s %9s\n", "tracer (Mrays/s)", "camera",
+                "shadow", "bounce", "all", "/native", "SAH", "build ms", "nodes KB", "tris KB");
     json j;
     j["scene"] = scene_path;
     j["triangles"] = soup.size();
-    j["rays"] = {sets[0].size(), sets[1].size()};
+    for (int k = 0; k < kSets; ++k)
+        j["rays"][kSetNames[k]] = sets[k].size();
     j["threads"] = threads;
     for (int e = 0; e < n_all; ++e) {
-        std::vector<double> ratio;
-        for (int r = 0; r < runs; ++r)
-            ratio.push_back(total[e][r] / total[0][r]);
         const bool native = e < n_native;
         const Entry& own = entries[native ? e : 0];
-        std::printf("%-56s %9.2f %9.2f %9.2f %8.3f %8.2f %9.1f %9.0f %9.0f\n", names[e].c_str(),
-                    median(mrays[0][e]), median(mrays[1][e]), median(total[e]), median(ratio),
-                    native ? entries[e].sah : cur.sah_cost,
+        std::printf("%-56s %8.2f %8.2f %8.2f %8.2f %8.3f %8.2f %9.1f %9.0f %9.0f\n",
+                    names[e].c_str(), mrays(0, e), mrays(1, e), mrays(2, e), mrays_all(e),
+                    ratio(-1, e, 0), native ? entries[e].sah : cur.sah_cost,
                     (native ? entries[e].build : cur.build_seconds) * 1e3, own.nodes_bytes / 1024.0,
                     own.tris_bytes / 1024.0);
         // Agreement with tracer 0: closest-hit triangle (a different triangle is a tie or a
         // grazing ray) and any-hit verdicts.
-        int diff[2] = {0, 0};
-        for (int k = 0; k < 2; ++k)
+        int diff[kSets] = {0, 0, 0};
+        for (int k = 0; k < kSets; ++k)
             for (size_t i = 0; i < sets[k].size(); ++i)
                 diff[k] += results[k][e][i] != results[k][0][i];
         if (e > 0)
             std::printf("    differs from envtrace native on %d camera rays (triangle), %d shadow "
-                        "rays (verdict)\n",
-                        diff[0], diff[1]);
-        j["tracers"].push_back({{"name", names[e]},
-                                {"mrays_camera", median(mrays[0][e])},
-                                {"mrays_shadow", median(mrays[1][e])},
-                                {"mrays_all", median(total[e])},
-                                {"ratio_to_native", median(ratio)},
-                                {"differs_camera", diff[0]},
-                                {"differs_shadow", diff[1]}});
+                        "rays (verdict), %d bounce rays (triangle)\n",
+                        diff[0], diff[1], diff[2]);
+        json row = {{"name", names[e]}, {"ratio_to_native", ratio(-1, e, 0)}};
+        for (int k = 0; k < kSets; ++k) {
+            row[std::string("mrays_") + kSetNames[k]] = mrays(k, e);
+            row[std::string("differs_") + kSetNames[k]] = diff[k];
+        }
+        j["tracers"].push_back(row);
+    }
+    // The goals' ratios, each the median of the runs' ratios (side by side within a run).
+    if (embree_row >= 0) {
+        std::printf("native / Embree:");
+        for (int k = 0; k < kSets; ++k) {
+            std::printf(" %s %.3f,", kSetNames[k], ratio(k, 0, embree_row));
+            j["native_over_embree"][kSetNames[k]] = ratio(k, 0, embree_row);
+        }
+        std::printf(" all %.3f\n", ratio(-1, 0, embree_row));
+        j["native_over_embree"]["all"] = ratio(-1, 0, embree_row);
+    }
+    if (cl) {
+        std::printf("OpenCL / native:");
+        for (int k = 0; k < kSets; ++k) {
+            std::printf(" %s %.3f,", kSetNames[k], ratio(k, n_native, 0));
+            j["opencl_over_native"][kSetNames[k]] = ratio(k, n_native, 0);
+        }
+        std::printf(" all %.3f\n", ratio(-1, n_native, 0));
+        j["opencl_over_native"]["all"] = ratio(-1, n_native, 0);
     }
     std::printf("SAH: traversal 1, triangle 1 per unit of root area (envtrace's builder weighs "
                 "a packet of four triangles as 1); tris KB: the triangle data traversal reads. "
