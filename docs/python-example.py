@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""envtrace from Python: a scene built from numpy arrays, rendered, its map turned, compared.
+"""envtrace from Python: a scene built from numpy arrays, rendered, its map turned, denoised,
+compared.
 
     PYTHONPATH=build/python /usr/bin/python3 docs/python-example.py --out renders/example
 
@@ -62,7 +63,7 @@ def main():
         "render": {"max_depth": 4, "seed": 1},
     }
 
-    r = envtrace.Renderer(scene, backend=args.backend)
+    r = envtrace.Renderer(scene, backend=args.backend, aovs=True)  # aovs: to denoise
     r.render(spp=8)
     before = r.render(spp=8)  # the same film: 16 samples, the bits of one render of 16
     stats = r.stats()
@@ -73,6 +74,11 @@ def main():
     r.set_environment(rotation=90)  # the sun moves a quarter turn; the film restarts
     after = r.render(spp=16)
     envtrace.write_image(os.path.join(args.out, "after.exr"), after)
+    try:  # Open Image Denoise, guided by the film's albedo and normal
+        envtrace.write_image(os.path.join(args.out, "after.denoised.exr"), r.denoised())
+        print("denoised the turned map's film")
+    except envtrace.Error as e:  # the denoiser is optional: tools/setup installs it
+        print(f"no denoiser: {e}")
 
     errors = envtrace.compare(after, before)
     print(f"turned map against the first: rmse {errors['rmse']:.4f}, "

@@ -2,7 +2,9 @@
 // channel of a file, a render's layers included, without OpenImageIO's own Python module.
 #include "bindings.h"
 
+#include "image/denoise.h"
 #include "image/image_io.h"
+#include "scene_object.h"
 #include "util/error.h"
 #include "util/output_batch.h"
 
@@ -45,9 +47,29 @@ void write_channels(const std::string& path, const py::handle& pixels,
     batch.commit();
 }
 
+// The library's denoiser (render --denoise's) on arrays: the guides may be None.
+py::array_t<float> denoise_arrays(const py::handle& color, const py::handle& albedo,
+                                  const py::handle& normal, bool hdr, bool prefilter) {
+    const RgbImage beauty = rgb_image(color, "denoise: color");
+    const RgbImage a = albedo.is_none() ? RgbImage{} : rgb_image(albedo, "denoise: albedo");
+    const RgbImage n = normal.is_none() ? RgbImage{} : rgb_image(normal, "denoise: normal");
+    DenoiseOptions o;
+    o.hdr = hdr;
+    o.prefilter_guides = prefilter;
+    RgbImage out;
+    {
+        py::gil_scoped_release free;
+        out = denoise(beauty, a, n, o);
+    }
+    return to_array(std::move(out.rgb), {out.height, out.width, 3});
+}
+
 } // namespace
 
 void bind_images(py::module_& m) {
+    m.def("denoise", &denoise_arrays, py::arg("color"), py::arg("albedo") = py::none(),
+          py::arg("normal") = py::none(), py::arg("hdr") = true, py::arg("prefilter") = true,
+          "Open Image Denoise's RT filter on an H x W x 3 image, guided by albedo and normal");
     m.def("read_channels", &read_channels, py::arg("path"),
           "Every channel of an image: (names, H x W x C float32 array)");
     m.def("write_channels", &write_channels, py::arg("path"), py::arg("pixels"),

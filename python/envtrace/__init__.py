@@ -18,7 +18,7 @@ docs/python.md is the reference.
 from ._envtrace import Error, EnvironmentMap, LightSet, __version__
 from ._images import read_image, write_image
 from ._render import Renderer, render
-from ._denoise import denoise  # a marked place: wired to the library's denoiser once merged
+from ._denoise import denoise
 from ._scene import load_scene
 from ._tools import compare, load_map
 

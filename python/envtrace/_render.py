@@ -4,6 +4,7 @@ edits, AOVs, noise and stats)."""
 import json
 
 from . import _envtrace
+from ._denoise import denoise
 from ._images import group_layers
 from ._scene import load_scene_and_doc
 
@@ -72,6 +73,14 @@ class Renderer:
         layers = group_layers(names, pixels)
         layers.pop("color", None)
         return layers
+
+    def denoised(self):
+        """The film so far through envtrace.denoise, guided by its albedo and normal (a Renderer
+        made with aovs=True; render --denoise's image for the same film)."""
+        layers = self.aovs()
+        if "albedo" not in layers or "normal" not in layers:
+            raise _envtrace.Error("Renderer.denoised: needs a Renderer made with aovs=True")
+        return denoise(self.image(), layers["albedo"], layers["normal"])
 
     def noise(self):
         """The film's estimated relative error (the --noise-target measure); inf below 2 spp."""

@@ -97,7 +97,7 @@ TEST(CliOptions, EveryGivenSplitCountIsChecked) {
         }
     expect_ok(
         ett::run_envtrace(render(scene, out, {"--strategy", "mis", "--light-samples", "2"}), dir));
-    // The default strategy, compensated, takes one sample of each: the error says what splits.
+    // The default strategy takes one sample of each: the error says what splits.
     expect_error(ett::run_envtrace(render(scene, out, {"--light-samples", "2"}), dir),
                  "name the strategy mis to split");
 }

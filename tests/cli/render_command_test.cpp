@@ -515,7 +515,7 @@ TEST(RenderCommand, StatsAndMetadataAgree) {
          std::vector<std::pair<std::string, std::string>>{{"spp", "3"},
                                                           {"max_depth", "4"},
                                                           {"resumed_from_spp", "0"},
-                                                          {"strategy", "\"compensated\""},
+                                                          {"strategy", "\"auto\""},
                                                           {"interrupted", "\"no\""}}) {
         EXPECT_NE(json.find("\"" + key + "\": " + value), std::string::npos) << key << json;
         const std::string unquoted = value[0] == '"' ? value.substr(1, value.size() - 2) : value;

@@ -20,7 +20,7 @@ TEST(RenderSettings, NamesRoundTrip) {
         EXPECT_EQ(et::name_of(et::parse_backend(n, "t")), n);
     for (const auto& n : et::bsdf_sampling_names())
         EXPECT_EQ(et::name_of(et::parse_bsdf_sampling(n, "t")), n);
-    EXPECT_EQ(et::strategy_names().size(), 8u); // "lights" is chosen by --lights only
+    EXPECT_EQ(et::strategy_names().size(), 9u); // "lights" is chosen by --lights only
 }
 
 TEST(RenderSettings, ValuesAreTheKernelCodes) {
@@ -41,7 +41,8 @@ TEST(RenderSettings, ValuesAreTheKernelCodes) {
     st.strategy = et::Strategy::mis;
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::ndf);
     for (et::Strategy s :
-         {et::Strategy::compensated, et::Strategy::visibility, et::Strategy::cosine}) {
+         {et::Strategy::compensated, et::Strategy::visibility, et::Strategy::cosine,
+          et::Strategy::automatic}) {
         st.strategy = s;
         EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf) << et::name_of(s);
     }
@@ -62,7 +63,8 @@ TEST(RenderSettings, AutomaticHeuristicIsPowerForThePapersEstimatorAlone) {
     EXPECT_EQ(st.heuristic, et::MisHeuristic::automatic);
     for (const auto& n : et::strategy_names()) {
         st.strategy = et::parse_strategy(n, "t");
-        const bool balance = n == "compensated" || n == "visibility" || n == "cosine";
+        const bool balance =
+            n == "compensated" || n == "visibility" || n == "cosine" || n == "auto";
         EXPECT_EQ(et::resolved_heuristic(st),
                   balance ? et::MisHeuristic::balance : et::MisHeuristic::power)
             << n;
@@ -95,12 +97,13 @@ TEST(RenderSettings, RetiredNamesAreRefused) {
         EXPECT_NE(n, "mix");
 }
 
-// The default estimator goes beyond the paper's (docs/history/results-journal.md, "The default
-// strategy"): MIS compensation below the first vertex, with visible-normal GGX sampling and the
-// balance heuristic.
-TEST(RenderSettings, DefaultIsCompensated) {
+// The default estimator goes beyond the paper's (docs/estimators.md): the learned visibility
+// tables where they beat MIS compensation, with visible-normal GGX sampling and the balance
+// heuristic.
+TEST(RenderSettings, DefaultIsAuto) {
     const et::RenderSettings st;
-    EXPECT_EQ(st.strategy, et::Strategy::compensated);
+    EXPECT_EQ(st.strategy, et::Strategy::automatic);
+    EXPECT_STREQ(et::name_of(st.strategy), "auto");
     EXPECT_EQ(et::resolved_bsdf_sampling(st), et::BsdfSampling::vndf);
     EXPECT_EQ(et::resolved_heuristic(st), et::MisHeuristic::balance);
 }
@@ -130,7 +133,7 @@ TEST(RenderSettings, SplitCounts) {
     et::RenderSettings st;
     st.light_samples = 4;
     EXPECT_THROW(et::check_split(st), et::Error)
-        << "the default strategy, compensated, took a split";
+        << "the default strategy took a split";
     st.strategy = et::Strategy::mis;
     et::check_split(st);
     st.strategy = et::Strategy::compensated;
