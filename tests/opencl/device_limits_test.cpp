@@ -90,6 +90,8 @@ et::DeviceScene big_map_scene(et::Scene& s) {
     s.materials.push_back(ett::diffuse(0.5f));
     et::RenderSettings st = s.settings;
     st.backend = et::Backend::opencl;
+    // A strategy without learned tables, whose 32 MiB would be the largest buffer.
+    st.strategy = et::Strategy::compensated;
     return et::prepare_device_scene(s, st);
 }
 

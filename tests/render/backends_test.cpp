@@ -280,6 +280,7 @@ TEST(LightBatch, AutoFollowsTheDevice) {
     for (int m = 0; m < 3; ++m) {
         et::RenderSettings st = s.settings;
         st.max_depth = 2;
+        st.strategy = et::Strategy::compensated; // one whose light samples may come in batches
         st.light_batch = modes[m];
         const et::DeviceScene ds = et::prepare_device_scene(s, st);
         et::Renderer r(ds, [&](et::Film& film) -> std::unique_ptr<et::WavefrontDevice> {
