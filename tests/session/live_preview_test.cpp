@@ -1,6 +1,7 @@
 // The live preview (session/render_outputs.h, LivePreview) while a session renders: after each
 // due round the PNG preview and the linear image on disk are whole, readable images of the film
 // so far (the EXR's spp says which round), and no temporary is left beside them.
+#include "single_cluster.h"
 #include "render_util.h"
 #include "session/render_outputs.h"
 #include "session/render_session.h"
@@ -26,10 +27,7 @@ std::unique_ptr<et::PreparedRender> prepared_room(int spp) {
 }
 
 const et::Cluster& single() {
-    static int argc = 0;
-    static char** argv = nullptr;
-    static const et::Cluster cluster(&argc, &argv);
-    return cluster;
+    return ett::single_cluster();
 }
 
 // The pixels as a viewer reads them (OpenImageIO directly: et::read_rgb_image would record the

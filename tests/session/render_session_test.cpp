@@ -1,6 +1,7 @@
 // The render session as a front end other than the command line drives it: run to the settings'
 // spp, stopped on request from a progress callback after whole rounds, resumed from its state to
 // the film of an unbroken run bit for bit; its report is one list written as JSON and metadata.
+#include "single_cluster.h"
 #include "render_util.h"
 #include "session/render_report.h"
 #include "session/render_session.h"
@@ -23,12 +24,8 @@ std::unique_ptr<et::PreparedRender> prepared_room(int spp) {
     return et::prepare_render(std::move(s), st);
 }
 
-// A process outside mpirun: a cluster of one, which never touches MPI.
 const et::Cluster& single() {
-    static int argc = 0;
-    static char** argv = nullptr;
-    static const et::Cluster cluster(&argc, &argv);
-    return cluster;
+    return ett::single_cluster();
 }
 
 TEST(RenderSession, StopsOnRequestAndResumesBitIdentical) {
