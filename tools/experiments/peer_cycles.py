@@ -354,7 +354,7 @@ def blender_mesh(bpy, name, tris, normals, material):
     return ob
 
 
-def build_blender_scene(bpy, scene, groups, depth):
+def build_blender_scene(bpy, scene, groups, depth, pattern, rr_depth):
     """The converted scene in a fresh Blender file; returns the Blender scene and its objects."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bs = bpy.context.scene
@@ -376,6 +376,11 @@ def build_blender_scene(bpy, scene, groups, depth):
     cy.use_guiding = False
     cy.use_surface_guiding = True
     cy.use_volume_guiding = False
+    cy.sampling_pattern = pattern
+    # Russian roulette: envtrace's rr_depth (surfaces before roulette may end a path) as Cycles'
+    # minimum light bounces; None keeps Cycles' own (roulette from the first bounce).
+    if rr_depth is not None:
+        cy.min_light_bounces = rr_depth
     bs.render.film_transparent = False
     bs.render.threads_mode = "FIXED"
     bs.render.threads = 2
@@ -454,10 +459,10 @@ def build_blender_scene(bpy, scene, groups, depth):
 class Cycles:
     """The converted scene, rendered again and again (persistent data: synced once)."""
 
-    def __init__(self, bpy, scene, groups, depth, work, name):
+    def __init__(self, bpy, scene, groups, depth, work, name, pattern, rr_depth):
         self.bpy, self.work, self.name = bpy, work, name
         t0 = time.perf_counter()
-        self.bs, self.objects = build_blender_scene(bpy, scene, groups, depth)
+        self.bs, self.objects = build_blender_scene(bpy, scene, groups, depth, pattern, rr_depth)
         self.build_seconds = time.perf_counter() - t0
         _, self.sync_seconds = self.render(1, 1, False)  # the first render syncs and builds the BVH
 
@@ -543,6 +548,21 @@ def interp_error(times, errors, at):
     return e * t / at
 
 
+def fit_c(times, errors):
+    """c of error = c / time over a ladder (least squares in log-log with the slope held at -1)."""
+    pts = [t * e for t, e in zip(times, errors) if e > 0 and t > 0]
+    return math.exp(np.mean(np.log(pts))) if pts else float("nan")
+
+
+def log_slope(times, errors):
+    """The free log-log slope of error against time (-1 for Monte Carlo; steeper for quasi-Monte
+    Carlo; flatter, or erratic, where rare fireflies rule the error)."""
+    pts = np.array([(t, e) for t, e in zip(times, errors) if e > 0 and t > 0])
+    if len(pts) < 2 or np.ptp(np.log(pts[:, 0])) == 0:
+        return float("nan")
+    return float(np.polyfit(np.log(pts[:, 0]), np.log(pts[:, 1]), 1)[0])
+
+
 # ----------------------------------------------------------------------------- the experiment
 
 def measure_scene(bpy, path, a, work):
@@ -557,7 +577,8 @@ def measure_scene(bpy, path, a, work):
     et_empty = os.path.join(work, f"{name}-map.json")
     with open(et_empty, "w") as f:
         json.dump(empty, f, indent=1)
-    cy = Cycles(bpy, scene, groups, depth, work, name)
+    rr = int(scene.get("render", {}).get("rr_depth", 5)) if a.cycles_rr == "envtrace" else None
+    cy = Cycles(bpy, scene, groups, depth, work, name, a.cycles_pattern, rr)
     print(f"{name}: depth {depth}, {sum(len(g[0]) for g in groups)} triangles; Blender build "
           f"{cy.build_seconds:.2f} s, first render (sync + BVH + 1 spp) {cy.sync_seconds:.2f} s", flush=True)
     res = {"scene": name, "depth": depth, "cycles_build_s": cy.build_seconds, "cycles_sync_s": cy.sync_seconds}
@@ -649,8 +670,11 @@ def measure_scene(bpy, path, a, work):
         for s in seeds:
             es = ladder(m, s)[1]
             inside.append(min(es) <= target <= max(es))
+        fit = [fit_c(*ladder(m, s)) / target for s in seeds]
+        t_all, e_all = zip(*[(r["seconds"], r["rel_mse"]) for r in rows if r["method"] == m])
         res["times"][m] = {"median": float(np.median(ts)), "min": float(min(ts)), "max": float(max(ts)),
-                           "interpolated": all(inside)}
+                           "interpolated": all(inside), "fit": float(np.median(fit)),
+                           "slope": log_slope(t_all, e_all)}
     print(f"{name}: target rel MSE {target:.4g}: " + ", ".join(
         f"{m} {v['median']:.2f} s" for m, v in res["times"].items()), flush=True)
     return res
@@ -664,7 +688,7 @@ def write_report(results, a, out, bpy_version):
         w.writerows(rows)
     cmd = (f"build/cycles-venv/bin/python tools/experiments/peer_cycles.py --seeds {a.seeds} "
            f"--budgets {' '.join(f'{b:g}' for b in a.budgets)} --ref-seconds {a.ref_seconds:g} "
-           f"--size {a.size[0]} {a.size[1]}" + (" --quick" if a.quick else ""))
+           f"--size {a.size[0]} {a.size[1]} --cycles-pattern {a.cycles_pattern} --cycles-rr {a.cycles_rr}" + (" --quick" if a.quick else ""))
     L = [f"# envtrace against Cycles {bpy_version} at equal error\n",
          f"`{cmd}` (scenes: {', '.join(os.path.basename(s) for s in a.scenes)}); both on the CPU with "
          f"2 threads, box-filtered pixels, {a.size[0]}x{a.size[1]}, on a 2-core host shared with other "
@@ -684,6 +708,16 @@ def write_report(results, a, out, bpy_version):
             cells.append(f"{v['median']:.2f}{'' if v['interpolated'] else '*'} [{v['min']:.2f}-{v['max']:.2f}] "
                          f"(x{v['median'] / mis:.2f})")
         L.append(f"| {res['scene']} (d{res['depth']}) | {res['target']:.4g} | " + " | ".join(cells) + " |")
+    L += ["", "The same target reached by the fit error = c / time over each method's whole ladder "
+          "(median over seeds; ratio to envtrace mis's fit), and the free log-log slope of error against "
+          "time over all its renders (-1: Monte Carlo; steeper: quasi-Monte Carlo; flatter or erratic: "
+          "fireflies rule the error, and the times above are uncertain).\n",
+          "| scene | " + " | ".join(METHODS) + " |", "|---|" + "---|" * len(METHODS)]
+    for res in results:
+        mis = res["times"]["envtrace mis"]["fit"]
+        L.append(f"| {res['scene']} | " + " | ".join(
+            f"{res['times'][m]['fit']:.2f} s (x{res['times'][m]['fit'] / mis:.2f}), slope {res['times'][m]['slope']:.2f}"
+            for m in METHODS) + " |")
     L += ["", "## The conversion: converged references compared\n",
           "Each renderer's reference (envtrace mis, Cycles without guiding; two halves of "
           f"{a.ref_seconds / 2:g} s each). Mean ratio envtrace / Cycles over the image and per channel; "
@@ -724,6 +758,10 @@ def main():
     p.add_argument("--target-seconds", type=float, default=4.0, help="the target: envtrace mis's error at this time")
     p.add_argument("--calibrate-seconds", type=float, default=1.0)
     p.add_argument("--map-spp", type=int, default=16)
+    p.add_argument("--cycles-pattern", default="AUTOMATIC", choices=["AUTOMATIC", "TABULATED_SOBOL", "BLUE_NOISE"],
+                   help="Cycles' sampling pattern (AUTOMATIC, its default: blue noise)")
+    p.add_argument("--cycles-rr", default="envtrace", choices=["envtrace", "cycles"],
+                   help="Cycles' Russian roulette: from envtrace's rr_depth (min light bounces) or its own")
     p.add_argument("--quick", action="store_true", help="a short run: budgets 0.5 2 8, 1 seed, 16 s references")
     a = p.parse_args()
     if a.quick or a.tiny:
