@@ -637,6 +637,9 @@ def measure_scene(bpy, path, a, work):
     np.save(os.path.join(work, f"{name}-ref-envtrace.npy"), refs["envtrace"][0])
     np.save(os.path.join(work, f"{name}-ref-cycles.npy"), refs["cycles"][0])
 
+    if a.agreement_only:
+        return res
+
     # The ladder: methods alternate render by render.
     rows = []
     for budget in a.budgets:
@@ -680,6 +683,37 @@ def measure_scene(bpy, path, a, work):
     return res
 
 
+def write_agreement(results, a, out, bpy_version):
+    """--agreement-only: the conversion's table alone."""
+    L = [f"# envtrace against Cycles {bpy_version}: the conversion\n",
+         f"`build/cycles-venv/bin/python tools/experiments/peer_cycles.py --agreement-only --ref-seconds "
+         f"{a.ref_seconds:g} --size {a.size[0]} {a.size[1]} --cycles-rr {a.cycles_rr} --scenes "
+         f"{' '.join(os.path.basename(s) for s in a.scenes)}`\n"]
+    L += agreement_table(results, a)
+    with open(os.path.join(out, "agreement.md"), "w") as f:
+        f.write("\n".join(L) + "\n")
+    print(f"wrote {os.path.join(out, 'agreement.md')}")
+
+
+def agreement_table(results, a):
+    L = ["Each renderer's reference (envtrace mis, Cycles without guiding; two halves of "
+         f"{a.ref_seconds / 2:g} s each). Mean ratio envtrace / Cycles over the image and per channel; "
+         f"{BLOCK}x{BLOCK}-pixel blocks: relative difference (rms, max) and z-score against both "
+         "references' noise (rms). \"map alone\": every shape hidden, the map seen directly "
+         f"({a.map_spp} spp each).\n",
+         "| scene | ref spp envtrace / Cycles | mean ratio | R / G / B | block rel rms | block rel max | "
+         "block z rms | map alone: mean ratio, block rel rms / max | Cycles build / first render s |",
+         "|---|---|---|---|---|---|---|---|---|"]
+    for res in results:
+        g, mp = res["refs"], res["map"]
+        L.append(f"| {res['scene']} | {res['ref_spp']['envtrace']} / {res['ref_spp']['cycles']} | "
+                 f"{g['mean_ratio']:.4f} | {' / '.join(f'{x:.4f}' for x in g['ratio'])} | "
+                 f"{g['block_rel_rms']:.4f} | {g['block_rel_max']:.4f} | {g['block_z_rms']:.2f} | "
+                 f"{mp['mean_ratio']:.4f}, {mp['block_rel_rms']:.4f} / {mp['block_rel_max']:.4f} | "
+                 f"{res['cycles_build_s']:.2f} / {res['cycles_sync_s']:.2f} |")
+    return L
+
+
 def write_report(results, a, out, bpy_version):
     rows = [r for res in results for r in res["rows"]]
     with open(os.path.join(out, "peer_cycles.csv"), "w", newline="") as f:
@@ -718,22 +752,7 @@ def write_report(results, a, out, bpy_version):
         L.append(f"| {res['scene']} | " + " | ".join(
             f"{res['times'][m]['fit']:.2f} s (x{res['times'][m]['fit'] / mis:.2f}), slope {res['times'][m]['slope']:.2f}"
             for m in METHODS) + " |")
-    L += ["", "## The conversion: converged references compared\n",
-          "Each renderer's reference (envtrace mis, Cycles without guiding; two halves of "
-          f"{a.ref_seconds / 2:g} s each). Mean ratio envtrace / Cycles over the image and per channel; "
-          f"{BLOCK}x{BLOCK}-pixel blocks: relative difference (rms, max) and z-score against both "
-          "references' noise (rms). \"map alone\": every shape hidden, the map seen directly "
-          f"({a.map_spp} spp each).\n",
-          "| scene | ref spp envtrace / Cycles | mean ratio | R / G / B | block rel rms | block rel max | "
-          "block z rms | map alone: mean ratio, block rel rms / max | Cycles build / first render s |",
-          "|---|---|---|---|---|---|---|---|---|"]
-    for res in results:
-        g, mp = res["refs"], res["map"]
-        L.append(f"| {res['scene']} | {res['ref_spp']['envtrace']} / {res['ref_spp']['cycles']} | "
-                 f"{g['mean_ratio']:.4f} | {' / '.join(f'{x:.4f}' for x in g['ratio'])} | "
-                 f"{g['block_rel_rms']:.4f} | {g['block_rel_max']:.4f} | {g['block_z_rms']:.2f} | "
-                 f"{mp['mean_ratio']:.4f}, {mp['block_rel_rms']:.4f} / {mp['block_rel_max']:.4f} | "
-                 f"{res['cycles_build_s']:.2f} / {res['cycles_sync_s']:.2f} |")
+    L += ["", "## The conversion: converged references compared\n"] + agreement_table(results, a)
     L += ["", "## Every render\n", "Median over seeds per rung (all renders: peer_cycles.csv).\n",
           "| scene | method | budget s | spp | seconds | rel MSE |", "|---|---|---|---|---|---|"]
     for res in results:
@@ -762,6 +781,8 @@ def main():
                    help="Cycles' sampling pattern (AUTOMATIC, its default: blue noise)")
     p.add_argument("--cycles-rr", default="envtrace", choices=["envtrace", "cycles"],
                    help="Cycles' Russian roulette: from envtrace's rr_depth (min light bounces) or its own")
+    p.add_argument("--agreement-only", action="store_true",
+                   help="only the conversion's check (map alone, references compared), no ladder")
     p.add_argument("--quick", action="store_true", help="a short run: budgets 0.5 2 8, 1 seed, 16 s references")
     a = p.parse_args()
     if a.quick or a.tiny:
@@ -777,7 +798,10 @@ def main():
     out = common.out_dir(a, "peer_cycles")
     work = common.tmpdir("peer_cycles")
     results = [measure_scene(bpy, s, a, work) for s in a.scenes]
-    write_report(results, a, out, bpy.app.version_string)
+    if a.agreement_only:
+        write_agreement(results, a, out, bpy.app.version_string)
+    else:
+        write_report(results, a, out, bpy.app.version_string)
 
 
 if __name__ == "__main__":
