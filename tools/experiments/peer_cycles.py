@@ -79,6 +79,50 @@ BLOCK = 16
 CONVENTION_TURN = {"envtrace": 0.0, "blender": 90.0, "mitsuba": 180.0}
 
 
+# --materials-check: the held-out open007_d1 (museum_wells6.exr, a gold Suzanne) with the statue's
+# material replaced, one scene per mapping of the docstring's table, plus open003_d5's glass
+# Suzanne flat-shaded (its vertex normals dropped) and room004_d1 (a rough silver bunny in a room).
+MATERIAL_VARIANTS = {
+    "gold_a0.05_d1": ("open007_d1.json", None, None),
+    "schlick_a0.1_d1": ("open007_d1.json", {"type": "microfacet", "specular": [0.9, 0.6, 0.3], "roughness": 0.1}, None),
+    "mirror_d1": ("open007_d1.json", {"type": "mirror", "specular": [0.9, 0.9, 0.9]}, None),
+    "plastic_a0.1_d1": ("open007_d1.json", {"type": "plastic", "albedo": [0.8, 0.3, 0.2], "roughness": 0.1}, None),
+    "rough_glass_a0.3_d8": ("open007_d1.json", {"type": "dielectric", "ior": 1.5, "roughness": 0.3}, 8),
+    "glass_flat_suzanne_d5": ("open003_d5.json", "flat", None),
+    "room004_silver_a0.3_d1": ("room004_d1.json", None, None),
+}
+
+
+def material_variants(work):
+    """The scene files of --materials-check, written into `work`."""
+    out = []
+    for name, (base, mat, depth) in MATERIAL_VARIANTS.items():
+        src = os.path.join(HELDOUT, base)
+        with open(src) as f:
+            s = json.load(f)
+        for sh in s["shapes"]:
+            if "file" in sh and os.path.isfile(os.path.join(HELDOUT, sh["file"])):
+                sh["file"] = os.path.join(HELDOUT, sh["file"])
+        if mat == "flat":
+            mesh = resolve(s["shapes"][1]["file"], HELDOUT)
+            flat = os.path.join(work, "flat_" + os.path.basename(mesh))
+            with open(mesh) as f, open(flat, "w") as o:
+                for line in f:
+                    if not line.startswith("vn "):
+                        o.write(" ".join(w.split("/")[0] for w in line.split()) + "\n"
+                                if line.startswith("f ") else line)
+            s["shapes"][1]["file"] = flat
+        elif mat:
+            s["materials"]["statue0"] = mat
+        if depth:
+            s["render"]["max_depth"] = depth
+        path = os.path.join(work, name + ".json")
+        with open(path, "w") as f:
+            json.dump(s, f, indent=1)
+        out.append(path)
+    return out
+
+
 # ----------------------------------------------------------------------------- scene reading
 
 def resolve(path, scene_dir):
@@ -597,7 +641,7 @@ def measure_scene(bpy, path, a, work):
 
     # Calibration: seconds per sample of each method.
     rate = {}
-    for m in METHODS:
+    for m in ["cycles"] if a.agreement_only else METHODS:
         if m.startswith("envtrace"):
             _, st = envtrace_render(et_scene, work, name, m.split()[1], 1, seconds=a.calibrate_seconds)
             rate[m] = st["spp"] / st["render_seconds"]
@@ -686,9 +730,10 @@ def measure_scene(bpy, path, a, work):
 def write_agreement(results, a, out, bpy_version):
     """--agreement-only: the conversion's table alone."""
     L = [f"# envtrace against Cycles {bpy_version}: the conversion\n",
-         f"`build/cycles-venv/bin/python tools/experiments/peer_cycles.py --agreement-only --ref-seconds "
-         f"{a.ref_seconds:g} --size {a.size[0]} {a.size[1]} --cycles-rr {a.cycles_rr} --scenes "
-         f"{' '.join(os.path.basename(s) for s in a.scenes)}`\n"]
+         f"`build/cycles-venv/bin/python tools/experiments/peer_cycles.py "
+         f"{'--materials-check' if a.materials_check else '--agreement-only'} --ref-seconds "
+         f"{a.ref_seconds:g} --size {a.size[0]} {a.size[1]} --cycles-rr {a.cycles_rr}` (scenes: "
+         f"{', '.join(os.path.basename(s) for s in a.scenes)})\n"]
     L += agreement_table(results, a)
     with open(os.path.join(out, "agreement.md"), "w") as f:
         f.write("\n".join(L) + "\n")
@@ -783,6 +828,8 @@ def main():
                    help="Cycles' Russian roulette: from envtrace's rr_depth (min light bounces) or its own")
     p.add_argument("--agreement-only", action="store_true",
                    help="only the conversion's check (map alone, references compared), no ladder")
+    p.add_argument("--materials-check", action="store_true",
+                   help="--agreement-only on variants of held-out scenes, one per material mapping")
     p.add_argument("--quick", action="store_true", help="a short run: budgets 0.5 2 8, 1 seed, 16 s references")
     a = p.parse_args()
     if a.quick or a.tiny:
@@ -797,6 +844,8 @@ def main():
     common.envtrace()
     out = common.out_dir(a, "peer_cycles")
     work = common.tmpdir("peer_cycles")
+    if a.materials_check:
+        a.scenes, a.agreement_only = material_variants(work), True
     results = [measure_scene(bpy, s, a, work) for s in a.scenes]
     if a.agreement_only:
         write_agreement(results, a, out, bpy.app.version_string)
