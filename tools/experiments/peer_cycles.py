@@ -195,8 +195,8 @@ def read_mtl(path):
 
 def read_obj(path):
     """Triangles of an OBJ as envtrace's loader (tinyobjloader) splits them: quads along the shorter
-    diagonal, larger polygons as fans. Returns positions (n, 3, 3), normals (n, 3, 3) or None per
-    triangle set, and the MTL material name of each triangle."""
+    diagonal, larger polygons as fans. Returns positions (n, 3, 3), each triangle's corner normals
+    (3 x 3) or None, each triangle's MTL material name, and the MTL's materials by name."""
     v, vn, tris, nrm, mat_of, mtl = [], [], [], [], [], {}
     cur = None
     folder = os.path.dirname(path)
@@ -322,19 +322,14 @@ def node_material(bpy, name, mat):
     nt = bm.node_tree
     nt.nodes.clear()
     out = nt.nodes.new("ShaderNodeOutputMaterial")
-    t = mat.get("type", "diffuse")
+    t = {"cook-torrance": "microfacet", "metal": "conductor", "glass": "dielectric"}.get(
+        mat.get("type", "diffuse"), mat.get("type", "diffuse"))
     col = lambda c, d: list(np.broadcast_to(np.array(c if c is not None else d, float), 3)) + [1.0]  # noqa
     for key in ("albedo", "specular", "roughness"):
         if isinstance(mat.get(key), dict):
             sys.exit(f"peer_cycles: material {name}: texture objects are not converted")
     alpha = float(mat.get("roughness", {"conductor": 0.1, "dielectric": 0.0}.get(t, 0.3)))
     rough = math.sqrt(max(alpha, 0.0))
-    if t in ("cook-torrance",):
-        t = "microfacet"
-    if t in ("metal",):
-        t = "conductor"
-    if t in ("glass",):
-        t = "dielectric"
     if t == "diffuse":
         n = nt.nodes.new("ShaderNodeBsdfDiffuse")
         n.inputs["Color"].default_value = col(mat.get("albedo"), 0.8)
