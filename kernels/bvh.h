@@ -7,11 +7,12 @@
 // meta, flags; integers are stored as float bits. An inner child has flags 0 and meta = its node
 // index. A leaf child has flags = 0x80000000 | its number of packets (below) and meta = its
 // first packet; leaves are intersected straight from their parent, so a leaf costs no node fetch.
-// An unused lane is an empty leaf (no packet) with a point box. Node 0 is the root. Inner
-// children that the ray enters are pushed far-first with their entry distance, so the nearest is
-// visited next and a popped node that lies beyond the closest hit found meanwhile is skipped
-// without a fetch. The host keeps the tree shallow enough for ETK_BVH_STACK (at most 1 + 3 x
-// depth entries).
+// An unused lane is an empty leaf (no packet) with a point box. Node 0 is the root. Of the inner
+// children that the ray enters the nearest is visited next and the others are pushed far-first
+// with their entry distance, so a popped node that lies beyond the closest hit found meanwhile is
+// skipped without a fetch. The host keeps the tree shallow enough for ETK_BVH_STACK (at most
+// 1 + 3 x depth entries).
+//
 // A leaf's triangles lie in packets of four, ETK_BVH_PACKET float4 each, again one triangle per
 // lane: v0.x, v0.y, v0.z, v1.x, ..., v2.z and the triangle's index; an unused lane has index -1
 // and three zero vertices, which no ray hits (determinant 0). The packets are the traversal's only

@@ -22,8 +22,9 @@
 #define ETK_FN static inline
 // For small helpers on hot paths that take pointers to the caller's locals (the BVH lane) or a
 // large struct by value (EtkParams): a call that is not inlined spills them or copies the struct,
-// and PoCL's inliner leaves such calls (0.73x -> 0.87x of native from etk_bvh_lane
-// alone). Everything else stays plain inline: inlining it all multiplies PoCL's build time by 8.
+// and PoCL's inliner leaves such calls (0.73x -> 0.87x of native from the BVH's lane
+// helper alone). Everything else stays plain inline: inlining it all multiplies PoCL's build time
+// by 8.
 #if defined(__clang__) || defined(__GNUC__)
 #define ETK_FORCE_INLINE_FN static inline __attribute__((always_inline))
 #else
