@@ -22,8 +22,9 @@
 #define ETK_FN static inline
 // For small helpers on hot paths that take pointers to the caller's locals (the BVH lane) or a
 // large struct by value (EtkParams): a call that is not inlined spills them or copies the struct,
-// and PoCL's inliner leaves such calls (0.73x -> 0.87x of native from etk_bvh_lane
-// alone). Everything else stays plain inline: inlining it all multiplies PoCL's build time by 8.
+// and PoCL's inliner leaves such calls (0.73x -> 0.87x of native from the BVH's lane
+// helper alone). Everything else stays plain inline: inlining it all multiplies PoCL's build time
+// by 8.
 #if defined(__clang__) || defined(__GNUC__)
 #define ETK_FORCE_INLINE_FN static inline __attribute__((always_inline))
 #else
@@ -65,6 +66,14 @@ typedef float4 etk_lanes;
 #define etk_lanes_of(a) (a)
 #define etk_lanes_splat(s) ((float4)(s))
 #define etk_any_lane(m) any(m)
+// The lanes of a mask as bits 0-3 (x is bit 0), the sign bits of a float4's lanes, the lowest
+// set bit's index and lane i of a float4 (bvh.h's node: entered children without a branch each).
+#define etk_lane_bits(m) ((uint)(((m).x & 1) | ((m).y & 2) | ((m).z & 4) | ((m).w & 8)))
+#define etk_sign_bits(v) etk_lane_bits(as_int4(v) < 0)
+#define etk_lowest_bit(b) (31 - (int)clz((b) & (0u - (b))))
+static inline float etk_lane(float4 v, int i) {
+    return i == 0 ? v.x : (i == 1 ? v.y : (i == 2 ? v.z : v.w));
+}
 // Reserves a slot in a work queue.
 #define ETK_ATOMIC_INC(p) atomic_inc(p)
 #define ETK_ATOMIC_ADD(p, v) atomic_add((p), (v))
@@ -230,6 +239,31 @@ template <typename Mask> inline int etk_any_lane(Mask m) {
 #else
     return (m[0] | m[1] | m[2] | m[3]) != 0;
 #endif
+}
+// As in OpenCL C (above): a mask's lanes as bits 0-3, a float4's sign bits, the lowest set
+// bit's index and lane i.
+template <typename Mask> inline uint etk_lane_bits(Mask m) {
+#if defined(__SSE__)
+    return static_cast<uint>(__builtin_ia32_movmskps(reinterpret_cast<etk_v4>(m)));
+#else
+    return static_cast<uint>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
+#endif
+}
+inline uint etk_sign_bits(float4 v) {
+#if defined(__SSE__)
+    return static_cast<uint>(__builtin_ia32_movmskps(etk_to_v4(v)));
+#else
+    uint b = 0;
+    for (int i = 0; i < 4; ++i)
+        b |= (std::signbit((&v.x)[i]) ? 1u : 0u) << i;
+    return b;
+#endif
+}
+inline int etk_lowest_bit(uint b) {
+    return __builtin_ctz(b);
+}
+inline float etk_lane(float4 v, int i) {
+    return etk_to_v4(v)[i];
 }
 inline float4 operator+(float4 a, float4 b) {
     return etk_from_v4(etk_to_v4(a) + etk_to_v4(b));
