@@ -290,6 +290,12 @@ ETK_FORCE_INLINE_FN int etk_bvh_next(ETK_GLOBAL const float* meta, float4 tn, ui
     return stack[*sp];
 }
 
+// How far the ray still looks: the closest hit so far, with slack (a box's entry distance and a
+// triangle's t round differently, so a child entered at the hit's own distance stays in).
+ETK_FORCE_INLINE_FN float etk_bvh_reach(const EtkHit* hit) {
+    return hit->t * 1.0000005f;
+}
+
 // Closest hit with t in (0, tmax), or any hit when any_hit != 0. Returns whether it hit.
 // A node's lanes are tested at once and its entered children taken from bit masks: first its
 // leaves, in lane order, each while its entry distance is still within the closest hit (the
@@ -318,7 +324,7 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
             if (sp == 0)
                 break;
             --sp;
-            if (!(stack_t[sp] <= hit->t * 1.0000005f))
+            if (!(stack_t[sp] <= etk_bvh_reach(hit)))
                 continue; // entered beyond the closest hit found since it was pushed
             node = stack[sp];
         }
@@ -326,11 +332,10 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
         float4 tn, tf;
         etk_box_hit4(nd, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
         ETK_GLOBAL const float* meta = (ETK_GLOBAL const float*)(nd + 6); // lane i: meta[i]
-        // Entered: tnear <= tfar and within the closest hit, with slack (tnear and a triangle's t
-        // round differently).
-        float4 lim = make_float4(hit->t, hit->t, hit->t, hit->t) * 1.0000005f;
-        uint enter = etk_lane_bits((etk_lanes_of(tn) <= etk_lanes_of(tf)) &
-                                   (etk_lanes_of(tn) <= etk_lanes_of(lim)));
+        // Entered: tnear <= tfar and within the ray's reach.
+        etk_lanes lim = etk_lanes_splat(etk_bvh_reach(hit));
+        uint enter =
+            etk_lane_bits((etk_lanes_of(tn) <= etk_lanes_of(tf)) & (etk_lanes_of(tn) <= lim));
         uint leaf = etk_sign_bits(nd[7]); // flags: the sign bit marks a leaf
         uint leaves = enter & leaf;
         if (leaves) {
@@ -338,13 +343,13 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
             do {
                 int i = etk_lowest_bit(leaves);
                 leaves &= leaves - 1u;
-                if (etk_lane(tn, i) <= hit->t * 1.0000005f &&
+                if (etk_lane(tn, i) <= etk_bvh_reach(hit) &&
                     etk_leaf_hit(packets, (int)as_uint(meta[i]),
                                  (int)(as_uint(flags[i]) & 0x7fffffffu), sr, any_hit, hit))
                     return 1;
             } while (leaves);
-            lim = make_float4(hit->t, hit->t, hit->t, hit->t) * 1.0000005f;
-            enter &= etk_lane_bits(etk_lanes_of(tn) <= etk_lanes_of(lim));
+            lim = etk_lanes_splat(etk_bvh_reach(hit));
+            enter &= etk_lane_bits(etk_lanes_of(tn) <= lim);
         }
         node = etk_bvh_next(meta, tn, enter & ~leaf, stack, stack_t, &sp);
     }

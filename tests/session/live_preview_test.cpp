@@ -26,10 +26,6 @@ std::unique_ptr<et::PreparedRender> prepared_room(int spp) {
     return et::prepare_render(std::move(s), st);
 }
 
-const et::Cluster& single() {
-    return ett::single_cluster();
-}
-
 // The pixels as a viewer reads them (OpenImageIO directly: et::read_rgb_image would record the
 // file as an input of this process, which no later write may then replace).
 std::vector<float> pixels(const std::string& path, int& width, int& height) {
@@ -66,7 +62,7 @@ TEST(LivePreview, WritesWholeImagesOfTheFilmSoFarWhileRendering) {
     o.live_interval = 0.0; // after every round
     o.live_image = true;
     const auto p = prepared_room(5);
-    et::RenderSession session(single(), *p, {});
+    et::RenderSession session(ett::single_cluster(), *p, {});
     session.start();
     et::LivePreview live(o, session);
     et::SessionCallbacks cb;
@@ -97,7 +93,7 @@ TEST(LivePreview, WritesOnlyWhenDue) {
     o.preview = dir + "/out.png";
     o.live_interval = 1e6;
     const auto p = prepared_room(3);
-    et::RenderSession session(single(), *p, {});
+    et::RenderSession session(ett::single_cluster(), *p, {});
     session.start();
     et::LivePreview live(o, session);
     et::SessionCallbacks cb;
@@ -117,7 +113,7 @@ TEST(LivePreview, AFailedWriteWarnsAndTheRenderGoesOn) {
     o.preview = dir + "/gone/out.png"; // a folder that is not there
     o.live_interval = 0.0;
     const auto p = prepared_room(3);
-    et::RenderSession session(single(), *p, {});
+    et::RenderSession session(ett::single_cluster(), *p, {});
     session.start();
     et::LivePreview live(o, session);
     et::SessionCallbacks cb;

@@ -24,20 +24,16 @@ std::unique_ptr<et::PreparedRender> prepared_room(int spp) {
     return et::prepare_render(std::move(s), st);
 }
 
-const et::Cluster& single() {
-    return ett::single_cluster();
-}
-
 TEST(RenderSession, StopsOnRequestAndResumesBitIdentical) {
     const auto p = prepared_room(12);
-    et::RenderSession whole(single(), *p, {});
+    et::RenderSession whole(ett::single_cluster(), *p, {});
     whole.start();
     const et::SessionResult all = whole.run();
     EXPECT_EQ(all.spp, 12);
     EXPECT_EQ(all.signal, 0);
     EXPECT_FALSE(all.stopped);
 
-    et::RenderSession first(single(), *p, {});
+    et::RenderSession first(ett::single_cluster(), *p, {});
     first.start();
     et::SessionCallbacks cb;
     int calls = 0;
@@ -54,7 +50,7 @@ TEST(RenderSession, StopsOnRequestAndResumesBitIdentical) {
 
     et::SessionOptions resume;
     resume.resume = true;
-    et::RenderSession rest(single(), *p, resume);
+    et::RenderSession rest(ett::single_cluster(), *p, resume);
     rest.resume(first.state_of(part.sums));
     rest.start();
     EXPECT_EQ(rest.resumed_from(), 5);
@@ -68,7 +64,7 @@ TEST(RenderSession, StopsOnRequestAndResumesBitIdentical) {
 // out of the other.
 TEST(RenderReport, StatsAndMetadataFromOneList) {
     const auto p = prepared_room(3);
-    et::RenderSession s(single(), *p, {});
+    et::RenderSession s(ett::single_cluster(), *p, {});
     s.start();
     const et::SessionResult r = s.run();
     const et::ProgramBuildInfo build;

@@ -312,15 +312,20 @@ def to_blender(p):
 
 # ----------------------------------------------------------------------------- Blender scene
 
+def empty_node_tree(owner):
+    """A material's or world's node tree, emptied (Blender 5 always has one: use_nodes is gone)."""
+    try:
+        owner.use_nodes = True
+    except AttributeError:
+        pass
+    owner.node_tree.nodes.clear()
+    return owner.node_tree
+
+
 def node_material(bpy, name, mat):
     """A Cycles material for an envtrace material (the table of the module docstring)."""
     bm = bpy.data.materials.new(name)
-    try:
-        bm.use_nodes = True
-    except AttributeError:
-        pass
-    nt = bm.node_tree
-    nt.nodes.clear()
+    nt = empty_node_tree(bm)
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     t = {"cook-torrance": "microfacet", "metal": "conductor", "glass": "dielectric"}.get(
         mat.get("type", "diffuse"), mat.get("type", "diffuse"))
@@ -463,12 +468,7 @@ def build_blender_scene(bpy, scene, groups, depth, pattern, rr_depth):
     turn = float(env.get("rotation", 0.0)) + CONVENTION_TURN[env.get("convention", "envtrace")]
     w = bpy.data.worlds.new("world")
     bs.world = w
-    try:
-        w.use_nodes = True
-    except AttributeError:
-        pass
-    nt = w.node_tree
-    nt.nodes.clear()
+    nt = empty_node_tree(w)
     tc = nt.nodes.new("ShaderNodeTexCoord")
     mp = nt.nodes.new("ShaderNodeMapping")
     mp.vector_type = "POINT"

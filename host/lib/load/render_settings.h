@@ -95,9 +95,7 @@ struct RenderSettings {
     // names.
     int max_depth = 12;
     // auto: learns what blocks the map and keeps the tables only where its verdict measures that
-    // they beat compensated on this image. On the held-out set at 4 s, 1.65x (report half) and
-    // 1.69x (tune half) the paper's MIS in geometric mean against compensated's 1.16x and 1.11x;
-    // rooms 1.7-4.4x, open scenes 0.81-1.33x (docs/estimators.md).
+    // they beat compensated on this image; its figures on the held-out set: docs/estimators.md.
     Strategy strategy = Strategy::automatic;
     MisHeuristic heuristic = MisHeuristic::automatic;
     SamplerKind sampler = SamplerKind::sobol;
