@@ -68,7 +68,7 @@ ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
     for (int step = first; step > 0; step >>= 1) {
         int mid = lo + step;
         float c = cdf[min(mid, n - 1)];
-        lo = (mid < n && c <= u) ? mid : lo;
+        lo += step & -((int)(mid < n) & (int)(c <= u));
     }
     return lo;
 }
@@ -83,7 +83,7 @@ ETK_FN int etk_find_interval_between(ETK_GLOBAL const float* cdf, int lo, int hi
     for (; step > 0; step >>= 1) {
         int mid = lo + step;
         float c = cdf[min(mid, hi)];
-        lo = (mid <= hi && c <= u) ? mid : lo;
+        lo += step & -((int)(mid <= hi) & (int)(c <= u));
     }
     return lo;
 }

@@ -195,14 +195,14 @@ ETK_FN int etk_guide_pick_region(ETK_GLOBAL const float* cdf, float2 u, float2* 
     // powers of two, so the steps sum to ROWS - 1 and COLS - 1: no index passes the table.
     int band = 0;
     for (int step = ETK_GUIDE_ROWS / 2; step > 0; step >>= 1)
-        band = cdf[(band + step) * ETK_GUIDE_COLS] <= u.y ? band + step : band;
+        band += step & -(int)(cdf[(band + step) * ETK_GUIDE_COLS] <= u.y);
     int first = band * ETK_GUIDE_COLS;
     float b0 = cdf[first], b1 = cdf[first + ETK_GUIDE_COLS];
     float x = b0 + u.x * (b1 - b0);
     int col = 0;
     for (int step = ETK_GUIDE_COLS / 2; step > 0; step >>= 1) {
         float c = cdf[first + col + step];
-        col = c <= x && c < b1 ? col + step : col;
+        col += step & -((int)(c <= x) & (int)(c < b1));
     }
     int R = first + col;
     *t = make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(u.y, b0, b1));
