@@ -47,8 +47,15 @@ struct VisibilityOptions {
     int min_records = 64;
     bool continuation = true; // guide diffuse vertices' continuations as well
     // The guided share of a well-learned cell's continuations (0.3 / 0.5 / 0.7 measured:
-    // docs/history/results-journal.md).
+    // docs/history/results-journal.md), until the cell chooses its own among guided_shares.
     double continuation_share = 0.5;
+    // Each cell's guided share c, once it has min_records continuation records: the one of these
+    // whose continuation has the least second moment on all its records (a tie keeps the
+    // smaller). Where the guide learns the indirect light, c > 0 wins; where light comes back by
+    // paths the guide misses (the sun through a mirror-like statue onto the ground under the
+    // open sky), a share c leaves those paths 1 - c of the BSDF's density and multiplies their
+    // weight by 1 / (1 - c), and c = 0 wins (docs/estimators.md).
+    std::array<double, 3> guided_shares{{0.0, 0.25, 0.5}};
     // Portals (kernels/portal_guide.h): each cell's share of light samples drawn from the learned
     // portal table is the one of these whose light sample has the least second moment on the
     // cell's records since the last update (0 until it has min_records of them).

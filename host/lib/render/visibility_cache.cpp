@@ -36,6 +36,10 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
         spot_.assign(ETK_PORTAL_CELLS, 0);
         spot_moments_.assign(static_cast<size_t>(options.slots) * options.spot_shares.size(), 0);
         spot_shares_.assign(options.slots, 0.0f);
+        guided_moments_.assign(static_cast<size_t>(options.slots) * options.guided_shares.size(),
+                               0);
+        guided_shares_.assign(options.slots, static_cast<float>(options.continuation_share));
+        guided_records_.assign(options.slots, 0);
         cont_m2_.assign(options.slots, 0);
         last_ = guide_prior_cells(mass_, options.slots, true, box);
     }
@@ -146,7 +150,7 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
                                         int n) {
     if (dir_.sums.empty())
         throw Error("continuation records for a visibility cache built without the guide");
-    const size_t C = opt_.spot_shares.size();
+    const size_t C = opt_.spot_shares.size(), G = opt_.guided_shares.size();
     // The tables the records were drawn with (last_ only changes in tables(), between passes).
     const float* spot =
         last_.data() + etk::etk_portal_offset(opt_.slots, 1) + etk::etk_portal_size(opt_.slots);
@@ -158,6 +162,7 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
             const int k = keys[i + kPrefetch], ks = k / K;
             __builtin_prefetch(&dir_.sums[static_cast<size_t>(k)], 1);
             __builtin_prefetch(&spot_moments_[ks * C], 1);
+            __builtin_prefetch(&guided_moments_[ks * G], 1);
             __builtin_prefetch(&cont_m2_[ks], 1);
             // The record's region entries of the cell's table (its key's region is its ray's).
             __builtin_prefetch(&last_[etk::etk_guide_dir_offset(opt_.slots, ks) + k % K], 0);
@@ -204,6 +209,17 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
             const double m = pq > 0.0 ? v * v * prec * pb * pb / pq : kMaxValue;
             add_to(spot_moments_, s * C + j, fixed_point(m));
         }
+        // The guided share's moments, with the cell's spot share; from the first update on (the
+        // prior guide is uniform: its records would only tell that it is worse than the BSDF).
+        if (guide_learned_)
+            add_to(guided_records_, static_cast<size_t>(s), 1u);
+        for (size_t j = 0; j < G && guide_learned_; ++j) {
+            const double pc =
+                etk::etk_cguide_mix(static_cast<float>(opt_.guided_shares[j]), q, pg, ps,
+                                    static_cast<float>(pb));
+            const double m = pc > 0.0 ? v * v * prec * pb * pb / pc : kMaxValue;
+            add_to(guided_moments_, s * G + j, fixed_point(m));
+        }
     }
     cells.flush(spot_);
     __atomic_fetch_add(&dir_.records, records, __ATOMIC_RELAXED);
@@ -240,11 +256,21 @@ void VisibilityCache::choose_shares(const double* candidates, size_t n, double c
     }
 }
 
+void VisibilityCache::choose_guided_shares() {
+    const size_t G = opt_.guided_shares.size();
+    for (int s = 0; s < opt_.slots; ++s)
+        if (guided_records_[s] >= static_cast<uint32_t>(opt_.min_records))
+            guided_shares_[s] = static_cast<float>(
+                opt_.guided_shares[least_moment_share(guided_moments_.data() + s * G, G, 0.0)]);
+}
+
 const std::vector<float>& VisibilityCache::tables() {
     std::lock_guard<std::mutex> lock(mutex_);
     const size_t C = opt_.portal_shares.size();
     choose_shares(opt_.portal_shares.data(), C, 0.0, light_, moments_, shares_);
     const bool continuation = !dir_.sums.empty();
+    if (continuation) // before the cells' tables, which take the shares
+        choose_guided_shares();
     fewer_.clear();
     // Rebuilt in place (34 MB at 2^13 slots: a fresh copy each update, its pages faulted in and
     // then copied to last_, was most of an update's 29 ms). Cells without records keep the
@@ -291,7 +317,7 @@ const std::vector<float>& VisibilityCache::tables() {
             float* dir = out.data() + etk::etk_guide_dir_offset(opt_.slots, s);
             const double own = learned(dir_, s, uniform);
             write_guide_cdf(prob, dir);
-            dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(opt_.continuation_share * own);
+            dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(guided_shares_[s] * own);
         }
     }
     float* portal = out.data() + etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0);
@@ -302,6 +328,7 @@ const std::vector<float>& VisibilityCache::tables() {
         write_portal_table(box_, spot_shares_, std::vector<double>(spot_.begin(), spot_.end()),
                            portal + etk::etk_portal_size(opt_.slots));
     }
+    guide_learned_ = true;
     return out;
 }
 

@@ -103,7 +103,9 @@ class VisibilityCache {
     uint64_t bytes() const {
         return light_.bytes() + dir_.bytes() + portal_.size() * 8 + moments_.size() * 8 +
                shares_.size() * 4 + spot_.size() * 8 + spot_moments_.size() * 8 +
-               spot_shares_.size() * 4 + last_.size() * 4 + light_m2_.size() * 8 +
+               spot_shares_.size() * 4 + guided_moments_.size() * 8 +
+               (guided_shares_.size() + guided_records_.size()) * 4 +
+               last_.size() * 4 + light_m2_.size() * 8 +
                cont_m2_.size() * 8;
     }
     // The cells of the last tables() that take fewer than one light sample, per count.
@@ -129,6 +131,12 @@ class VisibilityCache {
     // counted from here.
     void choose_shares(const double* candidates, size_t n, double cost, RegionSums& r,
                        std::vector<uint64_t>& moments, std::vector<float>& shares);
+    // Each slot with at least min_records continuation records drawn with a learned guide (after
+    // the first update) takes the guided share of least second moment over all of them: unlike
+    // the shares above, its moments are never reset, since the paths a guide misses are rare (the
+    // sun's caustic through a glass or mirror-like statue) and one update's records seldom hold
+    // them. Until then the slot keeps options.continuation_share.
+    void choose_guided_shares();
     // Adds one record of value v (relative to the map's power, >= 0) at key (slot x K + region)
     // to `to`; returns the slot.
     static int add_region(RegionSums& to, int key, double v);
@@ -142,6 +150,12 @@ class VisibilityCache {
     // The secondary-source table's sums and, per slot, moments and shares.
     std::vector<uint64_t> spot_, spot_moments_;
     std::vector<float> spot_shares_;
+    // Per slot, the continuation's second moment for each of options.guided_shares over every
+    // record so far, and the chosen guided share.
+    std::vector<uint64_t> guided_moments_;
+    std::vector<float> guided_shares_;
+    std::vector<uint32_t> guided_records_; // the records in guided_moments_, per slot
+    bool guide_learned_ = false; // tables() has run: the records' guide is a learned one
     // Per slot, the second moments of one light sample's and one continuation's estimate (fixed
     // point, in the common unit of light_sample_count).
     std::vector<uint64_t> light_m2_, cont_m2_;
