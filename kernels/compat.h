@@ -56,9 +56,10 @@
 #endif
 // A call in OpenCL C on CPU devices, forced inline elsewhere (natively too): for the BVH's leaf
 // test. Inlined into the traversal loop, its live vectors and row pointers make clang spill the
-// loop's own state (the next node's index through a pointer on the stack, the stack's depth, the
-// ray), which every node's visit then waits for (PoCL 0.92x -> ~1.0x native); GCC keeps that
-// state in registers, and as a call passes the leaf's vectors through memory.
+// loop's own state (the next node's index, through a pointer on the stack, and the stack's
+// depth), which every node's visit then waits for (PoCL, all rays: 0.89-0.93x -> 0.92-1.00x
+// native); GCC keeps that state in registers, and as a call passes the leaf's vectors through
+// memory.
 #if defined(ETK_CPU_DEVICE) && (defined(__clang__) || defined(__GNUC__))
 #define ETK_CPU_CALL_FN static __attribute__((noinline))
 #else
