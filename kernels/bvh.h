@@ -208,10 +208,12 @@ ETK_FN float3 etk_safe_inverse(float3 d) {
     return r;
 }
 
-// Intersects the packets of a leaf; returns 1 when any_hit and one was hit. Inlined: as a call,
-// GCC passes its vectors through memory (native traversal ~10% slower).
-ETK_FORCE_INLINE_FN int etk_leaf_hit(ETK_GLOBAL const float4* packets, int first, int count,
-                                     EtkShearedRay r, int any_hit, EtkHit* hit) {
+// Intersects the packets of a leaf; returns 1 when any_hit and one was hit. Inlined natively: as
+// a call, GCC passes its vectors through memory (native traversal ~10% slower). A call in PoCL
+// (compat.h, ETK_CPU_CALL_FN). The ray by value: by pointer, GCC's inlined code kept less of it
+// in registers (native ~5% slower), and PoCL was no faster for the copy it saves.
+ETK_CPU_CALL_FN int etk_leaf_hit(ETK_GLOBAL const float4* packets, int first, int count,
+                                 EtkShearedRay r, int any_hit, EtkHit* hit) {
     for (int i = 0; i < count; ++i)
         if (etk_packet_hit(packets + ETK_BVH_PACKET * (first + i), r, any_hit, hit))
             return 1;
