@@ -214,9 +214,8 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
         if (guide_learned_)
             add_to(guided_records_, static_cast<size_t>(s), 1u);
         for (size_t j = 0; j < G && guide_learned_; ++j) {
-            const double pc =
-                etk::etk_cguide_mix(static_cast<float>(opt_.guided_shares[j]), q, pg, ps,
-                                    static_cast<float>(pb));
+            const double pc = etk::etk_cguide_mix(static_cast<float>(opt_.guided_shares[j]), q, pg,
+                                                  ps, static_cast<float>(pb));
             const double m = pc > 0.0 ? v * v * prec * pb * pb / pc : kMaxValue;
             add_to(guided_moments_, s * G + j, fixed_point(m));
         }

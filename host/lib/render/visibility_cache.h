@@ -104,9 +104,8 @@ class VisibilityCache {
         return light_.bytes() + dir_.bytes() + portal_.size() * 8 + moments_.size() * 8 +
                shares_.size() * 4 + spot_.size() * 8 + spot_moments_.size() * 8 +
                spot_shares_.size() * 4 + guided_moments_.size() * 8 +
-               (guided_shares_.size() + guided_records_.size()) * 4 +
-               last_.size() * 4 + light_m2_.size() * 8 +
-               cont_m2_.size() * 8;
+               (guided_shares_.size() + guided_records_.size()) * 4 + last_.size() * 4 +
+               light_m2_.size() * 8 + cont_m2_.size() * 8;
     }
     // The cells of the last tables() that take fewer than one light sample, per count.
     const std::map<float, uint64_t>& fewer_light_samples() const { return fewer_; }
@@ -155,7 +154,7 @@ class VisibilityCache {
     std::vector<uint64_t> guided_moments_;
     std::vector<float> guided_shares_;
     std::vector<uint32_t> guided_records_; // the records in guided_moments_, per slot
-    bool guide_learned_ = false; // tables() has run: the records' guide is a learned one
+    bool guide_learned_ = false;           // tables() has run: the records' guide is a learned one
     // Per slot, the second moments of one light sample's and one continuation's estimate (fixed
     // point, in the common unit of light_sample_count).
     std::vector<uint64_t> light_m2_, cont_m2_;
