@@ -130,8 +130,9 @@ class VisibilityCache {
     // counted from here.
     void choose_shares(const double* candidates, size_t n, double cost, RegionSums& r,
                        std::vector<uint64_t>& moments, std::vector<float>& shares);
-    // Each slot with at least min_records continuation records drawn with a learned guide (after
-    // the first update) takes the guided share of least second moment over all of them: unlike
+    // Each slot with at least min_records continuation records that brought light back, drawn
+    // with a learned guide (after the first update), takes the guided share of least second
+    // moment over all of them (the records of no light add nothing to any moment): unlike
     // the shares above, its moments are never reset, since the paths a guide misses are rare (the
     // sun's caustic through a glass or mirror-like statue) and one update's records seldom hold
     // them. Until then the slot keeps options.continuation_share.
@@ -153,7 +154,7 @@ class VisibilityCache {
     // record so far, and the chosen guided share.
     std::vector<uint64_t> guided_moments_;
     std::vector<float> guided_shares_;
-    std::vector<uint32_t> guided_records_; // the records in guided_moments_, per slot
+    std::vector<uint32_t> guided_records_; // the records summed in guided_moments_, per slot
     bool guide_learned_ = false;           // tables() has run: the records' guide is a learned one
     // Per slot, the second moments of one light sample's and one continuation's estimate (fixed
     // point, in the common unit of light_sample_count).
