@@ -551,6 +551,13 @@ TEST(VisibilityGuideTables, LightSampleCountPerCell) {
     EXPECT_EQ(etk::etk_guide_light_count(v.S, v.p, 0), 1.0f);
 }
 
+// Two directions in different regions of the continuation guide.
+struct TwoDirections {
+    etk::float3 d1 = etk::normalize(etk::make_float3(0.2f, 0.9f, 0.1f));
+    etk::float3 d2 = etk::normalize(etk::make_float3(-0.6f, 0.3f, -0.5f));
+    int R1 = etk::etk_cguide_region(d1), R2 = etk::etk_cguide_region(d2);
+};
+
 // The continuation guide learns the diffuse integrand, incident radiance x cosine: two regions
 // whose records bring back the same luminance(L_in) / p, drawn at BSDF densities cos / pi of 0.9
 // and 0.3 (the cell's share is still 0, so a record's density is its BSDF's), take learned
@@ -561,9 +568,9 @@ TEST(VisibilityGuideTables, ContinuationGuideFollowsRadianceTimesCosine) {
     o.min_records = 1000; // the share before the cell chooses its own
     const std::unique_ptr<et::VisibilityCache> owned = small_cache(f, o);
     et::VisibilityCache& cache = *owned;
-    const etk::float3 d1 = etk::normalize(etk::make_float3(0.2f, 0.9f, 0.1f));
-    const etk::float3 d2 = etk::normalize(etk::make_float3(-0.6f, 0.3f, -0.5f));
-    const int R1 = etk::etk_cguide_region(d1), R2 = etk::etk_cguide_region(d2);
+    const TwoDirections t;
+    const etk::float3 d1 = t.d1, d2 = t.d2;
+    const int R1 = t.R1, R2 = t.R2;
     ASSERT_NE(R1, R2);
     const int slot = 1, n = 100;
     std::vector<int> keys;
@@ -597,9 +604,9 @@ TEST(VisibilityGuideTables, GuidedShareHasTheLeastSecondMoment) {
     const et::VisibilityOptions o = four_slots();
     const std::unique_ptr<et::VisibilityCache> owned = small_cache(f, o);
     et::VisibilityCache& cache = *owned;
-    const etk::float3 d1 = etk::normalize(etk::make_float3(0.2f, 0.9f, 0.1f));
-    const etk::float3 d2 = etk::normalize(etk::make_float3(-0.6f, 0.3f, -0.5f));
-    const int R1 = etk::etk_cguide_region(d1), R2 = etk::etk_cguide_region(d2);
+    const TwoDirections t;
+    const etk::float3 d1 = t.d1, d2 = t.d2;
+    const int R1 = t.R1, R2 = t.R2;
     ASSERT_NE(R1, R2);
     const int n = 2 * o.min_records;
     // n records of `slot` along d, drawn at density cos / pi (every share is 0 when they are).
