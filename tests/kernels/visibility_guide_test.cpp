@@ -569,16 +569,14 @@ TEST(VisibilityGuideTables, ContinuationGuideFollowsRadianceTimesCosine) {
     const std::unique_ptr<et::VisibilityCache> owned = small_cache(f, o);
     et::VisibilityCache& cache = *owned;
     const TwoDirections t;
-    const etk::float3 d1 = t.d1, d2 = t.d2;
-    const int R1 = t.R1, R2 = t.R2;
-    ASSERT_NE(R1, R2);
+    ASSERT_NE(t.R1, t.R2);
     const int slot = 1, n = 100;
     std::vector<int> keys;
     std::vector<float> values, rays;
     for (int i = 0; i < 2 * n; ++i) {
         const bool first = i < n;
-        const etk::float3 d = first ? d1 : d2;
-        keys.push_back(slot * K + (first ? R1 : R2));
+        const etk::float3 d = first ? t.d1 : t.d2;
+        keys.push_back(slot * K + (first ? t.R1 : t.R2));
         values.push_back(2.0f);
         const float r[8] = {0.5f, 0.5f, 0.5f, 0.0f,
                             d.x,  d.y,  d.z,  static_cast<float>((first ? 0.9 : 0.3) / M_PI)};
@@ -589,8 +587,8 @@ TEST(VisibilityGuideTables, ContinuationGuideFollowsRadianceTimesCosine) {
     const float* cdf = etk::etk_cguide_cdf(v.S, v.p, slot);
     // P(R) = own S(R) / sum S + (1 - own) / K, own = 2n / (2n + n0).
     const double own = 2.0 * n / (2.0 * n + o.prior), prior = (1.0 - own) / K;
-    EXPECT_NEAR(cdf[R1 + 1] - cdf[R1] - prior, own * 0.75, 1e-5);
-    EXPECT_NEAR(cdf[R2 + 1] - cdf[R2] - prior, own * 0.25, 1e-5);
+    EXPECT_NEAR(cdf[t.R1 + 1] - cdf[t.R1] - prior, own * 0.75, 1e-5);
+    EXPECT_NEAR(cdf[t.R2 + 1] - cdf[t.R2] - prior, own * 0.25, 1e-5);
     EXPECT_NEAR(cdf[ETK_GUIDE_DIR_SHARE], o.continuation_share * own, 1e-6);
 }
 
@@ -605,9 +603,7 @@ TEST(VisibilityGuideTables, GuidedShareHasTheLeastSecondMoment) {
     const std::unique_ptr<et::VisibilityCache> owned = small_cache(f, o);
     et::VisibilityCache& cache = *owned;
     const TwoDirections t;
-    const etk::float3 d1 = t.d1, d2 = t.d2;
-    const int R1 = t.R1, R2 = t.R2;
-    ASSERT_NE(R1, R2);
+    ASSERT_NE(t.R1, t.R2);
     const int n = 2 * o.min_records;
     // n records of `slot` along d, drawn at density cos / pi (every share is 0 when they are).
     auto records = [&](int slot, etk::float3 d, int R, float cos) {
@@ -623,11 +619,11 @@ TEST(VisibilityGuideTables, GuidedShareHasTheLeastSecondMoment) {
         KernelView v(cache.tables(), o.slots, true);
         return etk::etk_cguide_cdf(v.S, v.p, slot)[ETK_GUIDE_DIR_SHARE];
     };
-    records(1, d1, R1, 0.9f);
-    records(2, d1, R1, 0.9f);
+    records(1, t.d1, t.R1, 0.9f);
+    records(2, t.d1, t.R1, 0.9f);
     EXPECT_NEAR(share(1), o.continuation_share * n / (n + o.prior), 1e-6);
-    records(1, d1, R1, 0.9f);
-    records(2, d2, R2, 0.3f);
+    records(1, t.d1, t.R1, 0.9f);
+    records(2, t.d2, t.R2, 0.3f);
     const double own = 2.0 * n / (2.0 * n + o.prior);
     KernelView v(cache.tables(), o.slots, true);
     EXPECT_NEAR(etk::etk_cguide_cdf(v.S, v.p, 1)[ETK_GUIDE_DIR_SHARE], o.guided_shares.back() * own,
