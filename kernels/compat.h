@@ -167,6 +167,7 @@ using std::pow;
 using std::sin;
 using std::sqrt;
 typedef std::uint32_t uint;
+typedef std::uint64_t ulong;
 
 struct float2 {
     float x, y;

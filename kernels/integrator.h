@@ -31,6 +31,7 @@
 #include "sampler.h"
 #include "surface.h"
 #include "visibility_guide.h"
+#include "visibility_record.h"
 
 ETK_BEGIN
 
@@ -584,13 +585,12 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
         float4 r = P.radiance[slot];
         P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.shadow_L[slot]), r.w);
     }
-    if (p.guide_learn) { // the visibility strategy's records, in shadow-queue order (host reads)
-        P.guide_key[i] = P.shadow_key[slot];
-        P.guide_val[i] = visible ? P.shadow_val[slot] : 0.0f;
+    if (p.guide_learn) { // the visibility strategy's record, summed on the device
+        ETK_GLOBAL const float* box = etk_portal_table(S, p);
         float t; // where an unoccluded ray leaves the scene's box: the portal table's record
-        P.guide_exit[i] =
-            visible ? etk_portal_exit(etk_portal_table(S, p), etk_xyz(o), etk_xyz(d), &t) : -1;
-        P.guide_rec_parts[i] = P.guide_parts[slot];
+        int exit = visible ? etk_portal_exit(box, etk_xyz(o), etk_xyz(d), &t) : -1;
+        etk_guide_record_light(Q.guide_sums, p, box, P.shadow_key[slot],
+                               visible ? P.shadow_val[slot] : 0.0f, exit, P.guide_parts[slot]);
     }
 }
 

@@ -65,6 +65,7 @@ typedef struct {
     int guide_ready;
     int guide_learn; // records shadow rays' and continuations' outcomes (visibility_cache.h)
     int guide_continuation;
+    float guide_inv_power; // 1 / the map's power: the unit of the records (visibility_record.h)
     // Splitting (the mis strategy): light and BSDF samples per non-delta vertex, powers of two;
     // 1 and 1 are the paper's estimator (etk_split_samples in integrator.h).
     int light_samples, bsdf_samples;

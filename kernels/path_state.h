@@ -51,16 +51,11 @@
     X(int, shadow_key)   /* visibility learning: its cell x regions + region of its direction */   \
     X(float, shadow_val) /* visibility learning: its unweighted L cos / pdf */                     \
     X(int, pixel)        /* film pixel of the path */                                              \
-    X(int, guide_key)    /* visibility learning: per shadow ray (queue order), shadow_key */       \
-    X(float, guide_val)  /* visibility learning: its shadow_val, 0 if blocked */                   \
-    X(int,                                                                                         \
-      guide_exit) /* visibility learning: the portal cell it leaves the box by, -1: blocked */     \
-    X(float2, guide_rec_parts) /* visibility learning: its p_vis and p_portal (portal_guide.h) */  \
-    X(float2, guide_parts)     /* the same per path slot, written by the shade stage */            \
-    X(float4, light_dir)       /* the light sample of the path's vertex, drawn by sample_lights:   \
-                                  direction; w: its density (integrator.h) */                      \
-    X(float4, light_L)         /* its radiance (rgb) */                                            \
-    X(int, light_cell)         /* the cell sample_lights drew it in (etk_light_source) */
+    X(float2, guide_parts) /* visibility learning: the shadow ray's p_vis and p_portal */          \
+    X(float4, light_dir)   /* the light sample of the path's vertex, drawn by sample_lights:       \
+                              direction; w: its density (integrator.h) */                          \
+    X(float4, light_L)     /* its radiance (rgb) */                                                \
+    X(int, light_cell)     /* the cell sample_lights drew it in (etk_light_source) */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces; the others keep one buffer each for the whole render (the back ends
@@ -138,9 +133,12 @@ typedef struct {
 typedef struct {
     ETK_PATH_FIELDS(ETK_MEMBER)
 } EtkPaths;
+// The queues and the device's sums: the queue counters, and the visibility strategy's record sums
+// (kernels/visibility_record.h; one word where nothing learns).
 typedef struct {
     ETK_QUEUES(ETK_QUEUE_MEMBER)
     ETK_ATOMIC_PTR counters;
+    ETK_ATOMIC_PTR guide_sums;
 } EtkQueues;
 typedef struct {
     ETK_FILM_FIELDS(ETK_MEMBER)
@@ -166,13 +164,15 @@ ETK_FN void etk_push_each(EtkQueues Q, const EtkPushes* out) {
             etk_push_queue(Q, q)[ETK_ATOMIC_INC(Q.counters + q)] = out->slot[q];
 }
 
-// Kernel arguments, in this order: scene buffers, path fields, queues, film, counters, params,
-// the queue length. ETK_KERNEL_ARGS (wavefront.cl) and EtkKernelArg (the host) both expand it.
+// Kernel arguments, in this order: scene buffers, path fields, queues, film, counters, guide sums,
+// params, the queue length. ETK_KERNEL_ARGS (wavefront.cl) and EtkKernelArg (the host) both expand
+// it.
 #define ETK_ARG_INDEX(type, name) ETK_ARG_##name,
 #define ETK_QUEUE_ARG_INDEX(name) ETK_ARG_##name,
 enum {
     ETK_SCENE_BUFFERS(ETK_ARG_INDEX) ETK_PATH_FIELDS(ETK_ARG_INDEX) ETK_QUEUES(ETK_QUEUE_ARG_INDEX)
         ETK_FILM_FIELDS(ETK_ARG_INDEX) ETK_ARG_counters,
+    ETK_ARG_guide_sums,
     ETK_ARG_params,
     ETK_ARG_n,
     ETK_ARG_COUNT

@@ -42,6 +42,9 @@
 #define ETK_PORTAL_ON 6 // 1 once the table holds something learned
 #define ETK_PORTAL_CDF 8
 #define ETK_PORTAL_SHARES (ETK_PORTAL_CDF + ETK_PORTAL_CELLS + 1)
+// The shares b a hash-grid cell chooses among, by the least second moment of its light sample
+// on its records (host/lib/render/visibility_cache.h): 0, 1/4, 1/2, 3/4.
+#define ETK_PORTAL_CANDIDATES 4
 
 ETK_BEGIN
 
@@ -61,6 +64,10 @@ ETK_FN int etk_portal_size(int slots) {
 ETK_FN float etk_portal_share(EtkScene S, EtkParams p, int cell) {
     ETK_GLOBAL const float* box = etk_portal_table(S, p);
     return p.guide_ready && box[ETK_PORTAL_ON] > 0.0f ? box[ETK_PORTAL_SHARES + cell] : 0.0f;
+}
+
+ETK_FN float etk_portal_candidate(int j) {
+    return 0.25f * (float)j;
 }
 
 // Component a (0, 1, 2) of v: OpenCL C has no run-time component index.

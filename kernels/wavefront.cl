@@ -12,7 +12,8 @@
     ETK_SCENE_BUFFERS(ETK_ARG_CONST)                                                               \
     ETK_PATH_FIELDS(ETK_ARG)                                                                       \
     ETK_QUEUES(ETK_ARG_QUEUE)                                                                      \
-    ETK_FILM_FIELDS(ETK_ARG) volatile __global uint *counters, EtkParams params, int n
+    ETK_FILM_FIELDS(ETK_ARG)                                                                       \
+    volatile __global uint *counters, volatile __global uint *guide_sums, EtkParams params, int n
 
 // The pushes of a work-group's stage calls (path_state.h): each work-item leaves its slots in
 // local memory; after one barrier, work-item 0 reserves the group's run of each queue with one
@@ -50,7 +51,7 @@ static inline __attribute__((always_inline)) void etk_push_group(EtkQueues Q, Et
     __kernel void name(ETK_KERNEL_ARGS) {                                                          \
         EtkScene S = {ETK_SCENE_BUFFERS(ETK_NAME)};                                                \
         EtkPaths P = {ETK_PATH_FIELDS(ETK_NAME)};                                                  \
-        EtkQueues Q = {ETK_QUEUES(ETK_QUEUE_NAME) counters};                                       \
+        EtkQueues Q = {ETK_QUEUES(ETK_QUEUE_NAME) counters, guide_sums};                           \
         EtkFilm F = {ETK_FILM_FIELDS(ETK_NAME)};                                                   \
         __local int push_slots[ETK_PUSH_QUEUES * ETK_STAGE_LOCAL_MAX];                             \
         EtkPushes out = etk_no_pushes();                                                           \

@@ -148,6 +148,7 @@ class WithHostThreads : public et::WavefrontDevice {
         return d_->stage_seconds();
     }
     void upload_guide(const std::vector<float>& cells) override { d_->upload_guide(cells); }
+    void take_guide_sums(std::vector<uint32_t>& out) override { d_->take_guide_sums(out); }
     bool prefers_light_batches() const override { return d_->prefers_light_batches(); }
     int host_threads() const override { return threads_; }
 

@@ -236,6 +236,7 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
     d.guide_cells = guide_prior_cells(d.guide_regions, opt.slots, p.guide_continuation != 0,
                                       guide_portal_box(&lo[0], &hi[0]));
     d.guide_map_power = guide_map_power(d.env_texels, p.env.tex_w, p.env.tex_h);
+    p.guide_inv_power = guide_inv_power(d.guide_map_power);
 }
 
 } // namespace

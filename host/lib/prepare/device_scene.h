@@ -34,6 +34,14 @@ struct DeviceScene {
         double sah_cost = 0.0, build_seconds = 0.0;
     } bvh;
 
+    // Words of the learned light sample's record sums on the device (kernels/visibility_record.h):
+    // 0 unless the scene learns them.
+    size_t guide_sum_words() const {
+        return params.light_first == ETK_LIGHT_LEARNED
+                   ? static_cast<size_t>(etk::etk_gsum_words(params.guide_slots))
+                   : 0;
+    }
+
     int width() const {
         return params.width;
     }

@@ -56,6 +56,10 @@ std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, in
     return out;
 }
 
+float guide_inv_power(double power) {
+    return power > 0.0 ? static_cast<float>(1.0 / power) : 1.0f;
+}
+
 double guide_map_power(const std::vector<float>& rgb, int w, int h) {
     double sum = 0.0;
     for (int y = 0; y < h; ++y) {

@@ -56,10 +56,6 @@ struct VisibilityOptions {
     // open sky), a share c leaves those paths 1 - c of the BSDF's density and multiplies their
     // weight by 1 / (1 - c), and c = 0 wins (docs/estimators.md).
     std::array<double, 3> guided_shares{{0.0, 0.25, 0.5}};
-    // Portals (kernels/portal_guide.h): each cell's share of light samples drawn from the learned
-    // portal table is the one of these whose light sample has the least second moment on the
-    // cell's records since the last update (0 until it has min_records of them).
-    std::array<double, 4> portal_shares{{0.0, 0.25, 0.5, 0.75}};
     // The secondary-source table's share of a cell's guided continuations: chosen among these
     // as the portal share is (0 until the cell has min_records continuation records),
     // except that a share q > 0 must lower the second moment by spot_cost of it, the extra time
@@ -116,6 +112,8 @@ std::vector<float> guide_region_tables(const std::vector<float>& dist, int w, in
 
 // The map's power (luminance over the sphere), the unit the learning's fixed point is relative to.
 double guide_map_power(const std::vector<float>& rgb, int w, int h);
+// The records' unit (EtkParams::guide_inv_power): 1 / the map's power, 1 for a black map.
+float guide_inv_power(double power);
 
 // The learning passes of a film of `pixels` pixels: the first of min_learning_passes, twice that,
 // four times ... whose passes trace at least options.learning_paths camera paths, at most

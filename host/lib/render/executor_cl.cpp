@@ -123,6 +123,8 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
 #define ET_FILM_SIZE(type, name) buffers.push_back({#name, uint64_t(sizeof(type)) * pixels_});
     ETK_FILM_FIELDS(ET_FILM_SIZE)
 #undef ET_FILM_SIZE
+    guide_words_ = std::max<size_t>(1, scene.guide_sum_words());
+    buffers.push_back({"guide_sums", uint64_t(sizeof(cl_uint)) * guide_words_});
     uint64_t fixed = 0;
     for (const BufferRequest& b : buffers)
         fixed += b.bytes;
@@ -167,6 +169,8 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
         // the prepared scene's memory.
         args_[etk::ETK_ARG_guide_cells] = upload(ctx, scene.guide_cells, false);
         guide_floats_ = std::max<size_t>(1, scene.guide_cells.size());
+        args_[etk::ETK_ARG_guide_sums] =
+            cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_uint) * guide_words_);
 #define ET_FILM(type, name)                                                                        \
     args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * px);
         ETK_FILM_FIELDS(ET_FILM)
@@ -178,8 +182,10 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
 #define ET_FILM_WORDS(type, name) widest = std::max<uint64_t>(widest, sizeof(type) / 4 * px);
         ETK_FILM_FIELDS(ET_FILM_WORDS)
 #undef ET_FILM_WORDS
-        lanes_[0]->prime_kernels(paths_, widest);
+        lanes_[0]->prime_kernels(paths_, std::max<uint64_t>(widest, guide_words_));
         clear_film(true);
+        lanes_[0]->zero_words(args_[etk::ETK_ARG_guide_sums], guide_words_);
+        lanes_[0]->queue().finish();
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot set up the OpenCL renderer (") + e.what() +
                     "): " + cl_error_name(e.err()) + "; try a smaller film or --paths");
@@ -320,6 +326,21 @@ void ClDevice::upload_guide(const std::vector<float>& cells) {
                                               sizeof(cl_float) * cells.size(), cells.data());
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot upload the visibility tables (") + e.what() +
+                    "): " + cl_error_name(e.err()));
+    }
+}
+
+// Between passes (no lane is running): the sums, then zeroes in their place.
+void ClDevice::take_guide_sums(std::vector<uint32_t>& out) {
+    out.resize(guide_words_);
+    try {
+        ClLane& l = *lanes_[0];
+        l.queue().enqueueReadBuffer(args_[etk::ETK_ARG_guide_sums], CL_TRUE, 0,
+                                    sizeof(cl_uint) * guide_words_, out.data());
+        l.zero_words(args_[etk::ETK_ARG_guide_sums], guide_words_);
+        l.queue().finish();
+    } catch (const cl::Error& e) {
+        throw Error(std::string("cannot read the visibility records (") + e.what() +
                     "): " + cl_error_name(e.err()));
     }
 }

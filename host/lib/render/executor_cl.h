@@ -103,6 +103,7 @@ class ClDevice : public WavefrontDevice {
     bool prefers_light_batches() const override { return prefers_light_batches_on(rt_->limits()); }
     int host_threads() const override;
     void upload_guide(const std::vector<float>& cells) override;
+    void take_guide_sums(std::vector<uint32_t>& out) override;
 
     // Events of launches not yet accounted, all lanes (for tests: stays bounded during a render).
     size_t pending_events() const;
@@ -117,6 +118,7 @@ class ClDevice : public WavefrontDevice {
     std::vector<cl::Buffer> args_; // the shared buffers, by ETK_ARG_*
     std::vector<std::unique_ptr<ClLane>> lanes_;
     size_t guide_floats_ = 1; // size of the visibility tables' buffer
+    size_t guide_words_ = 1;  // size of the visibility records' sums (visibility_record.h)
 };
 
 } // namespace et

@@ -55,9 +55,11 @@ class CpuDevice::Lane : public StageExecutor {
         for (const FieldRead& r : reads)
             std::memcpy(r.to, field(r.field), path_field_bytes(r.field) * static_cast<size_t>(n));
     }
-    // The cells' tables live in the device, not the (read-only) prepared scene.
-    void set_guide_cells(const float* cells) {
+    // The cells' tables live in the device, not the (read-only) prepared scene; the record sums
+    // are the device's, shared by the lanes.
+    void set_guide(const float* cells, uint32_t* sums) {
         scene_.guide_cells = cells;
+        queues_.guide_sums = sums;
     }
 
     void launch(int stage, int n, const etk::EtkParams& p) override {
@@ -111,11 +113,12 @@ class CpuDevice::Lane : public StageExecutor {
 };
 
 CpuDevice::CpuDevice(const DeviceScene& scene, Film& film, int threads, int wave)
-    : guide_cells_(scene.guide_cells), film_(film), wave_(wave > 0 ? wave : 1024) {
+    : guide_cells_(scene.guide_cells), guide_sums_(std::max<size_t>(1, scene.guide_sum_words()), 0),
+      film_(film), wave_(wave > 0 ? wave : 1024) {
     const int n = thread_count(threads);
     for (int t = 0; t < n; ++t) {
         lanes_.push_back(std::make_unique<Lane>(scene, film, wave_));
-        lanes_.back()->set_guide_cells(guide_cells_.data());
+        lanes_.back()->set_guide(guide_cells_.data(), guide_sums_.data());
     }
 }
 
@@ -132,6 +135,11 @@ void CpuDevice::upload_guide(const std::vector<float>& cells) {
         throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
                     std::to_string(guide_cells_.size()));
     std::copy(cells.begin(), cells.end(), guide_cells_.begin()); // between passes: no reader
+}
+
+void CpuDevice::take_guide_sums(std::vector<uint32_t>& out) {
+    out = guide_sums_; // between passes: no lane adds
+    std::fill(guide_sums_.begin(), guide_sums_.end(), 0u);
 }
 
 CpuDevice::~CpuDevice() = default;

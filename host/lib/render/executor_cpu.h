@@ -29,9 +29,11 @@ class CpuDevice : public WavefrontDevice {
     void download_film(Film&, bool) override {}
     std::vector<std::pair<std::string, double>> stage_seconds() override;
     void upload_guide(const std::vector<float>& cells) override;
+    void take_guide_sums(std::vector<uint32_t>& out) override;
 
   private:
-    std::vector<float> guide_cells_; // the visibility strategy's tables, read by every lane
+    std::vector<float> guide_cells_;   // the visibility strategy's tables, read by every lane
+    std::vector<uint32_t> guide_sums_; // its record sums, added to by every lane
     Film& film_;
     class Lane;
     std::vector<std::unique_ptr<Lane>> lanes_;

@@ -1,6 +1,6 @@
 // The film on the host: per-pixel sums of the samples and of their squares (the layout of
-// kernels/film_accumulate.h, where the stages add to it). From them: the image (the mean), each pixel's
-// variance, and the sum of two films (renders of disjoint sample ranges).
+// kernels/film_accumulate.h, where the stages add to it). From them: the image (the mean), each
+// pixel's variance, and the sum of two films (renders of disjoint sample ranges).
 #pragma once
 #include "kernels/path_state.h"
 

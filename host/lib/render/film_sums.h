@@ -1,8 +1,8 @@
 // The film's sums in exact arithmetic, so that they do not depend on the order of the samples:
-// the renderer adds each pass (one float sample per pixel, kernels/film_accumulate.h) here, converted to
-// fixed point, and two films of disjoint sample sets add exactly. A render split over MPI ranks
-// or farm tasks (--sample-range, `envtrace merge`) therefore gives the bit-identical image of one
-// process: integer addition is associative, float addition is not.
+// the renderer adds each pass (one float sample per pixel, kernels/film_accumulate.h) here,
+// converted to fixed point, and two films of disjoint sample sets add exactly. A render split over
+// MPI ranks or farm tasks (--sample-range, `envtrace merge`) therefore gives the bit-identical
+// image of one process: integer addition is associative, float addition is not.
 //
 // Per pixel and channel (RGB of the sum, RGB of the sum of squares): a 128-bit integer counting
 // units of 2^-70 (samples are rounded to that grid, a relative change below 2^-24 for any value

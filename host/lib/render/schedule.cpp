@@ -34,6 +34,10 @@ void WavefrontDevice::upload_guide(const std::vector<float>&) {
     throw Error("this back end cannot take the visibility strategy's tables");
 }
 
+void WavefrontDevice::take_guide_sums(std::vector<uint32_t>&) {
+    throw Error("this back end keeps no visibility records");
+}
+
 RayCounts& RayCounts::operator+=(const RayCounts& o) {
     camera += o.camera;
     continuation += o.continuation;

@@ -73,6 +73,10 @@ class WavefrontDevice {
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
     // A learning technique's tables (EtkScene.guide_cells) for the passes to come.
     virtual void upload_guide(const std::vector<float>& cells);
+    // The light-sample records' sums the stages added since the last call (DeviceScene::
+    // guide_sum_words words, kernels/visibility_record.h), read between passes; the device's
+    // sums start again from zero.
+    virtual void take_guide_sums(std::vector<uint32_t>& out);
     // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
     virtual bool prefers_light_batches() const { return true; }
     // Host threads a lane may spend on the visibility strategy's records between its launches:

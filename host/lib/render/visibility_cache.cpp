@@ -11,10 +11,8 @@ namespace et {
 namespace {
 
 constexpr int K = ETK_GUIDE_REGIONS;
-// Fixed point: a value of the map's power counts 2^28; one record at most 2^12 of that (a single
-// sample that large is a firefly, not information), so a slot holds 2^24 such records.
-constexpr double kUnit = 268435456.0; // 2^28
-constexpr double kMaxValue = 4096.0;
+// The records' cap (kernels/visibility_record.h): a second moment of a density of 0.
+constexpr double kMaxValue = ETK_GUIDE_MAX_RECORD;
 
 } // namespace
 
@@ -23,9 +21,12 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
                                  const std::array<float, 6>& box)
     : opt_(options), mass_(regions.begin(), regions.begin() + K), box_(box),
       portal_(ETK_PORTAL_CELLS, 0),
-      moments_(static_cast<size_t>(options.slots) * options.portal_shares.size(), 0),
+      moments_(static_cast<size_t>(options.slots) * ETK_PORTAL_CANDIDATES, 0),
       shares_(options.slots, 0.0f), light_m2_(options.slots, 0),
-      inv_scale_(scale > 0.0 ? 1.0 / scale : 1.0) {
+      last_(guide_prior_cells(mass_, options.slots, options.continuation, box)),
+      inv_power_(guide_inv_power(scale)) {
+    for (int j = 0; j < ETK_PORTAL_CANDIDATES; ++j)
+        portal_candidates_[j] = etk::etk_portal_candidate(j);
     light_.sums.assign(static_cast<size_t>(options.slots) * K, 0);
     light_.counts.assign(options.slots, 0);
     light_.counted = light_.counts;
@@ -41,16 +42,14 @@ VisibilityCache::VisibilityCache(const VisibilityOptions& options,
         guided_shares_.assign(options.slots, static_cast<float>(options.continuation_share));
         guided_records_.assign(options.slots, 0);
         cont_m2_.assign(options.slots, 0);
-        last_ = guide_prior_cells(mass_, options.slots, true, box);
     }
 }
 
 namespace {
 
-// v >= 0 in fixed point, capped (llround's value for these non-negative values, without the
-// call: v kUnit + 0.5 is exact below 2^52).
+// v >= 0 in the device's fixed point, so that both kinds of records sum in one unit.
 uint64_t fixed_point(double v) {
-    return static_cast<uint64_t>(std::min(v, kMaxValue) * kUnit + 0.5);
+    return etk::etk_guide_fixed(static_cast<float>(v));
 }
 
 double record_value(float v) {
@@ -105,45 +104,48 @@ int VisibilityCache::add_region(RegionSums& to, int key, double v) {
 
 void VisibilityCache::add(const int* keys, const float* values, const int* exits,
                           const float* parts, int n) {
-    const size_t C = opt_.portal_shares.size();
-    uint64_t records = 0;
-    thread_local CellBatch cells;
-    for (int i = 0; i < n; ++i) {
-        if (i + kPrefetch < n && keys[i + kPrefetch] >= 0 && keys[i + kPrefetch] < opt_.slots * K) {
-            const int k = keys[i + kPrefetch];
-            __builtin_prefetch(&light_.sums[static_cast<size_t>(k)], 1);
-            __builtin_prefetch(&moments_[(k / K) * C], 1);
-            __builtin_prefetch(&light_m2_[k / K], 1);
-        }
-        const double v = record_value(values[i]) * inv_scale_; // relative to the map's power
-        if (exits[i] >= 0 && exits[i] < ETK_PORTAL_CELLS)
-            cells.add(exits[i], fixed_point(v));
-        const int key = keys[i];
-        if (key < 0 || key >= opt_.slots * K)
-            continue;
-        ++records;
-        const int s = add_region(light_, key, v);
-        const double pv = parts[2 * i], pp = parts[2 * i + 1];
-        if (!(v > 0.0) || !std::isfinite(pv) || !std::isfinite(pp))
-            continue;
-        // A diffuse vertex's light sample estimates (albedo / pi) v: its second moment, in the
-        // unit light_sample_count shares with the continuation's (albedo^2 dropped).
-        const double e = v * (1.0 / M_PI);
-        add_to(light_m2_, static_cast<size_t>(s), fixed_point(e * e));
-        // v = g / p_rec (g = luminance(L) cos, unoccluded); the second moment of the light
-        // sample with share b is E_rec[g^2 / (p_rec p_b)] = E_rec[v^2 p_rec / p_b]. shares_ only
-        // changes in tables(), between passes.
-        const double b0 = shares_[s];
-        const double prec = (1.0 - b0) * pv + b0 * pp;
-        for (size_t j = 0; j < C; ++j) {
-            const double b = opt_.portal_shares[j];
-            const double pb = (1.0 - b) * pv + b * pp;
-            const double m = pb > 0.0 ? v * v * prec / pb : kMaxValue;
-            add_to(moments_, s * C + j, fixed_point(m));
-        }
+    {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        if (pending_.empty())
+            pending_.assign(static_cast<size_t>(etk::etk_gsum_words(opt_.slots)), 0u);
     }
-    cells.flush(portal_);
-    __atomic_fetch_add(&light_.records, records, __ATOMIC_RELAXED);
+    etk::EtkParams p{};
+    p.guide_slots = opt_.slots;
+    p.guide_inv_power = inv_power_;
+    const float* box = last_.data() + etk::etk_portal_offset(opt_.slots, opt_.continuation);
+    for (int i = 0; i < n; ++i)
+        etk::etk_guide_record_light(pending_.data(), p, box, keys[i], values[i], exits[i],
+                                    etk::make_float2(parts[2 * i], parts[2 * i + 1]));
+}
+
+namespace {
+
+uint64_t wide(const uint32_t* w) {
+    return uint64_t(w[0]) | uint64_t(w[1]) << 32;
+}
+
+} // namespace
+
+void VisibilityCache::absorb(const std::vector<uint32_t>& words) {
+    const int S = opt_.slots;
+    if (words.size() != static_cast<size_t>(etk::etk_gsum_words(S)))
+        throw Error("visibility record sums of " + std::to_string(words.size()) +
+                    " words, expected " + std::to_string(etk::etk_gsum_words(S)));
+    const uint32_t* w = words.data();
+    for (int s = 0; s < S; ++s) {
+        const uint32_t n = w[etk::etk_gsum_counts(S) + s];
+        if (n == 0)
+            continue; // no record: nothing summed in the cell (most cells)
+        light_.counts[s] += n;
+        light_m2_[s] += wide(w + etk::etk_gsum_m2(S) + 2 * s);
+        for (size_t k = size_t(s) * K; k < size_t(s + 1) * K; ++k)
+            light_.sums[k] += wide(w + 2 * k);
+    }
+    for (size_t k = 0; k < moments_.size(); ++k)
+        moments_[k] += wide(w + etk::etk_gsum_moments(S) + 2 * k);
+    for (int c = 0; c < ETK_PORTAL_CELLS; ++c)
+        portal_[c] += wide(w + etk::etk_gsum_portal(S) + 2 * c);
+    light_.records += wide(w + etk::etk_gsum_records(S));
 }
 
 void VisibilityCache::add_continuations(const int* keys, const float* values, const float* rays,
@@ -171,7 +173,7 @@ void VisibilityCache::add_continuations(const int* keys, const float* values, co
         if (key < 0 || key >= opt_.slots * K)
             continue;
         ++records;
-        const double v = record_value(values[i]) * inv_scale_; // relative to the map's power
+        const double v = record_value(values[i]) * inv_power_; // relative to the map's power
         const int s = key / K;
         const float* r = rays + 8 * static_cast<size_t>(i);
         const etk::float3 o = etk::make_float3(r[0], r[1], r[2]);
@@ -265,8 +267,11 @@ void VisibilityCache::choose_guided_shares() {
 
 const std::vector<float>& VisibilityCache::tables() {
     std::lock_guard<std::mutex> lock(mutex_);
-    const size_t C = opt_.portal_shares.size();
-    choose_shares(opt_.portal_shares.data(), C, 0.0, light_, moments_, shares_);
+    if (!pending_.empty()) { // the records add() summed since the last update
+        absorb(pending_);
+        std::fill(pending_.begin(), pending_.end(), 0u);
+    }
+    choose_shares(portal_candidates_.data(), ETK_PORTAL_CANDIDATES, 0.0, light_, moments_, shares_);
     const bool continuation = !dir_.sums.empty();
     if (continuation) // before the cells' tables, which take the shares
         choose_guided_shares();
@@ -275,8 +280,6 @@ const std::vector<float>& VisibilityCache::tables() {
     // then copied to last_, was most of an update's 29 ms). Cells without records keep the
     // prior tables (most cells of a scene); a cell's counts only grow, so every part of a cell
     // an earlier update wrote is written again below: the same tables as built afresh.
-    if (last_.empty())
-        last_ = guide_prior_cells(mass_, opt_.slots, continuation, box_);
     std::vector<float>& out = last_;
     std::vector<double> prob(K);
     const std::vector<float> uniform(K, 1.0f / K);

@@ -36,7 +36,7 @@
 // scene's box the ray left by; its value is summed there (the same fixed point), and the table
 // over the box's cells is the CDF of those sums -- where the light the scene receives gets in.
 // Which share b of a hash-grid cell's light samples goes to it is chosen per cell at each update
-// among options.portal_shares: the one of least second moment of the light sample,
+// among the candidates etk_portal_candidate: the one of least second moment of the light sample,
 //   M(b) = sum over the cell's records since the last update of v^2 p_rec / p_b,
 // v = g / p_rec the record's value, p_rec its density when drawn (the cell's last share) and
 // p_b = (1 - b) p_vis + b p_portal from the two densities the record carries -- an importance-
@@ -59,6 +59,7 @@
 #pragma once
 #include "kernels/portal_guide.h"
 #include "kernels/visibility_guide.h"
+#include "kernels/visibility_record.h"
 #include "prepare/visibility_tables.h"
 
 #include <array>
@@ -87,10 +88,14 @@ class VisibilityCache {
     // box: the portal table's (guide_portal_box).
     VisibilityCache(const VisibilityOptions& options, const std::vector<float>& regions,
                     double scale, const std::array<float, 6>& box);
-    // One bounce's shadow-ray records (thread-safe): cell x K + region, value, the portal cell
-    // the ray left the box by (-1: blocked) and the densities p_vis, p_portal of its direction
-    // (2 n floats).
+    // Shadow-ray records made on the host (thread-safe; a render's are summed on the device and
+    // absorbed): cell x K + region, value, the portal cell the ray left the box by (-1: blocked)
+    // and the densities p_vis, p_portal of its direction (2 n floats). The same function sums
+    // them as the device's shadow stage (kernels/visibility_record.h), for the next tables().
     void add(const int* keys, const float* values, const int* exits, const float* parts, int n);
+    // The device's sums of shadow-ray records since the last call (WavefrontDevice::
+    // take_guide_sums), added to the cache's; between passes.
+    void absorb(const std::vector<uint32_t>& words);
     // One wave's continuation records (thread-safe): cell x K + region, value luminance(L_in) /
     // p, and per record 8 floats: the ray's origin, 0, its direction and density p.
     void add_continuations(const int* keys, const float* values, const float* rays, int n);
@@ -162,8 +167,10 @@ class VisibilityCache {
     std::map<float, uint64_t> fewer_;
     // The tables of the last update (tables()): those the passes since were drawn with.
     std::vector<float> last_;
-    double inv_scale_;
-    RegionSums light_, dir_; // the light sample's (shadow rays), the continuation guide's
+    float inv_power_;                                             // 1 / the map's power
+    std::array<double, ETK_PORTAL_CANDIDATES> portal_candidates_; // etk_portal_candidate
+    std::vector<uint32_t> pending_; // add()'s sums (visibility_record.h's layout) until tables()
+    RegionSums light_, dir_;        // the light sample's (shadow rays), the continuation guide's
     mutable std::mutex mutex_;
 };
 

@@ -126,62 +126,34 @@ class ContinuationRecorder {
     std::vector<std::vector<Vertex>> vertices_; // per slice of the paths
 };
 
-// One wave's records of a learning pass: each bounce's shadow rays (their outcomes, in queue
-// order) and, with the continuation guide, each non-delta vertex's continuation.
+// One wave's continuation records of a learning pass, read and added on the host (the shadow rays'
+// records are summed on the device: kernels/visibility_record.h).
 class VisibilityRecorder : public WaveRecorder {
   public:
     VisibilityRecorder(VisibilityLearning& policy, VisibilityCache& cache, const etk::EtkParams& p,
                        int n, int host_threads)
-        : policy_(policy), cache_(cache), p_(p), host_threads_(host_threads) {
-        if (p.guide_continuation) {
-            continuations_ = std::make_unique<ContinuationRecorder>(n, host_threads);
-            threads_ = continuations_->slices();
-        }
-    }
-    ~VisibilityRecorder() override { policy_.add_record_time(seconds_, threads_); }
+        : policy_(policy), cache_(cache), p_(p), continuations_(n, host_threads) {}
+    ~VisibilityRecorder() override { policy_.add_record_time(seconds_, continuations_.slices()); }
 
-    void after_bounce(StageExecutor& ex, int bounce, const uint32_t* counters) override {
+    void after_bounce(StageExecutor& ex, int bounce, const uint32_t*) override {
+        if (etk::etk_last_bounce(p_, bounce)) // the last vertex: never guided
+            return;
         const Timer t;
-        add_shadow_records(ex, static_cast<int>(counters[etk::ETK_Q_SHADOW]));
-        if (continuations_ && !etk::etk_last_bounce(p_, bounce)) // the last vertex: never guided
-            continuations_->after_bounce(ex, bounce);
+        continuations_.after_bounce(ex, bounce);
         seconds_ += t.seconds();
     }
     void after_wave(StageExecutor& ex) override {
-        if (!continuations_)
-            return;
         const Timer t;
-        continuations_->finish(ex, cache_);
+        continuations_.finish(ex, cache_);
         seconds_ += t.seconds();
     }
 
   private:
-    void add_shadow_records(StageExecutor& ex, int m) {
-        if (m <= 0)
-            return;
-        keys_.resize(m);
-        values_.resize(m);
-        exits_.resize(m);
-        parts_.resize(2 * static_cast<size_t>(m));
-        ex.read_fields(m, {{etk::ETK_FIELD_guide_key, keys_.data()},
-                           {etk::ETK_FIELD_guide_val, values_.data()},
-                           {etk::ETK_FIELD_guide_exit, exits_.data()},
-                           {etk::ETK_FIELD_guide_rec_parts, parts_.data()}});
-        const int slices = slices_for(m, host_threads_);
-        threads_ = std::max(threads_, slices);
-        in_slices(m, slices, [&](int, int a, int k) {
-            cache_.add(keys_.data() + a, values_.data() + a, exits_.data() + a,
-                       parts_.data() + 2 * static_cast<size_t>(a), k);
-        });
-    }
     VisibilityLearning& policy_;
     VisibilityCache& cache_;
     etk::EtkParams p_;
-    int host_threads_, threads_ = 0;
     double seconds_ = 0.0;
-    std::unique_ptr<ContinuationRecorder> continuations_;
-    std::vector<int> keys_, exits_;
-    std::vector<float> values_, parts_;
+    ContinuationRecorder continuations_;
 };
 
 } // namespace
@@ -199,7 +171,8 @@ VisibilityLearning::VisibilityLearning(const DeviceScene& scene, bool batches)
     cache_ = std::make_unique<VisibilityCache>(options_, scene.guide_regions, scene.guide_map_power,
                                                box);
     host_bytes_ = cache_->bytes();
-    device_bytes_ = (scene.guide_cells.size() + scene.guide_regions.size()) * sizeof(float);
+    device_bytes_ = (scene.guide_cells.size() + scene.guide_regions.size()) * sizeof(float) +
+                    scene.guide_sum_words() * sizeof(uint32_t);
 }
 
 int VisibilityLearning::verdict_start() const {
@@ -236,7 +209,7 @@ void VisibilityLearning::configure(etk::EtkParams& p, uint32_t sample_index, boo
 
 std::unique_ptr<WaveRecorder> VisibilityLearning::recorder(const etk::EtkParams& p, int n,
                                                            int host_threads) {
-    if (!p.guide_learn || !cache_)
+    if (!p.guide_learn || !p.guide_continuation || !cache_)
         return nullptr;
     return std::make_unique<VisibilityRecorder>(*this, *cache_, p, n, host_threads);
 }
@@ -251,6 +224,8 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
     // Rebuilt after passes 1, 2, 4, ... L.
     if (VisibilityCache::update_after(pass, options_.learning_passes)) {
         const Timer t;
+        device.take_guide_sums(sums_);
+        cache_->absorb(sums_);
         device.upload_guide(cache_->tables());
         ready_ = true;
         light_counts_ = cache_->fewer_light_samples();

@@ -47,9 +47,10 @@ class VisibilityLearning : public LearningPolicy {
     const DeviceScene& scene_;
     VisibilityOptions options_;
     bool fallback_light_batch_; // the sample_lights stage for the fallback's passes
-    bool ready_ = false;   // the cells' tables hold something learned
-    bool dropped_ = false; // the verdict chose the fallback: the passes after it render it
+    bool ready_ = false;        // the cells' tables hold something learned
+    bool dropped_ = false;      // the verdict chose the fallback: the passes after it render it
     std::unique_ptr<VisibilityCache> cache_;
+    std::vector<uint32_t> sums_; // the device's record sums, read at each update
     std::unique_ptr<GuideVerdict> verdict_;
     // Figures (stats()).
     mutable std::mutex mutex_; // record_seconds_, record_threads_

@@ -1,0 +1,12 @@
+// Test kernel: the shadow stage's record sums (etk_guide_record_light) of a batch of records, to
+// compare with the host's bit for bit (tests/kernels/visibility_record_test.cpp).
+#include "visibility_record.h"
+
+__kernel void record_lights(volatile __global uint* sums, EtkParams p, __global const float* box,
+                            __global const int* keys, __global const float* values,
+                            __global const int* exits, __global const float2* parts, int n) {
+    int i = get_global_id(0);
+    if (i >= n)
+        return;
+    etk_guide_record_light(sums, p, box, keys[i], values[i], exits[i], parts[i]);
+}
