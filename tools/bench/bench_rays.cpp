@@ -41,6 +41,7 @@
 #endif
 
 #include <algorithm>
+#include <cstdlib>
 #include <atomic>
 #include <ctime>
 #include <cstdio>
@@ -111,6 +112,77 @@ template <typename Traverse>
 Tracer native_tracer(const std::vector<float4>& nodes, const std::vector<float4>& tris,
                      const std::vector<int>& order, int threads, Traverse traverse) {
     return native_tracer(nodes.data(), tris.data(), order, threads, traverse);
+}
+
+// Runs f(begin, end) over chunks of [0, n) on `threads` threads.
+template <typename F> void parallel_chunks(int threads, size_t n, F&& f) {
+    std::atomic<size_t> next{0};
+    et::run_on_threads(threads, [&](int) {
+        for (size_t begin; (begin = next.fetch_add(1024)) < n;)
+            f(begin, std::min(n, begin + 1024));
+    });
+}
+
+int hit_result(const etk::EtkHit& h, bool any, const std::vector<int>& order) {
+    return h.prim < 0 ? -1 : any ? 1 : order[h.prim];
+}
+
+// Interleaved traversals (etk_bvh_traverse2 / 4 / stream2) over the same arrays.
+Tracer pair_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
+                   const std::vector<int>& order, int threads) {
+    return [&nodes, &packets, &order, threads](const Rays& r, bool any, std::vector<int>& out) {
+        parallel_chunks(threads, r.size(), [&](size_t b, size_t e) {
+            size_t i = b;
+            for (; i + 1 < e; i += 2) {
+                etk::EtkHit h0, h1;
+                etk::etk_bvh_traverse2(nodes.data(), packets.data(), xyz(r.org[i]),
+                                       xyz(r.dir[i]), r.org[i].w, any, xyz(r.org[i + 1]),
+                                       xyz(r.dir[i + 1]), r.org[i + 1].w, any, &h0, &h1);
+                out[i] = hit_result(h0, any, order);
+                out[i + 1] = hit_result(h1, any, order);
+            }
+            for (; i < e; ++i) {
+                etk::EtkHit h;
+                etk::etk_bvh_traverse(nodes.data(), packets.data(), xyz(r.org[i]), xyz(r.dir[i]),
+                                      r.org[i].w, any, &h);
+                out[i] = hit_result(h, any, order);
+            }
+        });
+    };
+}
+Tracer pair_phase_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
+                   const std::vector<int>& order, int threads) {
+    return [&nodes, &packets, &order, threads](const Rays& r, bool any, std::vector<int>& out) {
+        parallel_chunks(threads, r.size(), [&](size_t b, size_t e) {
+            size_t i = b;
+            for (; i + 1 < e; i += 2) {
+                etk::EtkHit h0, h1;
+                etk::etk_bvh_traverse2p(nodes.data(), packets.data(), xyz(r.org[i]),
+                                       xyz(r.dir[i]), r.org[i].w, any, xyz(r.org[i + 1]),
+                                       xyz(r.dir[i + 1]), r.org[i + 1].w, any, &h0, &h1);
+                out[i] = hit_result(h0, any, order);
+                out[i + 1] = hit_result(h1, any, order);
+            }
+            for (; i < e; ++i) {
+                etk::EtkHit h;
+                etk::etk_bvh_traverse(nodes.data(), packets.data(), xyz(r.org[i]), xyz(r.dir[i]),
+                                      r.org[i].w, any, &h);
+                out[i] = hit_result(h, any, order);
+            }
+        });
+    };
+}
+Tracer stream_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
+                     const std::vector<int>& order, int threads) {
+    return [&nodes, &packets, &order, threads](const Rays& r, bool any, std::vector<int>& out) {
+        parallel_chunks(threads, r.size(), [&](size_t b, size_t e) {
+            etk::EtkHit h[1024];
+            etk::etk_bvh_stream2(nodes.data(), packets.data(), &r.org[b], &r.dir[b],
+                                 static_cast<int>(e - b), any, h);
+            for (size_t i = b; i < e; ++i)
+                out[i] = hit_result(h[i - b], any, order);
+        });
+    };
 }
 
 // The OpenCL back end: tests/kernels/cl/bvh_test.cl (etk_bvh_traverse, one ray per work-item).
@@ -515,6 +587,21 @@ int main(int argc, char** argv) try {
          native_tracer(ds.nodes, ds.packets, cur.order, threads, &etk::etk_bvh_traverse),
          cur.sah_cost, cur.build_seconds, static_cast<int>(ds.nodes.size() * sizeof(float4)),
          static_cast<int>(ds.packets.size() * sizeof(float4))});
+    if (std::getenv("ETK_BENCH_STEP")) {
+        entries.push_back({"step, one ray",
+                           native_tracer(ds.nodes, ds.packets, cur.order, threads,
+                                         &etk::etk_bvh_traverse1),
+                           cur.sah_cost, 0, 0, 0});
+        entries.push_back({"step, two rays in turn",
+                           pair_tracer(ds.nodes, ds.packets, cur.order, threads), cur.sah_cost, 0,
+                           0, 0});
+        entries.push_back({"step, two rays by phases",
+                           pair_phase_tracer(ds.nodes, ds.packets, cur.order, threads),
+                           cur.sah_cost, 0, 0, 0});
+        entries.push_back({"step, stream through two slots",
+                           stream_tracer(ds.nodes, ds.packets, cur.order, threads), cur.sah_cost,
+                           0, 0, 0});
+    }
     baseline::Bvh base;
     std::vector<float4> base_tris;
     if (!native_only) {
@@ -656,6 +743,11 @@ int main(int argc, char** argv) try {
         }
         j["tracers"].push_back(row);
     }
+    for (int e = 1; e < n_native; ++e)
+        if (e != embree_row)
+            std::printf("%s / native: camera %.3f, shadow %.3f, bounce %.3f, all %.3f\n",
+                        names[e].c_str(), ratio(0, e, 0), ratio(1, e, 0), ratio(2, e, 0),
+                        ratio(-1, e, 0));
     // The goals' ratios, each the median of the runs' ratios (side by side within a run).
     if (embree_row >= 0) {
         std::printf("native / Embree:");
