@@ -185,6 +185,58 @@ Tracer stream_tracer(const std::vector<float4>& nodes, const std::vector<float4>
     };
 }
 
+// Rays' order for coherence: direction octant, then the Morton code of the origin (10 bits per
+// axis over the origins' box). Returns the permutation (sorted position -> ray index).
+uint64_t spread_bits(uint64_t x) {
+    x &= 0x3ff;
+    x = (x | (x << 16)) & 0x030000ff;
+    x = (x | (x << 8)) & 0x0300f00f;
+    x = (x | (x << 4)) & 0x030c30c3;
+    x = (x | (x << 2)) & 0x09249249;
+    return x;
+}
+std::vector<uint32_t> coherent_order(const Rays& r) {
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+    for (const float4& o : r.org)
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], (&o.x)[k]);
+            hi[k] = std::max(hi[k], (&o.x)[k]);
+        }
+    std::vector<std::pair<uint64_t, uint32_t>> key(r.size());
+    for (size_t i = 0; i < r.size(); ++i) {
+        uint64_t m = 0;
+        for (int k = 0; k < 3; ++k) {
+            const float f = ((&r.org[i].x)[k] - lo[k]) / std::max(1e-30f, hi[k] - lo[k]);
+            m |= spread_bits(static_cast<uint64_t>(std::min(1023.0f, std::max(0.0f, f * 1024.0f))))
+                 << k;
+        }
+        const uint64_t oct = (r.dir[i].x < 0) | (r.dir[i].y < 0) << 1 | (r.dir[i].z < 0) << 2;
+        key[i] = {oct << 32 | m, static_cast<uint32_t>(i)};
+    }
+    std::sort(key.begin(), key.end());
+    std::vector<uint32_t> perm(r.size());
+    for (size_t i = 0; i < r.size(); ++i)
+        perm[i] = key[i].second;
+    return perm;
+}
+
+// Traces the rays in a given order (per ray set, found by its arrays' address).
+Tracer ordered_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
+                      const std::vector<int>& order, int threads,
+                      const std::map<const float4*, std::vector<uint32_t>>* perms) {
+    return [&nodes, &packets, &order, threads, perms](const Rays& r, bool any,
+                                                      std::vector<int>& out) {
+        const std::vector<uint32_t>& perm = perms->at(r.org.data());
+        parallel_for(threads, r.size(), [&](size_t j) {
+            const size_t i = perm[j];
+            etk::EtkHit h;
+            etk::etk_bvh_traverse(nodes.data(), packets.data(), xyz(r.org[i]), xyz(r.dir[i]),
+                                  r.org[i].w, any, &h);
+            out[i] = hit_result(h, any, order);
+        });
+    };
+}
+
 // The OpenCL back end: tests/kernels/cl/bvh_test.cl (etk_bvh_traverse, one ray per work-item).
 class ClTracer {
   public:
@@ -587,6 +639,17 @@ int main(int argc, char** argv) try {
          native_tracer(ds.nodes, ds.packets, cur.order, threads, &etk::etk_bvh_traverse),
          cur.sah_cost, cur.build_seconds, static_cast<int>(ds.nodes.size() * sizeof(float4)),
          static_cast<int>(ds.packets.size() * sizeof(float4))});
+    std::map<const float4*, std::vector<uint32_t>> perms;
+    if (std::getenv("ETK_BENCH_ORDER")) {
+        for (int k = 0; k < kSets; ++k) {
+            et::Timer t;
+            perms[sets[k].org.data()] = coherent_order(sets[k]);
+            std::printf("%s rays ordered in %.1f ms\n", kSetNames[k], t.seconds() * 1e3);
+        }
+        entries.push_back({"native, rays by octant and origin",
+                           ordered_tracer(ds.nodes, ds.packets, cur.order, threads, &perms),
+                           cur.sah_cost, 0, 0, 0});
+    }
     if (std::getenv("ETK_BENCH_STEP")) {
         entries.push_back({"step, one ray",
                            native_tracer(ds.nodes, ds.packets, cur.order, threads,
