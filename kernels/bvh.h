@@ -358,6 +358,296 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
     return hit->prim >= 0;
 }
 
+// A ray's traversal advanced one node at a time (etk_bvh_step), so that a thread can interleave
+// several independent rays: the visit of a node is a chain of dependent loads, compares and
+// branches, and another ray's chain can run in its gaps. The ray's constants; its state (node,
+// stack, closest hit) lives in the caller's variables so that the compiler can keep it in
+// registers (a struct holding the stacks stays in memory: GCC does not split it).
+typedef struct {
+    float4 ox, oy, oz, ix, iy, iz; // origin and inverse direction, broadcast for the box tests
+    EtkShearedRay sr;
+    int any_hit;
+} EtkBvhRay;
+
+ETK_FORCE_INLINE_FN EtkBvhRay etk_bvh_ray(float3 org, float3 dir, int any_hit) {
+    EtkBvhRay q;
+    float3 inv_dir = etk_safe_inverse(dir);
+    q.sr = etk_sheared_ray(org, dir);
+    q.ox = make_float4(org.x, org.x, org.x, org.x);
+    q.oy = make_float4(org.y, org.y, org.y, org.y);
+    q.oz = make_float4(org.z, org.z, org.z, org.z);
+    q.ix = make_float4(inv_dir.x, inv_dir.x, inv_dir.x, inv_dir.x);
+    q.iy = make_float4(inv_dir.y, inv_dir.y, inv_dir.y, inv_dir.y);
+    q.iz = make_float4(inv_dir.z, inv_dir.z, inv_dir.z, inv_dir.z);
+    q.any_hit = any_hit;
+    return q;
+}
+
+ETK_FORCE_INLINE_FN void etk_bvh_hit_init(EtkHit* hit, float tmax) {
+    hit->t = tmax;
+    hit->prim = -1;
+    hit->b1 = hit->b2 = 0.0f;
+}
+
+// The next node from the stack, skipping those entered beyond the closest hit found since they
+// were pushed; -1 once the stack is empty.
+ETK_FORCE_INLINE_FN int etk_bvh_pop(const int* stack, const float* stack_t, int* sp,
+                                    const EtkHit* hit) {
+    do {
+        if (*sp == 0)
+            return -1;
+        *sp = *sp - 1;
+    } while (!(stack_t[*sp] <= etk_bvh_reach(hit)));
+    return stack[*sp];
+}
+
+// A node's box test as bit masks: the lanes entered (returned) and its leaves.
+ETK_FORCE_INLINE_FN uint etk_bvh_enter(ETK_GLOBAL const float4* nd, float4 ox, float4 oy, float4 oz,
+                                       float4 ix, float4 iy, float4 iz, const EtkHit* hit,
+                                       float4* tn, uint* leaf) {
+    float4 tf;
+    etk_box_hit4(nd, ox, oy, oz, ix, iy, iz, hit->t, tn, &tf);
+    etk_lanes lim = etk_lanes_splat(etk_bvh_reach(hit));
+    *leaf = etk_sign_bits(nd[7]);
+    return etk_lane_bits((etk_lanes_of(*tn) <= etk_lanes_of(tf)) & (etk_lanes_of(*tn) <= lim));
+}
+
+// The entered leaves of node nd, then the node to visit next (*node, -1: pop one); returns 0
+// when any_hit and a triangle was hit.
+ETK_FORCE_INLINE_FN int etk_bvh_visit(ETK_GLOBAL const float4* nd,
+                                      ETK_GLOBAL const float4* packets, EtkShearedRay sr,
+                                      int any_hit, float4 tn, uint enter, uint leaf, int* node,
+                                      int* stack, float* stack_t, int* sp, EtkHit* hit) {
+    ETK_GLOBAL const float* meta = (ETK_GLOBAL const float*)(nd + 6);
+    uint leaves = enter & leaf;
+    if (leaves) {
+        ETK_GLOBAL const float* flags = (ETK_GLOBAL const float*)(nd + 7);
+        do {
+            int i = etk_lowest_bit(leaves);
+            leaves &= leaves - 1u;
+            if (etk_lane(tn, i) <= etk_bvh_reach(hit) &&
+                etk_leaf_hit(packets, (int)as_uint(meta[i]),
+                             (int)(as_uint(flags[i]) & 0x7fffffffu), sr, any_hit, hit))
+                return 0;
+        } while (leaves);
+        etk_lanes lim = etk_lanes_splat(etk_bvh_reach(hit));
+        enter &= etk_lane_bits(etk_lanes_of(tn) <= lim);
+    }
+    *node = etk_bvh_next(meta, tn, enter & ~leaf, stack, stack_t, sp);
+    return 1;
+}
+
+// Visits the ray's next node (*node; -1: pop one first); returns 0 once the traversal is over:
+// the stack is empty, or any_hit and a triangle was hit.
+ETK_FORCE_INLINE_FN int etk_bvh_step(ETK_GLOBAL const float4* nodes,
+                                     ETK_GLOBAL const float4* packets, float4 ox, float4 oy,
+                                     float4 oz, float4 ix, float4 iy, float4 iz, EtkShearedRay sr,
+                                     int any_hit, int* node, int* stack, float* stack_t, int* sp,
+                                     EtkHit* hit) {
+    if (*node < 0)
+        *node = etk_bvh_pop(stack, stack_t, sp, hit);
+    if (*node < 0)
+        return 0;
+    ETK_GLOBAL const float4* nd = nodes + ETK_BVH_NODE * *node;
+    float4 tn;
+    uint leaf, enter = etk_bvh_enter(nd, ox, oy, oz, ix, iy, iz, hit, &tn, &leaf);
+    return etk_bvh_visit(nd, packets, sr, any_hit, tn, enter, leaf, node, stack, stack_t, sp, hit);
+}
+
+// Two rays in lock-step by phases: both nodes' box tests first, then both visits, so that one
+// ray's mispredicted branch does not discard the other's loads and box test.
+ETK_CL_NOINLINE_FN void etk_bvh_traverse2p(ETK_GLOBAL const float4* nodes,
+                                           ETK_GLOBAL const float4* packets, float3 org0,
+                                           float3 dir0, float tmax0, int any0, float3 org1,
+                                           float3 dir1, float tmax1, int any1, EtkHit* hit0,
+                                           EtkHit* hit1) {
+    EtkBvhRay a = etk_bvh_ray(org0, dir0, any0), b = etk_bvh_ray(org1, dir1, any1);
+    int stack_a[ETK_BVH_STACK], stack_b[ETK_BVH_STACK];
+    float stack_ta[ETK_BVH_STACK], stack_tb[ETK_BVH_STACK];
+    int sp_a = 0, sp_b = 0, node_a = 0, node_b = 0;
+    EtkHit ha, hb;
+    etk_bvh_hit_init(&ha, tmax0);
+    etk_bvh_hit_init(&hb, tmax1);
+    int done_a = 0, done_b = 0;
+    for (;;) {
+        if (node_a < 0)
+            node_a = etk_bvh_pop(stack_a, stack_ta, &sp_a, &ha);
+        if (node_b < 0)
+            node_b = etk_bvh_pop(stack_b, stack_tb, &sp_b, &hb);
+        if ((node_a | node_b) < 0) {
+            done_a = node_a < 0;
+            done_b = node_b < 0;
+            break;
+        }
+        ETK_GLOBAL const float4* nd_a = nodes + ETK_BVH_NODE * node_a;
+        ETK_GLOBAL const float4* nd_b = nodes + ETK_BVH_NODE * node_b;
+        float4 tn_a, tn_b;
+        uint leaf_a, leaf_b;
+        uint enter_a = etk_bvh_enter(nd_a, a.ox, a.oy, a.oz, a.ix, a.iy, a.iz, &ha, &tn_a, &leaf_a);
+        uint enter_b = etk_bvh_enter(nd_b, b.ox, b.oy, b.oz, b.ix, b.iy, b.iz, &hb, &tn_b, &leaf_b);
+        done_a = !etk_bvh_visit(nd_a, packets, a.sr, a.any_hit, tn_a, enter_a, leaf_a, &node_a,
+                                stack_a, stack_ta, &sp_a, &ha);
+        done_b = !etk_bvh_visit(nd_b, packets, b.sr, b.any_hit, tn_b, enter_b, leaf_b, &node_b,
+                                stack_b, stack_tb, &sp_b, &hb);
+        if (done_a | done_b)
+            break;
+    }
+    if (!done_a)
+        while (etk_bvh_step(nodes, packets, a.ox, a.oy, a.oz, a.ix, a.iy, a.iz, a.sr, a.any_hit,
+                            &node_a, stack_a, stack_ta, &sp_a, &ha))
+            ;
+    if (!done_b)
+        while (etk_bvh_step(nodes, packets, b.ox, b.oy, b.oz, b.ix, b.iy, b.iz, b.sr, b.any_hit,
+                            &node_b, stack_b, stack_tb, &sp_b, &hb))
+            ;
+    *hit0 = ha;
+    *hit1 = hb;
+}
+
+// Two rays traversed in turn, a node each, until both are done: each gets the hit
+// etk_bvh_traverse gives it (the same triangles tested in the same order).
+ETK_CL_NOINLINE_FN void etk_bvh_traverse2(ETK_GLOBAL const float4* nodes,
+                                          ETK_GLOBAL const float4* packets, float3 org0,
+                                          float3 dir0, float tmax0, int any0, float3 org1,
+                                          float3 dir1, float tmax1, int any1, EtkHit* hit0,
+                                          EtkHit* hit1) {
+    EtkBvhRay a = etk_bvh_ray(org0, dir0, any0), b = etk_bvh_ray(org1, dir1, any1);
+    int stack_a[ETK_BVH_STACK], stack_b[ETK_BVH_STACK];
+    float stack_ta[ETK_BVH_STACK], stack_tb[ETK_BVH_STACK];
+    int sp_a = 0, sp_b = 0, node_a = 0, node_b = 0;
+    EtkHit ha, hb;
+    etk_bvh_hit_init(&ha, tmax0);
+    etk_bvh_hit_init(&hb, tmax1);
+    int live_a = 1, live_b = 1;
+    while (live_a & live_b) {
+        live_a = etk_bvh_step(nodes, packets, a.ox, a.oy, a.oz, a.ix, a.iy, a.iz, a.sr, a.any_hit, &node_a, stack_a, stack_ta, &sp_a, &ha);
+        live_b = etk_bvh_step(nodes, packets, b.ox, b.oy, b.oz, b.ix, b.iy, b.iz, b.sr, b.any_hit, &node_b, stack_b, stack_tb, &sp_b, &hb);
+    }
+    while (live_a)
+        live_a = etk_bvh_step(nodes, packets, a.ox, a.oy, a.oz, a.ix, a.iy, a.iz, a.sr, a.any_hit, &node_a, stack_a, stack_ta, &sp_a, &ha);
+    while (live_b)
+        live_b = etk_bvh_step(nodes, packets, b.ox, b.oy, b.oz, b.ix, b.iy, b.iz, b.sr, b.any_hit, &node_b, stack_b, stack_tb, &sp_b, &hb);
+    *hit0 = ha;
+    *hit1 = hb;
+}
+
+// Four rays in lock-step by phases (as etk_bvh_traverse2p); a ray that is done takes no more
+// steps, the others go on together.
+ETK_CL_NOINLINE_FN void etk_bvh_traverse4p(ETK_GLOBAL const float4* nodes,
+                                           ETK_GLOBAL const float4* packets, const float4* org,
+                                           const float4* dir, int any_hit, EtkHit* hit) {
+    EtkBvhRay q[4];
+    int stack[4][ETK_BVH_STACK];
+    float stack_t[4][ETK_BVH_STACK];
+    int sp[4], node[4], live[4];
+    EtkHit h[4];
+#pragma GCC unroll 4
+    for (int k = 0; k < 4; ++k) {
+        q[k] = etk_bvh_ray(make_float3(org[k].x, org[k].y, org[k].z),
+                           make_float3(dir[k].x, dir[k].y, dir[k].z), any_hit);
+        etk_bvh_hit_init(&h[k], org[k].w);
+        sp[k] = 0;
+        node[k] = 0;
+        live[k] = 1;
+    }
+    while (live[0] | live[1] | live[2] | live[3]) {
+        float4 tn[4];
+        uint leaf[4], enter[4];
+#pragma GCC unroll 4
+        for (int k = 0; k < 4; ++k) {
+            if (live[k] && node[k] < 0)
+                node[k] = etk_bvh_pop(stack[k], stack_t[k], &sp[k], &h[k]);
+            live[k] = live[k] && node[k] >= 0;
+        }
+#pragma GCC unroll 4
+        for (int k = 0; k < 4; ++k)
+            if (live[k])
+                enter[k] = etk_bvh_enter(nodes + ETK_BVH_NODE * node[k], q[k].ox, q[k].oy, q[k].oz,
+                                         q[k].ix, q[k].iy, q[k].iz, &h[k], &tn[k], &leaf[k]);
+#pragma GCC unroll 4
+        for (int k = 0; k < 4; ++k)
+            if (live[k])
+                live[k] = etk_bvh_visit(nodes + ETK_BVH_NODE * node[k], packets, q[k].sr,
+                                        q[k].any_hit, tn[k], enter[k], leaf[k], &node[k],
+                                        stack[k], stack_t[k], &sp[k], &h[k]);
+    }
+    for (int k = 0; k < 4; ++k)
+        hit[k] = h[k];
+}
+
+// A single ray through the step function (what etk_bvh_traverse would be on it).
+ETK_CL_NOINLINE_FN int etk_bvh_traverse1(ETK_GLOBAL const float4* nodes,
+                                         ETK_GLOBAL const float4* packets, float3 org, float3 dir,
+                                         float tmax, int any_hit, EtkHit* hit) {
+    EtkBvhRay a = etk_bvh_ray(org, dir, any_hit);
+    int stack[ETK_BVH_STACK];
+    float stack_t[ETK_BVH_STACK];
+    int sp = 0, node = 0;
+    etk_bvh_hit_init(hit, tmax);
+    while (etk_bvh_step(nodes, packets, a.ox, a.oy, a.oz, a.ix, a.iy, a.iz, a.sr, a.any_hit, &node, stack, stack_t, &sp, hit))
+        ;
+    return hit->prim >= 0;
+}
+
+// A stream of n rays through two slots: a slot whose ray is done takes the next one, so both
+// stay busy until the stream runs out.
+ETK_CL_NOINLINE_FN void etk_bvh_stream2(ETK_GLOBAL const float4* nodes,
+                                        ETK_GLOBAL const float4* packets, const float4* org,
+                                        const float4* dir, int n, int any_hit, EtkHit* hit) {
+    if (n < 2) {
+        for (int i = 0; i < n; ++i)
+            etk_bvh_traverse1(nodes, packets, make_float3(org[i].x, org[i].y, org[i].z),
+                              make_float3(dir[i].x, dir[i].y, dir[i].z), org[i].w, any_hit,
+                              &hit[i]);
+        return;
+    }
+    int stack_a[ETK_BVH_STACK], stack_b[ETK_BVH_STACK];
+    float stack_ta[ETK_BVH_STACK], stack_tb[ETK_BVH_STACK];
+    int ia = 0, ib = 1, next = 2;
+    EtkBvhRay a = etk_bvh_ray(make_float3(org[0].x, org[0].y, org[0].z),
+                              make_float3(dir[0].x, dir[0].y, dir[0].z), any_hit);
+    EtkBvhRay b = etk_bvh_ray(make_float3(org[1].x, org[1].y, org[1].z),
+                              make_float3(dir[1].x, dir[1].y, dir[1].z), any_hit);
+    int sp_a = 0, sp_b = 0, node_a = 0, node_b = 0;
+    EtkHit ha, hb;
+    etk_bvh_hit_init(&ha, org[0].w);
+    etk_bvh_hit_init(&hb, org[1].w);
+    while (ia >= 0 && ib >= 0) {
+        if (!etk_bvh_step(nodes, packets, a.ox, a.oy, a.oz, a.ix, a.iy, a.iz, a.sr, a.any_hit, &node_a, stack_a, stack_ta, &sp_a, &ha)) {
+            hit[ia] = ha;
+            ia = next < n ? next++ : -1;
+            if (ia >= 0) {
+                a = etk_bvh_ray(make_float3(org[ia].x, org[ia].y, org[ia].z),
+                                make_float3(dir[ia].x, dir[ia].y, dir[ia].z), any_hit);
+                etk_bvh_hit_init(&ha, org[ia].w);
+                sp_a = 0;
+                node_a = 0;
+            }
+        }
+        if (!etk_bvh_step(nodes, packets, b.ox, b.oy, b.oz, b.ix, b.iy, b.iz, b.sr, b.any_hit, &node_b, stack_b, stack_tb, &sp_b, &hb)) {
+            hit[ib] = hb;
+            ib = next < n ? next++ : -1;
+            if (ib >= 0) {
+                b = etk_bvh_ray(make_float3(org[ib].x, org[ib].y, org[ib].z),
+                                make_float3(dir[ib].x, dir[ib].y, dir[ib].z), any_hit);
+                etk_bvh_hit_init(&hb, org[ib].w);
+                sp_b = 0;
+                node_b = 0;
+            }
+        }
+    }
+    if (ia >= 0) {
+        while (etk_bvh_step(nodes, packets, a.ox, a.oy, a.oz, a.ix, a.iy, a.iz, a.sr, a.any_hit, &node_a, stack_a, stack_ta, &sp_a, &ha))
+            ;
+        hit[ia] = ha;
+    }
+    if (ib >= 0) {
+        while (etk_bvh_step(nodes, packets, b.ox, b.oy, b.oz, b.ix, b.iy, b.iz, b.sr, b.any_hit, &node_b, stack_b, stack_tb, &sp_b, &hb))
+            ;
+        hit[ib] = hb;
+    }
+}
+
 ETK_END
 
 #endif
