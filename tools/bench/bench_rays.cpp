@@ -41,7 +41,6 @@
 #endif
 
 #include <algorithm>
-#include <cstdlib>
 #include <atomic>
 #include <ctime>
 #include <cstdio>
@@ -112,150 +111,6 @@ template <typename Traverse>
 Tracer native_tracer(const std::vector<float4>& nodes, const std::vector<float4>& tris,
                      const std::vector<int>& order, int threads, Traverse traverse) {
     return native_tracer(nodes.data(), tris.data(), order, threads, traverse);
-}
-
-// Runs f(begin, end) over chunks of [0, n) on `threads` threads.
-template <typename F> void parallel_chunks(int threads, size_t n, F&& f) {
-    std::atomic<size_t> next{0};
-    et::run_on_threads(threads, [&](int) {
-        for (size_t begin; (begin = next.fetch_add(1024)) < n;)
-            f(begin, std::min(n, begin + 1024));
-    });
-}
-
-int hit_result(const etk::EtkHit& h, bool any, const std::vector<int>& order) {
-    return h.prim < 0 ? -1 : any ? 1 : order[h.prim];
-}
-
-// Interleaved traversals (etk_bvh_traverse2 / 4 / stream2) over the same arrays.
-Tracer pair_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
-                   const std::vector<int>& order, int threads) {
-    return [&nodes, &packets, &order, threads](const Rays& r, bool any, std::vector<int>& out) {
-        parallel_chunks(threads, r.size(), [&](size_t b, size_t e) {
-            size_t i = b;
-            for (; i + 1 < e; i += 2) {
-                etk::EtkHit h0, h1;
-                etk::etk_bvh_traverse2(nodes.data(), packets.data(), xyz(r.org[i]),
-                                       xyz(r.dir[i]), r.org[i].w, any, xyz(r.org[i + 1]),
-                                       xyz(r.dir[i + 1]), r.org[i + 1].w, any, &h0, &h1);
-                out[i] = hit_result(h0, any, order);
-                out[i + 1] = hit_result(h1, any, order);
-            }
-            for (; i < e; ++i) {
-                etk::EtkHit h;
-                etk::etk_bvh_traverse(nodes.data(), packets.data(), xyz(r.org[i]), xyz(r.dir[i]),
-                                      r.org[i].w, any, &h);
-                out[i] = hit_result(h, any, order);
-            }
-        });
-    };
-}
-Tracer quad_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
-                   const std::vector<int>& order, int threads) {
-    return [&nodes, &packets, &order, threads](const Rays& r, bool any, std::vector<int>& out) {
-        parallel_chunks(threads, r.size(), [&](size_t b, size_t e) {
-            size_t i = b;
-            for (; i + 3 < e; i += 4) {
-                etk::EtkHit h[4];
-                etk::etk_bvh_traverse4p(nodes.data(), packets.data(), &r.org[i], &r.dir[i], any,
-                                        h);
-                for (int k = 0; k < 4; ++k)
-                    out[i + k] = hit_result(h[k], any, order);
-            }
-            for (; i < e; ++i) {
-                etk::EtkHit h;
-                etk::etk_bvh_traverse(nodes.data(), packets.data(), xyz(r.org[i]), xyz(r.dir[i]),
-                                      r.org[i].w, any, &h);
-                out[i] = hit_result(h, any, order);
-            }
-        });
-    };
-}
-Tracer pair_phase_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
-                   const std::vector<int>& order, int threads) {
-    return [&nodes, &packets, &order, threads](const Rays& r, bool any, std::vector<int>& out) {
-        parallel_chunks(threads, r.size(), [&](size_t b, size_t e) {
-            size_t i = b;
-            for (; i + 1 < e; i += 2) {
-                etk::EtkHit h0, h1;
-                etk::etk_bvh_traverse2p(nodes.data(), packets.data(), xyz(r.org[i]),
-                                       xyz(r.dir[i]), r.org[i].w, any, xyz(r.org[i + 1]),
-                                       xyz(r.dir[i + 1]), r.org[i + 1].w, any, &h0, &h1);
-                out[i] = hit_result(h0, any, order);
-                out[i + 1] = hit_result(h1, any, order);
-            }
-            for (; i < e; ++i) {
-                etk::EtkHit h;
-                etk::etk_bvh_traverse(nodes.data(), packets.data(), xyz(r.org[i]), xyz(r.dir[i]),
-                                      r.org[i].w, any, &h);
-                out[i] = hit_result(h, any, order);
-            }
-        });
-    };
-}
-Tracer stream_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
-                     const std::vector<int>& order, int threads) {
-    return [&nodes, &packets, &order, threads](const Rays& r, bool any, std::vector<int>& out) {
-        parallel_chunks(threads, r.size(), [&](size_t b, size_t e) {
-            etk::EtkHit h[1024];
-            etk::etk_bvh_stream2(nodes.data(), packets.data(), &r.org[b], &r.dir[b],
-                                 static_cast<int>(e - b), any, h);
-            for (size_t i = b; i < e; ++i)
-                out[i] = hit_result(h[i - b], any, order);
-        });
-    };
-}
-
-// Rays' order for coherence: direction octant, then the Morton code of the origin (10 bits per
-// axis over the origins' box). Returns the permutation (sorted position -> ray index).
-uint64_t spread_bits(uint64_t x) {
-    x &= 0x3ff;
-    x = (x | (x << 16)) & 0x030000ff;
-    x = (x | (x << 8)) & 0x0300f00f;
-    x = (x | (x << 4)) & 0x030c30c3;
-    x = (x | (x << 2)) & 0x09249249;
-    return x;
-}
-std::vector<uint32_t> coherent_order(const Rays& r) {
-    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-    for (const float4& o : r.org)
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], (&o.x)[k]);
-            hi[k] = std::max(hi[k], (&o.x)[k]);
-        }
-    std::vector<std::pair<uint64_t, uint32_t>> key(r.size());
-    for (size_t i = 0; i < r.size(); ++i) {
-        uint64_t m = 0;
-        for (int k = 0; k < 3; ++k) {
-            const float f = ((&r.org[i].x)[k] - lo[k]) / std::max(1e-30f, hi[k] - lo[k]);
-            m |= spread_bits(static_cast<uint64_t>(std::min(1023.0f, std::max(0.0f, f * 1024.0f))))
-                 << k;
-        }
-        const uint64_t oct = (r.dir[i].x < 0) | (r.dir[i].y < 0) << 1 | (r.dir[i].z < 0) << 2;
-        key[i] = {oct << 32 | m, static_cast<uint32_t>(i)};
-    }
-    std::sort(key.begin(), key.end());
-    std::vector<uint32_t> perm(r.size());
-    for (size_t i = 0; i < r.size(); ++i)
-        perm[i] = key[i].second;
-    return perm;
-}
-
-// Traces the rays in a given order (per ray set, found by its arrays' address).
-Tracer ordered_tracer(const std::vector<float4>& nodes, const std::vector<float4>& packets,
-                      const std::vector<int>& order, int threads,
-                      const std::map<const float4*, std::vector<uint32_t>>* perms) {
-    return [&nodes, &packets, &order, threads, perms](const Rays& r, bool any,
-                                                      std::vector<int>& out) {
-        const std::vector<uint32_t>& perm = perms->at(r.org.data());
-        parallel_for(threads, r.size(), [&](size_t j) {
-            const size_t i = perm[j];
-            etk::EtkHit h;
-            etk::etk_bvh_traverse(nodes.data(), packets.data(), xyz(r.org[i]), xyz(r.dir[i]),
-                                  r.org[i].w, any, &h);
-            out[i] = hit_result(h, any, order);
-        });
-    };
 }
 
 // The OpenCL back end: tests/kernels/cl/bvh_test.cl (etk_bvh_traverse, one ray per work-item).
@@ -660,35 +515,6 @@ int main(int argc, char** argv) try {
          native_tracer(ds.nodes, ds.packets, cur.order, threads, &etk::etk_bvh_traverse),
          cur.sah_cost, cur.build_seconds, static_cast<int>(ds.nodes.size() * sizeof(float4)),
          static_cast<int>(ds.packets.size() * sizeof(float4))});
-    std::map<const float4*, std::vector<uint32_t>> perms;
-    if (std::getenv("ETK_BENCH_ORDER")) {
-        for (int k = 0; k < kSets; ++k) {
-            et::Timer t;
-            perms[sets[k].org.data()] = coherent_order(sets[k]);
-            std::printf("%s rays ordered in %.1f ms\n", kSetNames[k], t.seconds() * 1e3);
-        }
-        entries.push_back({"native, rays by octant and origin",
-                           ordered_tracer(ds.nodes, ds.packets, cur.order, threads, &perms),
-                           cur.sah_cost, 0, 0, 0});
-    }
-    if (std::getenv("ETK_BENCH_STEP")) {
-        entries.push_back({"step, one ray",
-                           native_tracer(ds.nodes, ds.packets, cur.order, threads,
-                                         &etk::etk_bvh_traverse1),
-                           cur.sah_cost, 0, 0, 0});
-        entries.push_back({"step, two rays in turn",
-                           pair_tracer(ds.nodes, ds.packets, cur.order, threads), cur.sah_cost, 0,
-                           0, 0});
-        entries.push_back({"step, two rays by phases",
-                           pair_phase_tracer(ds.nodes, ds.packets, cur.order, threads),
-                           cur.sah_cost, 0, 0, 0});
-        entries.push_back({"step, four rays by phases",
-                           quad_tracer(ds.nodes, ds.packets, cur.order, threads), cur.sah_cost, 0,
-                           0, 0});
-        entries.push_back({"step, stream through two slots",
-                           stream_tracer(ds.nodes, ds.packets, cur.order, threads), cur.sah_cost,
-                           0, 0, 0});
-    }
     baseline::Bvh base;
     std::vector<float4> base_tris;
     if (!native_only) {
@@ -830,11 +656,6 @@ int main(int argc, char** argv) try {
         }
         j["tracers"].push_back(row);
     }
-    for (int e = 1; e < n_native; ++e)
-        if (e != embree_row)
-            std::printf("%s / native: camera %.3f, shadow %.3f, bounce %.3f, all %.3f\n",
-                        names[e].c_str(), ratio(0, e, 0), ratio(1, e, 0), ratio(2, e, 0),
-                        ratio(-1, e, 0));
     // The goals' ratios, each the median of the runs' ratios (side by side within a run).
     if (embree_row >= 0) {
         std::printf("native / Embree:");
