@@ -88,6 +88,15 @@ ETK_FORCE_INLINE_FN float etk_spot_share(EtkScene S, EtkParams p, int cell) {
     return box[ETK_PORTAL_ON] > 0.0f ? box[ETK_PORTAL_SHARES + cell] : 0.0f;
 }
 
+// The guided shares c a cell chooses among once it has learned (host/lib/render/
+// visibility_cache.h): 0, 1/4, 1/2. Where light comes back by paths the guide misses (the sun
+// through a mirror-like statue onto the ground under the open sky), a share c leaves them 1 - c of
+// the BSDF's density and multiplies their weight by 1 / (1 - c): c = 0 wins there.
+#define ETK_GUIDED_CANDIDATES 3
+ETK_FN float etk_guided_candidate(int j) {
+    return 0.25f * (float)j;
+}
+
 // The mixture's density from its parts (the host's learning evaluates candidate shares with it).
 ETK_FN float etk_cguide_mix(float c, float q, float pg, float ps, float pb) {
     return c * ((1.0f - q) * pg + q * ps) + (1.0f - c) * pb;

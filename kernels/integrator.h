@@ -198,6 +198,7 @@ ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
     P.radiance[i] = make_float4(0.0f, 0.0f, 0.0f, 0.0f);
     P.eta_scale[i] = 1.0f; // the continuation's (etk_roulette), 1 to start
     P.pixel[i] = pixel;
+    P.guide_noted[i] = 0; // no continuation record yet (visibility_record.h)
     Q.ray_out[i] = i;
 }
 
@@ -242,6 +243,10 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
     // matters, which any-hit traversal answers sooner (the same triangle tests, so the same
     // answer).
     int ends = P.depth[slot] >= p.max_depth;
+    // A guided vertex's continuation, after the vertex's shadow ray: what its record needs (the
+    // last vertex's continuation is never guided, and teaches the guide nothing).
+    if (p.guide_learn && p.guide_continuation && P.ray_pdf[slot] > 0.0f && !ends)
+        etk_guide_note_vertex(P, slot, P.depth[slot] - 1);
     if (!etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), 3.0e38f, ends, &h)) {
         etk_escaped(S, P, p, slot);
         return;
@@ -579,6 +584,8 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
     (void)F;
     int slot = Q.shadow[i];
     float4 o = P.shadow_o[slot], d = P.shadow_d[slot];
+    if (p.guide_learn)
+        etk_guide_prefetch_light(Q.guide_sums, p, P.shadow_key[slot]);
     EtkHit h;
     int visible = !etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), d.w, 1, &h);
     if (visible) {
@@ -622,8 +629,6 @@ ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
 // than poisoning the pixel, and is counted: the host reports any, and the tests require none.
 ETK_FN void etk_accumulate(ETK_STAGE_PARAMS) {
     (void)out;
-    (void)S;
-    (void)p;
     int pixel = P.pixel[i];
     float3 L = etk_xyz(P.radiance[i]);
     if (!(isfinite(L.x) && isfinite(L.y) && isfinite(L.z))) {
@@ -631,6 +636,8 @@ ETK_FN void etk_accumulate(ETK_STAGE_PARAMS) {
         L = make_float3(0.0f, 0.0f, 0.0f);
     }
     etk_film_add(F, pixel, L);
+    if (p.guide_learn && p.guide_continuation) // the path's continuation records
+        etk_guide_record_path(S, P, Q.guide_sums, p, i);
 }
 
 ETK_END

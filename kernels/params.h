@@ -66,6 +66,7 @@ typedef struct {
     int guide_learn; // records shadow rays' and continuations' outcomes (visibility_cache.h)
     int guide_continuation;
     float guide_inv_power; // 1 / the map's power: the unit of the records (visibility_record.h)
+    float guide_continuation_share; // a well-learned cell's guided share (VisibilityOptions)
     // Splitting (the mis strategy): light and BSDF samples per non-delta vertex, powers of two;
     // 1 and 1 are the paper's estimator (etk_split_samples in integrator.h).
     int light_samples, bsdf_samples;

@@ -52,10 +52,13 @@
     X(float, shadow_val) /* visibility learning: its unweighted L cos / pdf */                     \
     X(int, pixel)        /* film pixel of the path */                                              \
     X(float2, guide_parts) /* visibility learning: the shadow ray's p_vis and p_portal */          \
-    X(float4, light_dir)   /* the light sample of the path's vertex, drawn by sample_lights:       \
-                              direction; w: its density (integrator.h) */                          \
-    X(float4, light_L)     /* its radiance (rgb) */                                                \
-    X(int, light_cell)     /* the cell sample_lights drew it in (etk_light_source) */
+    X(int, guide_noted) /* visibility learning: bit k: guided vertex k's record is noted below */  \
+    X(EtkGuideVertices,                                                                            \
+      guide_vertices)    /* its records until the path ends (visibility_record.h) */               \
+    X(float4, light_dir) /* the light sample of the path's vertex, drawn by sample_lights:         \
+                            direction; w: its density (integrator.h) */                            \
+    X(float4, light_L)   /* its radiance (rgb) */                                                  \
+    X(int, light_cell)   /* the cell sample_lights drew it in (etk_light_source) */
 
 // Work queues of path slots, one int per path in flight: X(name). ray_in and ray_out swap
 // buffers between bounces; the others keep one buffer each for the whole render (the back ends
@@ -92,6 +95,14 @@
     X(accumulate, etk_accumulate, 0)
 
 ETK_BEGIN
+
+// The continuation records a learning path keeps until it ends: the first ETK_GUIDE_VERTICES
+// guided vertices', ETK_GUIDE_VERTEX_FLOAT4S float4s each (kernels/visibility_record.h).
+#define ETK_GUIDE_VERTICES 8
+#define ETK_GUIDE_VERTEX_FLOAT4S 4
+typedef struct {
+    float4 v[ETK_GUIDE_VERTICES * ETK_GUIDE_VERTEX_FLOAT4S];
+} EtkGuideVertices;
 
 #define ETK_COUNTER_ENUM(name) ETK_Q_##name,
 enum { ETK_COUNTERS(ETK_COUNTER_ENUM) ETK_Q_COUNT };

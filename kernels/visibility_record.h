@@ -1,8 +1,10 @@
-// The visibility strategy's shadow-ray records, summed where they are made: in the shadow stage,
-// on the device, into one buffer of sums the host reads (and zeroes) only when it rebuilds the
-// tables (host/lib/render/visibility_cache.h says what the sums mean and how the tables come from
-// them). No record crosses to the host between bounces, so a GPU keeps its learning passes on
-// the device, and the native back end's threads add their own records as they trace.
+// The visibility strategy's records, summed where they are made, on the device, into one buffer
+// of sums the host reads (and zeroes) only when it rebuilds the tables
+// (host/lib/render/visibility_cache.h says what the sums mean and how the tables come from them):
+// each shadow ray's in the shadow stage; each guided vertex's continuation at the end of its
+// path (etk_guide_note_vertex keeps what the record needs until the path's radiance is known).
+// No record crosses to the host between bounces, so a GPU keeps its learning passes on the
+// device, and the native back end's threads add their own records as they trace.
 //
 // The sums are 64-bit fixed point, added as two 32-bit words with a carry (etk_add_wide): integer
 // additions commute, so the sums -- and the tables -- do not depend on the order the records
@@ -18,10 +20,20 @@
 //   moments slots x ETK_PORTAL_CANDIDATES pairs: per cell and candidate portal share b, the
 //           light sample's second moment had it been drawn with share b
 //   portal  ETK_PORTAL_CELLS pairs: per cell of the scene's box, the unoccluded records' values
-//   records 1 pair: the records with a cell
+// and, with the continuation guide (p.guide_continuation), after them:
+//   dir     slots x ETK_GUIDE_REGIONS pairs: per cell and region, the continuations' values
+//   dcounts slots words: the continuation records per cell
+//   cm2     slots pairs: per cell, the continuation's second moment
+//   spotm   slots x ETK_PORTAL_CANDIDATES pairs: per cell and secondary-source share q, the
+//           guided continuation's second moment had it been drawn with share q
+//   guidedm slots x ETK_GUIDED_CANDIDATES pairs: the same per guided share c
+//   gcounts slots words: the records in guidedm per cell
+//   spot    ETK_PORTAL_CELLS pairs: per cell of the scene's box, the continuations' values
+// (No total of the records: the per-cell counts hold it, without one word every thread adds to.)
 #ifndef ETK_VISIBILITY_RECORD_H
 #define ETK_VISIBILITY_RECORD_H
 #include "compat.h"
+#include "continuation_guide.h"
 #include "params.h"
 #include "portal_guide.h"
 #include "visibility_guide.h"
@@ -45,12 +57,34 @@ ETK_FN int etk_gsum_moments(int slots) {
 ETK_FN int etk_gsum_portal(int slots) {
     return etk_gsum_moments(slots) + 2 * slots * ETK_PORTAL_CANDIDATES;
 }
-ETK_FN int etk_gsum_records(int slots) {
+ETK_FN int etk_gsum_dir(int slots) {
     return etk_gsum_portal(slots) + 2 * ETK_PORTAL_CELLS;
 }
-ETK_FN int etk_gsum_words(int slots) {
-    return etk_gsum_records(slots) + 2;
+ETK_FN int etk_gsum_dcounts(int slots) {
+    return etk_gsum_dir(slots) + 2 * slots * ETK_GUIDE_REGIONS;
 }
+ETK_FN int etk_gsum_cm2(int slots) {
+    return etk_gsum_dcounts(slots) + slots;
+}
+ETK_FN int etk_gsum_spotm(int slots) {
+    return etk_gsum_cm2(slots) + 2 * slots;
+}
+ETK_FN int etk_gsum_guidedm(int slots) {
+    return etk_gsum_spotm(slots) + 2 * slots * ETK_PORTAL_CANDIDATES;
+}
+ETK_FN int etk_gsum_gcounts(int slots) {
+    return etk_gsum_guidedm(slots) + 2 * slots * ETK_GUIDED_CANDIDATES;
+}
+ETK_FN int etk_gsum_spot(int slots) {
+    return etk_gsum_gcounts(slots) + slots;
+}
+ETK_FN int etk_gsum_words(int slots, int continuation) {
+    return continuation ? etk_gsum_spot(slots) + 2 * ETK_PORTAL_CELLS : etk_gsum_dir(slots);
+}
+
+// A hint to load the line of the sums at w (the sums are volatile for the atomics; a prefetch
+// takes a plain pointer).
+#define etk_prefetch_sum(w) ETK_PREFETCH((ETK_GLOBAL const uint*)(w))
 
 // v >= 0 (relative to the map's power) in fixed point, capped.
 ETK_FN ulong etk_guide_fixed(float v) {
@@ -70,6 +104,19 @@ ETK_FN void etk_add_wide(ETK_ATOMIC_PTR w, ulong v) {
         ETK_ATOMIC_ADD(w + 1, hi);
 }
 
+// The lines a shadow ray's record with `key` will add to, requested before the ray is traced: the
+// traversal hides their latency (an atomic add waits for its line with nothing after it started).
+ETK_FN void etk_guide_prefetch_light(ETK_ATOMIC_PTR sums, EtkParams p, int key) {
+    int slots = p.guide_slots;
+    if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
+        return;
+    int c = key / ETK_GUIDE_REGIONS;
+    etk_prefetch_sum(sums + 2 * key);
+    etk_prefetch_sum(sums + etk_gsum_counts(slots) + c);
+    etk_prefetch_sum(sums + etk_gsum_m2(slots) + 2 * c);
+    etk_prefetch_sum(sums + etk_gsum_moments(slots) + 2 * c * ETK_PORTAL_CANDIDATES);
+}
+
 // One shadow ray's record: its key (cell x regions + region of its direction; outside the table:
 // no cell), its value (luminance(L) cos / pdf if nothing blocked it, else 0), the box cell it
 // leaves by (-1: blocked) and the densities p_vis, p_portal of its direction. box: the portal
@@ -84,7 +131,6 @@ ETK_FN void etk_guide_record_light(ETK_ATOMIC_PTR sums, EtkParams p, ETK_GLOBAL 
     if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
         return;
     int s = key / ETK_GUIDE_REGIONS;
-    etk_add_wide(sums + etk_gsum_records(slots), 1);
     etk_add_wide(sums + 2 * key, fv);
     ETK_ATOMIC_INC(sums + etk_gsum_counts(slots) + s);
     if (!(v > 0.0f) || !isfinite(parts.x) || !isfinite(parts.y))
@@ -103,6 +149,118 @@ ETK_FN void etk_guide_record_light(ETK_ATOMIC_PTR sums, EtkParams p, ETK_GLOBAL 
         float pb = (1.0f - b) * parts.x + b * parts.y;
         etk_add_wide(m + 2 * j,
                      etk_guide_fixed(pb > 0.0f ? v * v * prec / pb : ETK_GUIDE_MAX_RECORD));
+    }
+}
+
+// One guided vertex's continuation record: key (cell x regions + the equal-area region of the
+// direction), value luminance(L_in) / p (L_in the radiance the rest of the path brought back
+// along it), the ray's origin o, direction d and density p. cells: the tables the continuation
+// was drawn with (guide_cells). What the sums take, and why: visibility_cache.h.
+ETK_FN void etk_guide_record_continuation(ETK_ATOMIC_PTR sums, EtkParams p,
+                                          ETK_GLOBAL const float* cells, int key, float value,
+                                          float3 o, float3 d, float prec) {
+    int slots = p.guide_slots;
+    if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
+        return;
+    float v = (isfinite(value) ? fmax(value, 0.0f) : 0.0f) * p.guide_inv_power;
+    int s = key / ETK_GUIDE_REGIONS;
+    ETK_GLOBAL const float* spot = cells + etk_portal_offset(slots, 1) + etk_portal_size(slots);
+    float t;
+    int exit = etk_portal_exit(spot, o, d, &t);
+    // The densities the record was drawn with: the cell's guide, the spot table, the BSDF's.
+    ETK_GLOBAL const float* dir = cells + etk_guide_dir_offset(slots, s);
+    float c = dir[ETK_GUIDE_DIR_SHARE];
+    float q = spot[ETK_PORTAL_ON] > 0.0f ? spot[ETK_PORTAL_SHARES + s] : 0.0f;
+    float pg = etk_cguide_region_pdf(dir, d);
+    float ps = etk_portal_pdf_exit(spot, d, exit, t);
+    // p_b from the mixture the record was drawn with (its BSDF part taken out).
+    float pb =
+        c < 1.0f ? fmax(0.0f, (prec - etk_cguide_mix(c, q, pg, ps, 0.0f)) / (1.0f - c)) : 0.0f;
+    // The tables learn luminance(L_in) cos / p = pi p_b v (p_b = cos / pi at a diffuse vertex,
+    // the only kind that is guided): both follow the integrand's incident radiance x cosine. A
+    // glossy vertex's record, drawn from its lobe alone (p_rec = its p_b, recovered here with the
+    // cell's share c), weighs at most pi luminance(L_in) / (1 - c).
+    ulong g = etk_guide_fixed(isfinite(pb) ? ETK_PI * pb * v : 0.0f);
+    etk_add_wide(sums + etk_gsum_dir(slots) + 2 * key, g);
+    ETK_ATOMIC_INC(sums + etk_gsum_dcounts(slots) + s);
+    if (exit >= 0 && exit < ETK_PORTAL_CELLS && g != 0)
+        etk_add_wide(sums + etk_gsum_spot(slots) + 2 * exit, g);
+    if (!(v > 0.0f) || !(pb > 0.0f) || !isfinite(prec * ps * pg))
+        return;
+    // The continuation's estimate at a diffuse vertex, f cos L / p = albedo p_bsdf v: its second
+    // moment in the light sample count's unit.
+    etk_add_wide(sums + etk_gsum_cm2(slots) + 2 * s, etk_guide_fixed(pb * v * pb * v));
+    float m2 = v * v * prec * pb * pb;
+    ETK_ATOMIC_PTR sm = sums + etk_gsum_spotm(slots) + 2 * s * ETK_PORTAL_CANDIDATES;
+    for (int j = 0; j < ETK_PORTAL_CANDIDATES; ++j) {
+        float pq = etk_cguide_mix(p.guide_continuation_share, etk_portal_candidate(j), pg, ps, pb);
+        etk_add_wide(sm + 2 * j, etk_guide_fixed(pq > 0.0f ? m2 / pq : ETK_GUIDE_MAX_RECORD));
+    }
+    // The guided share's moments, with the cell's spot share; from the first update on (the
+    // prior guide is uniform: its records would only tell that it is worse than the BSDF).
+    if (!p.guide_ready)
+        return;
+    ETK_ATOMIC_INC(sums + etk_gsum_gcounts(slots) + s);
+    ETK_ATOMIC_PTR gm = sums + etk_gsum_guidedm(slots) + 2 * s * ETK_GUIDED_CANDIDATES;
+    for (int j = 0; j < ETK_GUIDED_CANDIDATES; ++j) {
+        float pc = etk_cguide_mix(etk_guided_candidate(j), q, pg, ps, pb);
+        etk_add_wide(gm + 2 * j, etk_guide_fixed(pc > 0.0f ? m2 / pc : ETK_GUIDE_MAX_RECORD));
+    }
+}
+
+// What a continuation record needs of guided vertex k (its depth) of the path in `slot` until
+// the path ends: the continuation ray (origin, density; direction, key), the throughput after the
+// vertex and the radiance so far, in ETK_GUIDE_VERTEX_FLOAT4S float4s. Called where the ray is
+// traced (the next bounce's intersect stage), after the vertex's shadow ray added its light.
+ETK_FN void etk_guide_note_vertex(EtkPaths P, int slot, int k) {
+    if (k >= ETK_GUIDE_VERTICES)
+        return; // deeper vertices teach the guide nothing (their records are not kept)
+    float4 d = P.ray_d[slot];
+    int key = P.ray_cell[slot] * ETK_GUIDE_REGIONS + etk_cguide_region(etk_xyz(d));
+    ETK_GLOBAL float4* r = P.guide_vertices[slot].v + ETK_GUIDE_VERTEX_FLOAT4S * k;
+    r[0] = etk_f4(etk_xyz(P.ray_o[slot]), P.ray_pdf[slot]);
+    r[1] = etk_f4(etk_xyz(d), as_float((uint)key));
+    r[2] = P.beta[slot];
+    r[3] = P.radiance[slot];
+    P.guide_noted[slot] |= 1 << k;
+}
+
+// At the path's end: the continuation records of its noted vertices, the radiance each brought
+// back being the path's final radiance less the radiance at the vertex, over its throughput.
+ETK_FN void etk_guide_record_path(EtkScene S, EtkPaths P, ETK_ATOMIC_PTR sums, EtkParams p,
+                                  int slot) {
+    float3 end = etk_xyz(P.radiance[slot]);
+    int noted = P.guide_noted[slot], slots = p.guide_slots;
+    // The records' keys scatter over tens of megabytes of sums and tables, and an atomic add
+    // waits for its line with nothing after it started (x86): every line the records will touch
+    // is requested first (natively, room000_d5: the records took 1.3x the time without).
+    for (int k = 0; k < ETK_GUIDE_VERTICES; ++k) {
+        if (!(noted & (1 << k)))
+            continue;
+        int key = (int)as_uint(P.guide_vertices[slot].v[ETK_GUIDE_VERTEX_FLOAT4S * k + 1].w);
+        if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
+            continue;
+        int c = key / ETK_GUIDE_REGIONS;
+        etk_prefetch_sum(sums + etk_gsum_dir(slots) + 2 * key);
+        ETK_PREFETCH(S.guide_cells + etk_guide_dir_offset(slots, c) + key % ETK_GUIDE_REGIONS);
+        ETK_PREFETCH(S.guide_cells + etk_guide_dir_offset(slots, c) + ETK_GUIDE_DIR_SHARE);
+        etk_prefetch_sum(sums + etk_gsum_dcounts(slots) + c);
+        etk_prefetch_sum(sums + etk_gsum_cm2(slots) + 2 * c);
+        etk_prefetch_sum(sums + etk_gsum_spotm(slots) + 2 * c * ETK_PORTAL_CANDIDATES);
+        etk_prefetch_sum(sums + etk_gsum_guidedm(slots) + 2 * c * ETK_GUIDED_CANDIDATES);
+        etk_prefetch_sum(sums + etk_gsum_gcounts(slots) + c);
+    }
+    for (int k = 0; k < ETK_GUIDE_VERTICES; ++k) {
+        if (!(noted & (1 << k)))
+            continue;
+        ETK_GLOBAL const float4* r = P.guide_vertices[slot].v + ETK_GUIDE_VERTEX_FLOAT4S * k;
+        float3 beta = etk_xyz(r[2]), before = etk_xyz(r[3]);
+        float3 L = make_float3(beta.x > 0.0f ? (end.x - before.x) / beta.x : 0.0f,
+                               beta.y > 0.0f ? (end.y - before.y) / beta.y : 0.0f,
+                               beta.z > 0.0f ? (end.z - before.z) / beta.z : 0.0f);
+        float4 o = r[0], d = r[1];
+        etk_guide_record_continuation(sums, p, S.guide_cells, (int)as_uint(d.w),
+                                      etk_luma(L) * (1.0f / o.w), etk_xyz(o), etk_xyz(d), o.w);
     }
 }
 

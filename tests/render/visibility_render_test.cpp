@@ -27,7 +27,6 @@ struct Result {
     std::vector<float> mean;
     uint64_t records = 0, continuation_records = 0;
     int verdict = -1;
-    int record_threads = 0; // the most host threads a bounce's records were added on
 };
 
 // Samples [from, to) on `threads` threads, resuming `resume` if given.
@@ -128,65 +127,6 @@ TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
     s.settings.heuristic = et::MisHeuristic::automatic;
     EXPECT_FALSE(samples(s, et::Strategy::visibility, 72, 80, &verdict) == vis);
     EXPECT_EQ(verdict, -1);
-}
-
-// A device as another, but for the host threads its lanes may add the guide's records on (a
-// GPU's: every hardware thread).
-class WithHostThreads : public et::WavefrontDevice {
-  public:
-    WithHostThreads(std::unique_ptr<et::WavefrontDevice> d, int threads)
-        : d_(std::move(d)), threads_(threads) {}
-    std::string name() const override { return d_->name(); }
-    int lanes() const override { return d_->lanes(); }
-    int wave_size() const override { return d_->wave_size(); }
-    et::StageExecutor& lane(int k) override { return d_->lane(k); }
-    void run_lanes(const std::function<void(int)>& f) override { d_->run_lanes(f); }
-    void finish() override { d_->finish(); }
-    void clear_film(bool aovs) override { d_->clear_film(aovs); }
-    void download_film(et::Film& film, bool aovs) override { d_->download_film(film, aovs); }
-    std::vector<std::pair<std::string, double>> stage_seconds() override {
-        return d_->stage_seconds();
-    }
-    void upload_guide(const std::vector<float>& cells) override { d_->upload_guide(cells); }
-    void take_guide_sums(std::vector<uint32_t>& out) override { d_->take_guide_sums(out); }
-    bool prefers_light_batches() const override { return d_->prefers_light_batches(); }
-    int host_threads() const override { return threads_; }
-
-  private:
-    std::unique_ptr<et::WavefrontDevice> d_;
-    int threads_;
-};
-
-// The records of a bounce are added in slices on several host threads where the device leaves
-// them free (a GPU): integer sums, so the tables, and the image, are the same bits. One lane, one
-// wave of the whole 256 x 256 film (65,536 paths), so a bounce's shadow and continuation records
-// are split on two threads or more (schedule.cpp: 16,384 records a thread at least).
-TEST(VisibilityRender, SameBitsWithTheRecordsAddedOnSeveralHostThreads) {
-    et::Scene s = ett::side_lit_room(256, 256);
-    s.settings.strategy = et::Strategy::visibility;
-    s.settings.backend = et::Backend::cpu;
-    s.settings.max_depth = 2;
-    s.settings.seed = 3;
-    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
-    auto run = [&](int threads) {
-        et::Renderer r(ds, [&](et::Film& film) -> std::unique_ptr<et::WavefrontDevice> {
-            return std::make_unique<WithHostThreads>(
-                std::make_unique<et::CpuDevice>(ds, film, 1, 256 * 256), threads);
-        });
-        for (uint32_t k = 0; k < 20; ++k) // inside the 32 learning passes
-            r.render_sample(k);
-        const et::RenderStats& st = r.stats();
-        return Result{r.sums().mean(), ett::learning_count(st, "records"),
-                      ett::learning_count(st, "continuation_records"), ett::learning_verdict(st),
-                      static_cast<int>(ett::learning_count(st, "record_threads"))};
-    };
-    const Result one = run(1), four = run(4);
-    // Per pass (20): depth 2 records continuations at the first vertex alone, ~39,000 here.
-    EXPECT_EQ(one.record_threads, 1);
-    EXPECT_GE(four.record_threads, 2) << "the records were never split: the test sees nothing";
-    EXPECT_EQ(one.records, four.records);
-    EXPECT_EQ(one.continuation_records, four.continuation_records);
-    EXPECT_TRUE(one.mean == four.mean) << "the image depends on the host threads adding records";
 }
 
 } // namespace

@@ -94,10 +94,10 @@ inline et::Scene side_lit_room(int w, int h) {
 }
 
 // A count among the learning technique's figures (RenderStats::learning, the visibility
-// strategy's: "records", "continuation_records", "record_threads"); 0 where nothing learns.
+// strategy's: "records", "continuation_records"); 0 where nothing learns.
 inline uint64_t learning_count(const et::RenderStats& st, const char* key) {
     return st.learning.is_object() && st.learning.contains(key) ? st.learning[key].get<uint64_t>()
-                                                                  : 0;
+                                                                : 0;
 }
 // The visibility strategy's verdict: 1 the tables stay, 0 MIS from then on, -1 not (yet) given.
 inline int learning_verdict(const et::RenderStats& st) {

@@ -38,7 +38,8 @@ struct DeviceScene {
     // 0 unless the scene learns them.
     size_t guide_sum_words() const {
         return params.light_first == ETK_LIGHT_LEARNED
-                   ? static_cast<size_t>(etk::etk_gsum_words(params.guide_slots))
+                   ? static_cast<size_t>(
+                         etk::etk_gsum_words(params.guide_slots, params.guide_continuation))
                    : 0;
     }
 

@@ -49,21 +49,15 @@ struct VisibilityOptions {
     // The guided share of a well-learned cell's continuations (0.3 / 0.5 / 0.7 measured:
     // docs/history/results-journal.md), until the cell chooses its own among guided_shares.
     double continuation_share = 0.5;
-    // Each cell's guided share c, once it has min_records continuation records: the one of these
-    // whose continuation has the least second moment on all its records (a tie keeps the
-    // smaller). Where the guide learns the indirect light, c > 0 wins; where light comes back by
-    // paths the guide misses (the sun through a mirror-like statue onto the ground under the
-    // open sky), a share c leaves those paths 1 - c of the BSDF's density and multiplies their
-    // weight by 1 / (1 - c), and c = 0 wins (docs/estimators.md).
-    std::array<double, 3> guided_shares{{0.0, 0.25, 0.5}};
-    // The secondary-source table's share of a cell's guided continuations: chosen among these
-    // as the portal share is (0 until the cell has min_records continuation records),
-    // except that a share q > 0 must lower the second moment by spot_cost of it, the extra time
-    // its density costs at every guided vertex of the cell (equal-spp relative variance, 320 x
-    // 240, 128 spp: skylight_room 0.0346 -> 0.0218 / 0.0239 / 0.0322 with a cost of 0 / 0.15 /
-    // 0.3, window_room 0.0187 -> 0.0177 / 0.0185 / 0.0186, while a cost of 0 took ~15% more
-    // time per sample: docs/history/results-journal.md).
-    std::array<double, 4> spot_shares{{0.0, 0.25, 0.5, 0.75}};
+    // Each cell's guided share c, once it has min_records continuation records: the candidate
+    // (etk_guided_candidate) whose continuation has the least second moment on all its records.
+    // The secondary-source table's share of a cell's guided continuations: chosen among the
+    // portal share's candidates (etk_portal_candidate) as the portal share is (0 until the cell has
+    // min_records continuation records), except that a share q > 0 must lower the second moment by
+    // spot_cost of it, the extra time its density costs at every guided vertex of the cell
+    // (equal-spp relative variance, 320 x 240, 128 spp: skylight_room 0.0346 -> 0.0218 / 0.0239 /
+    // 0.0322 with a cost of 0 / 0.15 / 0.3, window_room 0.0187 -> 0.0177 / 0.0185 / 0.0186, while a
+    // cost of 0 took ~15% more time per sample: docs/history/results-journal.md).
     double spot_cost = 0.15;
     // Each cell's expected light samples n (kernels/visibility_guide.h, etk_guide_light_count):
     // the candidate of light_sample_count on the second moments of the cell's light samples and

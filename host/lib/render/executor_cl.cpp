@@ -250,12 +250,6 @@ void ClDevice::finish() {
         l->finish();
 }
 
-// A CPU device's lanes keep the host's cores busy; a GPU's lane waits while the host adds the
-// visibility strategy's records, so every hardware thread adds them (schedule.cpp).
-int ClDevice::host_threads() const {
-    return rt_->limits().cpu ? 1 : thread_count(0);
-}
-
 size_t ClDevice::pending_events() const {
     size_t n = 0;
     for (const auto& l : lanes_)
@@ -332,7 +326,7 @@ void ClDevice::upload_guide(const std::vector<float>& cells) {
 
 // Between passes (no lane is running): the sums, then zeroes in their place.
 void ClDevice::take_guide_sums(std::vector<uint32_t>& out) {
-    out.resize(guide_words_);
+    out.resize(guide_words_); // (its zeros unused: the device zeroes its own buffer)
     try {
         ClLane& l = *lanes_[0];
         l.queue().enqueueReadBuffer(args_[etk::ETK_ARG_guide_sums], CL_TRUE, 0,

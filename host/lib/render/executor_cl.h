@@ -101,9 +101,8 @@ class ClDevice : public WavefrontDevice {
     void download_film(Film& film, bool aovs) override;
     std::vector<std::pair<std::string, double>> stage_seconds() override;
     bool prefers_light_batches() const override { return prefers_light_batches_on(rt_->limits()); }
-    int host_threads() const override;
     void upload_guide(const std::vector<float>& cells) override;
-    void take_guide_sums(std::vector<uint32_t>& out) override;
+    void take_guide_sums(std::vector<uint32_t>& sums) override;
 
     // Events of launches not yet accounted, all lanes (for tests: stays bounded during a render).
     size_t pending_events() const;

@@ -137,9 +137,12 @@ void CpuDevice::upload_guide(const std::vector<float>& cells) {
     std::copy(cells.begin(), cells.end(), guide_cells_.begin()); // between passes: no reader
 }
 
-void CpuDevice::take_guide_sums(std::vector<uint32_t>& out) {
-    out = guide_sums_; // between passes: no lane adds
-    std::fill(guide_sums_.begin(), guide_sums_.end(), 0u);
+void CpuDevice::take_guide_sums(std::vector<uint32_t>& sums) {
+    if (sums.size() != guide_sums_.size())
+        sums.assign(guide_sums_.size(), 0u);
+    sums.swap(guide_sums_); // between passes: no lane adds
+    for (auto& l : lanes_)
+        l->set_guide(guide_cells_.data(), guide_sums_.data());
 }
 
 CpuDevice::~CpuDevice() = default;

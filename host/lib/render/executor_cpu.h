@@ -29,7 +29,7 @@ class CpuDevice : public WavefrontDevice {
     void download_film(Film&, bool) override {}
     std::vector<std::pair<std::string, double>> stage_seconds() override;
     void upload_guide(const std::vector<float>& cells) override;
-    void take_guide_sums(std::vector<uint32_t>& out) override;
+    void take_guide_sums(std::vector<uint32_t>& sums) override;
 
   private:
     std::vector<float> guide_cells_;   // the visibility strategy's tables, read by every lane

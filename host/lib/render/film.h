@@ -9,6 +9,7 @@
 
 namespace et {
 
+using etk::EtkGuideVertices;
 using etk::float2;
 using etk::float4;
 

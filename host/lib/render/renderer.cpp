@@ -127,7 +127,7 @@ void Renderer::keep_held() {
 
 const Film* Renderer::measure(const etk::EtkParams& p) {
     device_->clear_film(sums_.has_aovs());
-    const RayCounts c = run_pass(*device_, p, nullptr, stop_);
+    const RayCounts c = run_pass(*device_, p, stop_);
     count(c);
     if (c.abandoned) {
         abandoned_ = true;
@@ -147,7 +147,7 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     // The pass renders into a zeroed film, whose one sample per pixel is then added exactly to
     // the sums.
     device_->clear_film(sums_.has_aovs());
-    const RayCounts c = run_pass(*device_, p, learn ? policy_.get() : nullptr, stop_);
+    const RayCounts c = run_pass(*device_, p, stop_);
     if (c.abandoned) { // an incomplete film: neither kept nor learnt from
         abandoned_ = true;
         count(c);

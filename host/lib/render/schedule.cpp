@@ -20,6 +20,7 @@ const char* stage_name(int stage) {
 }
 
 size_t path_field_bytes(int field) {
+    using etk::EtkGuideVertices;
     using etk::float2;
     using etk::float4;
 #define ET_FIELD_BYTES(type, name) sizeof(type),
@@ -49,7 +50,7 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
 }
 
 bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
-              WaveRecorder* recorder, const StopRequest& stop) {
+              const StopRequest& stop) {
     p.first_pixel = first;
     // A light set sums all its lights at a hit; every other technique takes one light sample.
     const int shade =
@@ -76,23 +77,18 @@ bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
         ex.read_counters(c);
         ex.launch(etk::ETK_STAGE_trace_shadows, static_cast<int>(c[etk::ETK_Q_SHADOW]), p);
         counts.shadow += c[etk::ETK_Q_SHADOW] + c[etk::ETK_Q_LIGHT_RAYS];
-        if (recorder)
-            recorder->after_bounce(ex, bounce, c);
         rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
         swapped = !swapped;
         if (rays > 0 && stop && stop())
             return false; // the path state is left as it is: the next wave starts afresh
     }
-    if (recorder)
-        recorder->after_wave(ex);
     ex.launch(etk::ETK_STAGE_accumulate, n, p);
     ex.read_counters(c); // the last bounce reset them: this is the film's count
     counts.nonfinite += c[etk::ETK_Q_NONFINITE];
     return true;
 }
 
-RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, LearningPolicy* policy,
-                   const StopRequest& stop) {
+RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, const StopRequest& stop) {
     const int pixels = params.width * params.height, wave = device.wave_size();
     std::atomic<int> next{0};
     std::atomic<bool> abandoned{false};
@@ -107,9 +103,7 @@ RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, Learni
                 break;
             }
             const int n = std::min(wave, pixels - first);
-            const std::unique_ptr<WaveRecorder> recorder =
-                policy ? policy->recorder(params, n, device.host_threads()) : nullptr;
-            if (!run_wave(device.lane(k), params, first, n, counts[k], recorder.get(), stop)) {
+            if (!run_wave(device.lane(k), params, first, n, counts[k], stop)) {
                 abandoned = true;
                 break;
             }

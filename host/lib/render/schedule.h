@@ -49,8 +49,6 @@ struct RayCounts {
 };
 
 class Film;
-class LearningPolicy;
-class WaveRecorder;
 
 // A back end: one or more executors ("lanes") that can run waves concurrently, and the film.
 class WavefrontDevice {
@@ -73,16 +71,13 @@ class WavefrontDevice {
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
     // A learning technique's tables (EtkScene.guide_cells) for the passes to come.
     virtual void upload_guide(const std::vector<float>& cells);
-    // The light-sample records' sums the stages added since the last call (DeviceScene::
-    // guide_sum_words words, kernels/visibility_record.h), read between passes; the device's
-    // sums start again from zero.
-    virtual void take_guide_sums(std::vector<uint32_t>& out);
+    // The visibility records' sums the stages added since the last call (DeviceScene::
+    // guide_sum_words words, kernels/visibility_record.h), between passes, into `sums`, which
+    // holds zeros (or nothing) on entry: the device's sums start again from zero, natively from
+    // those very words (the buffers trade places: no copy of tens of megabytes per update).
+    virtual void take_guide_sums(std::vector<uint32_t>& sums);
     // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
     virtual bool prefers_light_batches() const { return true; }
-    // Host threads a lane may spend on the visibility strategy's records between its launches:
-    // 1 where the device is the host's own cores (its lanes keep them busy), every hardware
-    // thread where the device is not (a GPU's lane waits on the host while it adds them).
-    virtual int host_threads() const { return 1; }
 };
 
 // Asked between waves and between bounces (from any lane's thread): true abandons the pass in
@@ -91,16 +86,15 @@ class WavefrontDevice {
 using StopRequest = std::function<bool()>;
 
 // One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
-// the film. Adds the rays traced to `counts`. A learning pass's recorder (learning_policy.h) is
-// called after every bounce and after the last.
-// Returns false where `stop` ended the wave before its film was written.
+// the film. Adds the rays traced to `counts`. Returns false where `stop` ended the wave before its
+// film was written.
 bool run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
-              WaveRecorder* recorder = nullptr, const StopRequest& stop = {});
+              const StopRequest& stop = {});
 
 // One pass: sample params.sample_index of every pixel, in waves of the device's size handed
-// to its lanes as they free up, each with its recorder from `policy` (if any). `stop` may abandon
-// it (the result's `abandoned`); the waiting lanes then take no more waves.
+// to its lanes as they free up. `stop` may abandon it (the result's `abandoned`); the waiting
+// lanes then take no more waves.
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
-                   LearningPolicy* policy = nullptr, const StopRequest& stop = {});
+                   const StopRequest& stop = {});
 
 } // namespace et

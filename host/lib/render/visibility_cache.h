@@ -4,8 +4,9 @@
 //
 // Learning: during the learning passes (samples 0 .. L-1, L = 64) every shadow ray of the
 // visibility strategy leaves a record (cell x regions + region, value): value = luminance(L) cos /
-// pdf of its direction if nothing blocked it, else 0 (the shadow stage writes them in queue order;
-// the schedule hands each bounce's records here). Per cell and region the values are summed in
+// pdf of its direction if nothing blocked it, else 0 (the shadow stage sums them on the device,
+// kernels/visibility_record.h, and absorb() takes the sums at each update). Per cell and region
+// the values are summed in
 // 64-bit fixed point, so the sums -- and the tables -- do not depend on the order records
 // arrive in (threads, lanes, wave sizes, back ends): the tables depend on the seed alone (and, for
 // the continuation guide below, on the paths' float radiance, which rounds differently on the two
@@ -49,8 +50,8 @@
 // luminance(L_in) cos / p, so a patch weighs by the light it sends to where it is seen from) is
 // summed there, a second scene-wide table of the same layout: where the indirect light comes from
 // (the sunlit patch on a floor). Each hash-grid cell's share q of its guided continuations drawn
-// from it is chosen among options.spot_shares the same way, by the least second moment of the
-// continuation over the cell's records since the last update:
+// from it is chosen among the candidates etk_portal_candidate the same way, by the least second
+// moment of the continuation over the cell's records since the last update:
 //   M(q) = sum v^2 p_rec p_b^2 / p_q,   p_q = c' ((1 - q) p_guide + q p_spot) + (1 - c') p_b,
 // v = luminance(L_in) / p_rec, the integrand f cos L_in being proportional to p_b luminance(L_in)
 // at a diffuse vertex (p_b = cos / pi), p_b recovered from the record's density and the tables it
@@ -93,12 +94,13 @@ class VisibilityCache {
     // and the densities p_vis, p_portal of its direction (2 n floats). The same function sums
     // them as the device's shadow stage (kernels/visibility_record.h), for the next tables().
     void add(const int* keys, const float* values, const int* exits, const float* parts, int n);
-    // The device's sums of shadow-ray records since the last call (WavefrontDevice::
-    // take_guide_sums), added to the cache's; between passes.
-    void absorb(const std::vector<uint32_t>& words);
-    // One wave's continuation records (thread-safe): cell x K + region, value luminance(L_in) /
-    // p, and per record 8 floats: the ray's origin, 0, its direction and density p.
+    // Continuation records made on the host (thread-safe; a render's are summed on the device,
+    // as add()'s): cell x K + region, value luminance(L_in) / p, and per record 8 floats: the
+    // ray's origin, 0, its direction and density p.
     void add_continuations(const int* keys, const float* values, const float* rays, int n);
+    // The device's sums of records since the last call (WavefrontDevice::take_guide_sums),
+    // added to the cache's and left zero (the device's next sums); between passes.
+    void absorb(std::vector<uint32_t>& words);
     // The cells' tables from everything recorded so far (guide_cells_size floats): the CDFs of Q,
     // then, with options.continuation, the continuation guide's CDFs and shares.
     // Each update also chooses the cells' portal shares and starts their measure afresh.
@@ -142,9 +144,12 @@ class VisibilityCache {
     // sun's caustic through a glass or mirror-like statue) and one update's records seldom hold
     // them. Until then the slot keeps options.continuation_share.
     void choose_guided_shares();
-    // Adds one record of value v (relative to the map's power, >= 0) at key (slot x K + region)
-    // to `to`; returns the slot.
-    static int add_region(RegionSums& to, int key, double v);
+    // The parameters the record functions take, and pending_ allocated.
+    etk::EtkParams record_params();
+    // One kind of records' per-cell block of the device's sums: region sums (pairs), counts,
+    // second moments (pairs), added to r and m2.
+    void absorb_cells(RegionSums& r, std::vector<uint64_t>& m2, uint32_t* sums, uint32_t* counts,
+                      uint32_t* moments);
     VisibilityOptions opt_;
     std::vector<float> mass_; // M_R
     std::array<float, 6> box_;
@@ -155,7 +160,7 @@ class VisibilityCache {
     // The secondary-source table's sums and, per slot, moments and shares.
     std::vector<uint64_t> spot_, spot_moments_;
     std::vector<float> spot_shares_;
-    // Per slot, the continuation's second moment for each of options.guided_shares over every
+    // Per slot, the continuation's second moment for each of etk_guided_candidate over every
     // record so far, and the chosen guided share.
     std::vector<uint64_t> guided_moments_;
     std::vector<float> guided_shares_;
@@ -169,6 +174,7 @@ class VisibilityCache {
     std::vector<float> last_;
     float inv_power_;                                             // 1 / the map's power
     std::array<double, ETK_PORTAL_CANDIDATES> portal_candidates_; // etk_portal_candidate
+    std::array<double, ETK_GUIDED_CANDIDATES> guided_candidates_; // etk_guided_candidate
     std::vector<uint32_t> pending_; // add()'s sums (visibility_record.h's layout) until tables()
     RegionSums light_, dir_;        // the light sample's (shadow rays), the continuation guide's
     mutable std::mutex mutex_;

@@ -1,10 +1,11 @@
 // The visibility strategy's learning (kernels/visibility_guide.h, portal_guide.h,
-// continuation_guide.h) as a learning policy: during its learning passes every bounce's shadow-ray
-// records and every wave's continuation records go to the visibility cache (visibility_cache.h);
-// after passes 1, 2, 4 ... L the cells' tables are rebuilt and uploaded; after the verdict's
-// passes of the tables, as many passes of the fallback (the paper's MIS for the visibility
-// strategy, compensated for auto: VisibilityOptions::fallback) measure it (guide_verdict.h), and
-// the cheaper one per error renders the rest of the image.
+// continuation_guide.h) as a learning policy: during its learning passes the stages sum every
+// shadow ray's and every guided vertex's continuation's record on the device
+// (kernels/visibility_record.h); after passes 1, 2, 4 ... L the visibility cache
+// (visibility_cache.h) takes the sums and the cells' tables are rebuilt and uploaded; after the
+// verdict's passes of the tables, as many passes of the fallback (the paper's MIS for the
+// visibility strategy, compensated for auto: VisibilityOptions::fallback) measure it
+// (guide_verdict.h), and the cheaper one per error renders the rest of the image.
 #pragma once
 #include "render/guide_verdict.h"
 #include "render/learning_policy.h"
@@ -12,7 +13,6 @@
 
 #include <map>
 #include <memory>
-#include <mutex>
 
 namespace et {
 
@@ -21,14 +21,9 @@ class VisibilityLearning : public LearningPolicy {
     VisibilityLearning(const DeviceScene& scene, bool batches);
     int learning_passes() const override;
     void configure(etk::EtkParams& p, uint32_t sample_index, bool learn) const override;
-    std::unique_ptr<WaveRecorder> recorder(const etk::EtkParams& p, int n,
-                                           int host_threads) override;
     bool after_pass(int pass, uint32_t sample_index, const Film& film, double seconds,
                     WavefrontDevice& device, const MeasuringPass& measure) override;
     nlohmann::json stats() const override;
-
-    // Host time adding records, and the most threads one batch was added on (thread-safe).
-    void add_record_time(double seconds, int threads);
 
   private:
     // The verdict's passes of the fallback use sample indices of their own, never kept: they
@@ -41,6 +36,8 @@ class VisibilityLearning : public LearningPolicy {
     int verdict_start() const; // the first of the verdict's passes of the tables
     // The tables after learning pass `pass`, where the schedule rebuilds them.
     void update_tables(int pass, WavefrontDevice& device);
+    // The device's record sums since the last call, into the cache (and the figures).
+    void take_records(WavefrontDevice& device);
     // The verdict's passes of the fallback, then the choice. False where one was abandoned.
     bool give_verdict(const MeasuringPass& measure);
 
@@ -53,9 +50,8 @@ class VisibilityLearning : public LearningPolicy {
     std::vector<uint32_t> sums_; // the device's record sums, read at each update
     std::unique_ptr<GuideVerdict> verdict_;
     // Figures (stats()).
-    mutable std::mutex mutex_; // record_seconds_, record_threads_
-    double learning_seconds_ = 0, update_seconds_ = 0, record_seconds_ = 0, verdict_seconds_ = 0;
-    int record_threads_ = 0, chosen_ = -1; // the verdict: 1 tables, 0 fallback, -1 not yet
+    double learning_seconds_ = 0, update_seconds_ = 0, verdict_seconds_ = 0;
+    int chosen_ = -1; // the verdict: 1 tables, 0 fallback, -1 not yet
     uint64_t records_ = 0, continuation_records_ = 0, host_bytes_ = 0, device_bytes_ = 0;
     double verdict_fallback_error_ = 0, verdict_tables_error_ = 0;
     std::map<float, uint64_t> light_counts_;
