@@ -182,10 +182,9 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
 #define ET_FILM_WORDS(type, name) widest = std::max<uint64_t>(widest, sizeof(type) / 4 * px);
         ETK_FILM_FIELDS(ET_FILM_WORDS)
 #undef ET_FILM_WORDS
-        lanes_[0]->prime_kernels(paths_, std::max<uint64_t>(widest, guide_words_));
+        lanes_[0]->prime_kernels(paths_, widest);
         clear_film(true);
-        lanes_[0]->zero_words(args_[etk::ETK_ARG_guide_sums], guide_words_);
-        lanes_[0]->queue().finish();
+        zero_guide_sums();
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot set up the OpenCL renderer (") + e.what() +
                     "): " + cl_error_name(e.err()) + "; try a smaller film or --paths");
@@ -324,6 +323,18 @@ void ClDevice::upload_guide(const std::vector<float>& cells) {
     }
 }
 
+// Zeroes written from the host, a few megabytes at a time, rather than by zero_words: tens of
+// megabytes of work-items take minutes under Oclgrind, whose uninitialised-value check counts a
+// host write (not a fill) as a definition.
+void ClDevice::zero_guide_sums() {
+    static const std::vector<cl_uint> zeros(size_t(1) << 20, 0u);
+    cl::CommandQueue& q = lanes_[0]->queue();
+    for (size_t at = 0; at < guide_words_; at += zeros.size())
+        q.enqueueWriteBuffer(args_[etk::ETK_ARG_guide_sums], CL_TRUE, sizeof(cl_uint) * at,
+                             sizeof(cl_uint) * std::min(zeros.size(), guide_words_ - at),
+                             zeros.data());
+}
+
 // Between passes (no lane is running): the sums, then zeroes in their place.
 void ClDevice::take_guide_sums(std::vector<uint32_t>& out) {
     out.resize(guide_words_); // (its zeros unused: the device zeroes its own buffer)
@@ -331,8 +342,7 @@ void ClDevice::take_guide_sums(std::vector<uint32_t>& out) {
         ClLane& l = *lanes_[0];
         l.queue().enqueueReadBuffer(args_[etk::ETK_ARG_guide_sums], CL_TRUE, 0,
                                     sizeof(cl_uint) * guide_words_, out.data());
-        l.zero_words(args_[etk::ETK_ARG_guide_sums], guide_words_);
-        l.queue().finish();
+        zero_guide_sums();
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot read the visibility records (") + e.what() +
                     "): " + cl_error_name(e.err()));

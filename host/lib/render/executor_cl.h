@@ -116,6 +116,7 @@ class ClDevice : public WavefrontDevice {
     std::vector<size_t> local_;    // work-group size per kernel
     std::vector<cl::Buffer> args_; // the shared buffers, by ETK_ARG_*
     std::vector<std::unique_ptr<ClLane>> lanes_;
+    void zero_guide_sums();   // before the first pass and after each take_guide_sums
     size_t guide_floats_ = 1; // size of the visibility tables' buffer
     size_t guide_words_ = 1;  // size of the visibility records' sums (visibility_record.h)
 };
