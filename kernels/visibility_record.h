@@ -91,6 +91,11 @@ ETK_FN ulong etk_guide_fixed(float v) {
     return (ulong)(fmin(v, ETK_GUIDE_MAX_RECORD) * ETK_GUIDE_UNIT + 0.5f);
 }
 
+// A record's value relative to the map's power: negative and non-finite values count as 0.
+ETK_FN float etk_guide_record_value(EtkParams p, float value) {
+    return (isfinite(value) ? fmax(value, 0.0f) : 0.0f) * p.guide_inv_power;
+}
+
 // Adds v to the 64-bit sum in words w[0] (low) and w[1] (high): the low word's carry goes to the
 // high word with it. Concurrent adds each carry their own, so the pair is exact once all are done
 // (the host reads it only then).
@@ -124,7 +129,7 @@ ETK_FN void etk_guide_prefetch_light(ETK_ATOMIC_PTR sums, EtkParams p, int key) 
 ETK_FN void etk_guide_record_light(ETK_ATOMIC_PTR sums, EtkParams p, ETK_GLOBAL const float* box,
                                    int key, float value, int exit, float2 parts) {
     int slots = p.guide_slots;
-    float v = (isfinite(value) ? fmax(value, 0.0f) : 0.0f) * p.guide_inv_power;
+    float v = etk_guide_record_value(p, value);
     ulong fv = etk_guide_fixed(v);
     if (exit >= 0 && exit < ETK_PORTAL_CELLS && fv != 0)
         etk_add_wide(sums + etk_gsum_portal(slots) + 2 * exit, fv);
@@ -162,7 +167,7 @@ ETK_FN void etk_guide_record_continuation(ETK_ATOMIC_PTR sums, EtkParams p,
     int slots = p.guide_slots;
     if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
         return;
-    float v = (isfinite(value) ? fmax(value, 0.0f) : 0.0f) * p.guide_inv_power;
+    float v = etk_guide_record_value(p, value);
     int s = key / ETK_GUIDE_REGIONS;
     ETK_GLOBAL const float* spot = cells + etk_portal_offset(slots, 1) + etk_portal_size(slots);
     float t;
