@@ -111,6 +111,37 @@ TEST(DeviceScene, VisibilityLearningPassesFollowTheFilm) {
     }
 }
 
+// The hash grid's slots follow the film below 64 x 64 pixels: no more than a pass's camera paths,
+// rounded up to a power of two, at least 64 (prepare/visibility_tables.h); the device's tables
+// and record sums are sized by them.
+TEST(DeviceScene, VisibilitySlotsFollowSmallFilms) {
+    const et::VisibilityOptions o;
+    ASSERT_EQ(o.slots, 1 << 13);
+    EXPECT_EQ(et::guide_slots(o, 1), 64);
+    EXPECT_EQ(et::guide_slots(o, 60), 64);
+    EXPECT_EQ(et::guide_slots(o, 65), 128);
+    EXPECT_EQ(et::guide_slots(o, 4096), 4096);
+    EXPECT_EQ(et::guide_slots(o, 4097), 1 << 13);
+    EXPECT_EQ(et::guide_slots(o, 128 * 96), 1 << 13);
+    EXPECT_EQ(et::guide_slots(o, int64_t(1) << 40), 1 << 13);
+    const std::string dir = ett::scratch_dir("device-scene-slots");
+    for (const auto& [w, h, slots] : {std::make_tuple(10, 6, 64), std::make_tuple(40, 30, 2048),
+                                      std::make_tuple(128, 96, 8192)}) {
+        std::ofstream(dir + "/s.json")
+            << R"({"camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
+  "film": {"width": )"
+            << w << R"(, "height": )" << h << R"(},
+  "environment": {"sky": {"resolution": [64, 32]}},
+  "shapes": [{"type": "sphere"}], "render": {"strategy": "visibility", "max_depth": 3}})";
+        const et::Scene s = et::load_scene(dir + "/s.json");
+        const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+        EXPECT_EQ(ds.guide_options.slots, slots) << w << " x " << h;
+        EXPECT_EQ(ds.params.guide_slots, slots) << w << " x " << h;
+        EXPECT_EQ(ds.guide_cells.size(), et::guide_cells_size(slots, true)) << w << " x " << h;
+        EXPECT_EQ(ds.guide_sum_words(), etk::etk_gsum_words(slots, 1)) << w << " x " << h;
+    }
+}
+
 // The kernels take the heuristic resolved for the strategy (load/render_settings.h), never auto's
 // -1, which etk_mis_weight would read as balance: the paper's estimator would lose its power
 // heuristic without any image test noticing.

@@ -206,6 +206,9 @@ void add_strata(const VoronoiStrata& v, DeviceScene& d) {
 // the cells' initial tables (the map's own distribution; the continuation guide's, at depth > 1,
 // uniform with a guided share of 0).
 void add_visibility_guide(const Scene& scene, DeviceScene& d) {
+    const int64_t pixels = static_cast<int64_t>(scene.width) * scene.height;
+    d.guide_options.slots = guide_slots(d.guide_options, pixels);
+    d.guide_options.learning_passes = guide_learning_passes(d.guide_options, pixels);
     const VisibilityOptions& opt = d.guide_options;
     glm::vec3 lo(0.0f), hi(0.0f);
     if (!scene.triangles.positions.empty()) {
@@ -222,8 +225,6 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
         p.guide_origin[k] = lo[k];
     p.guide_inv_cell = static_cast<float>(opt.resolution) / longest;
     p.guide_slots = opt.slots;
-    d.guide_options.learning_passes =
-        guide_learning_passes(opt, static_cast<int64_t>(scene.width) * scene.height);
     // Shadow rays carry their record's key as a float value (integrator.h): exact below 2^24.
     if (static_cast<int64_t>(opt.slots) * ETK_GUIDE_REGIONS > (int64_t(1) << 24))
         throw Error("visibility options: " + std::to_string(opt.slots) +

@@ -115,6 +115,13 @@ int guide_learning_passes(const VisibilityOptions& options, int64_t pixels) {
     return std::min(passes, std::max(1, options.max_learning_passes));
 }
 
+int guide_slots(const VisibilityOptions& options, int64_t pixels) {
+    int64_t cap = 64;
+    while (cap < pixels && cap < options.slots)
+        cap *= 2;
+    return static_cast<int>(std::min<int64_t>(options.slots, cap));
+}
+
 size_t guide_cells_size(int slots, bool continuation) {
     return static_cast<size_t>(slots) *
                (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0)) +

@@ -18,7 +18,8 @@ namespace et {
 struct VisibilityOptions {
     // Hash-grid cells (a power of two): 2^13 x 2 x 514 floats = 32 MiB of tables on the device
     // (window_room's variance 0.00887 with 2^13, 0.00875 with 2^14 at twice the memory, 0.00915
-    // with 2^12: docs/history/results-journal.md).
+    // with 2^12: docs/history/results-journal.md), and 68 MB of record sums. Preparation caps it
+    // for the film (guide_slots).
     int slots = 1 << 13;
     int resolution = 8; // cells along the scene's longest side (few records per cell
                         // otherwise: measured in docs/history/results-journal.md)
@@ -113,6 +114,13 @@ float guide_inv_power(double power);
 // four times ... whose passes trace at least options.learning_paths camera paths, at most
 // max_learning_passes (320 x 240: 32; 160 x 120 and smaller: 64; 640 x 480 and larger: 16).
 int guide_learning_passes(const VisibilityOptions& options, int64_t pixels);
+
+// The hash grid's slots for a film of `pixels` pixels: options.slots, but no more than the
+// smallest power of two >= pixels (at least 64). A learning pass traces one camera path per
+// pixel, so a small film's cells hold few records whatever their number, while every slot costs
+// its tables and sums (and a device's time to write and read them). Films of 4,097 pixels and up
+// (64 x 64) keep every slot.
+int guide_slots(const VisibilityOptions& options, int64_t pixels);
 
 // Floats of the cells' tables (EtkScene.guide_cells): the light sample's, then the continuation
 // guide's if it is on (kernels/visibility_guide.h), the portal table, and with the continuation
