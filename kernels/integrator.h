@@ -7,7 +7,8 @@
 //   pair 0: pixel jitter; for bounce d: pair 1+3d light sample, 2+3d BSDF direction (at a
 //   guided vertex: u.x also picks the guide or the BSDF, continuation_guide.h),
 //   3+3d (BSDF lobe, Russian roulette); the learned technique's choice to take the light sample:
-//   ETK_PAIR_SHARE + d (etk_shade_vertex). Split samples (etk_split_samples) come from the same
+//   ETK_PAIR_SHARE + d (etk_shade_vertex); the resampled light sample's pick: ETK_PAIR_RESAMPLE + d
+//   (light_resampling.h). Split samples (etk_split_samples) come from the same
 //   pairs shifted by a lattice. Pairs are hashed, so these need not be contiguous.
 //
 // A vertex is shaded in steps (etk_shade): the vertex's facts (etk_shade_vertex), its light sample
@@ -24,7 +25,9 @@
 #include "directional_lights.h"
 #include "envmap.h"
 #include "film_accumulate.h"
+#include "light_resampling.h"
 #include "light_sampling.h"
+#include "mis.h"
 #include "params.h"
 #include "path_state.h"
 #include "portal_guide.h"
@@ -40,30 +43,6 @@ ETK_BEGIN
 // queue pushes, which the caller makes after the stage returns (EtkPushes in path_state.h).
 #define ETK_STAGE_PARAMS                                                                           \
     EtkScene S, EtkPaths P, EtkQueues Q, EtkFilm F, EtkParams p, int i, EtkPushes *out
-
-ETK_FN float etk_mis_weight(int heuristic, float a, float b) {
-    if (heuristic == ETK_HEURISTIC_POWER) {
-        a *= a;
-        b *= b;
-    }
-    return a + b > 0.0f ? a / (a + b) : 0.0f;
-}
-
-// The MIS weight of a light sample (density pl; p_bsdf pb there) and of a BSDF sample (pb; pl),
-// each over its count: with nl = lc x p.light_samples light samples and nb = p.bsdf_samples BSDF
-// samples expected per vertex (the mis strategy's splitting, etk_split_samples; lc < 1 where the
-// visibility strategy takes its light sample with probability lc, etk_guide_light_count), the
-// multi-sample heuristic's weight on nl pl and nb pb (Veach), divided by the technique's count.
-// nl = nb = 1: the paper's weights, bit for bit.
-// Forced inline: a call would copy EtkParams, as etk_dims would (surface.h).
-ETK_FORCE_INLINE_FN float etk_light_sample_weight(EtkParams p, float lc, float pl, float pb) {
-    float nl = lc * (float)p.light_samples;
-    return etk_mis_weight(p.heuristic, nl * pl, (float)p.bsdf_samples * pb) / nl;
-}
-ETK_FORCE_INLINE_FN float etk_bsdf_sample_weight(EtkParams p, float lc, float pb, float pl) {
-    float nb = (float)p.bsdf_samples;
-    return etk_mis_weight(p.heuristic, nb * pb, lc * (float)p.light_samples * pl) / nb;
-}
 
 #define ETK_PAIR_SHARE 0x40000000u
 
@@ -368,17 +347,42 @@ typedef struct {
     float2 parts; // p_vis and p_portal of the direction (portal_guide.h)
 } EtkLightContribution;
 
-// The vertex's one light sample from the light-sampling module, weighted by MIS against the
-// continuation where the pass combines them. c is 0 where it brings nothing.
-ETK_CL_INLINE_FN EtkLightContribution etk_light_contribution(EtkScene S, EtkPaths P, EtkParams p,
-                                                             EtkVertex v) {
+// A light sample that brings nothing (c = 0), its record empty.
+ETK_FN EtkLightContribution etk_no_light_contribution(void) {
     EtkLightContribution r;
+    r.dir = make_float3(0.0f, 0.0f, 1.0f);
     r.c = make_float3(0.0f, 0.0f, 0.0f);
     r.value = 0.0f;
     r.key = 0;
     r.parts = make_float2(0.0f, 0.0f);
+    return r;
+}
+
+// The vertex's light sample resampled from n candidates (light_resampling.h), weighted by MIS
+// against the continuation as its technique's own sample would be.
+ETK_FN EtkLightContribution etk_resampled_light_contribution(EtkScene S, EtkParams p, EtkVertex v,
+                                                             uint n) {
+    EtkLightContribution r = etk_no_light_contribution();
+    float pick = etk_dims(p, v.pixel, ETK_PAIR_RESAMPLE + (uint)v.depth).x;
+    EtkResampledLight k = etk_light_resample(S, p, v.light, v.s, v.light_count, v.bsdf_count,
+                                             etk_dims(p, v.pixel, v.pair), pick, n);
+    if (!(k.weight > 0.0f))
+        return r;
+    r.dir = k.ls.dir;
+    r.c = v.beta * k.f * k.L * (fabs(k.wi.z) * k.mis * k.weight);
+    return r;
+}
+
+// The vertex's one light sample from the light-sampling module, weighted by MIS against the
+// continuation where the pass combines them. c is 0 where it brings nothing.
+ETK_CL_INLINE_FN EtkLightContribution etk_light_contribution(EtkScene S, EtkPaths P, EtkParams p,
+                                                             EtkVertex v) {
+    EtkLightContribution r = etk_no_light_contribution();
     // With the sample_lights stage the sample is drawn already, from this pair.
     int drawn = p.light_batch;
+    uint candidates = drawn ? 1u : etk_light_candidates(p, v.light, v.depth);
+    if (candidates > 1u)
+        return etk_resampled_light_contribution(S, p, v, candidates);
     EtkEnvSample ls =
         drawn ? etk_drawn_light_sample(P, v.slot)
               : etk_light_sample(S, p, v.light, v.s, etk_dims(p, v.pixel, v.pair), &r.parts);

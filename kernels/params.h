@@ -35,6 +35,10 @@ typedef struct {
     int rr_depth; // Russian roulette ends paths only past this many surfaces (integrator.h)
     // The light sample's technique at a path's first vertex and below it (ETK_LIGHT_*).
     int light_first, light_deeper;
+    // Candidates per light sample at a path's first vertex and below it: above 1, the sample is
+    // resampled from that many of the technique's by its product with the BSDF
+    // (light_resampling.h); 1, the technique's own sample.
+    int light_candidates_first, light_candidates_deeper;
     // 1: light and BSDF samples are combined by multiple importance sampling (weights by
     // `heuristic`); 0: each technique counts alone -- a light sample in full, an escaped
     // continuation only where no light sample was drawn.

@@ -21,6 +21,7 @@ constexpr Named<Strategy> kStrategies[] = {{Strategy::light, "light"},
                                            {Strategy::visibility, "visibility"},
                                            {Strategy::cosine, "cosine"},
                                            {Strategy::automatic, "auto"},
+                                           {Strategy::resampled, "resampled"},
                                            {Strategy::lights, "lights"}};
 constexpr Named<MisHeuristic> kHeuristics[] = {{MisHeuristic::automatic, "auto"},
                                                {MisHeuristic::balance, "balance"},
@@ -73,7 +74,7 @@ E parse_in(const Named<E> (&table)[N], const std::string& s, const std::string& 
     throw Error(what + ": unknown " + kind + " '" + shown + "' (use " + choices + ")");
 }
 
-constexpr size_t kUserStrategies = 9; // all but "lights"
+constexpr size_t kUserStrategies = 10; // all but "lights"
 
 } // namespace
 
@@ -112,6 +113,7 @@ namespace {
 // The MIS strategies beyond the paper's estimator: what `auto` gives them, it never gives `mis`.
 bool beyond_the_paper(Strategy s) {
     return s == Strategy::compensated || s == Strategy::visibility || s == Strategy::cosine ||
+           s == Strategy::resampled ||
            s == Strategy::automatic;
 }
 } // namespace

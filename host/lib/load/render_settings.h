@@ -25,6 +25,7 @@ enum class Strategy : int {
     visibility,  // MIS, light samples guided by learned visibility
     cosine,      // MIS, light samples from the map x the cosine to the normal's bin
     automatic,   // "auto": visibility's learning, kept only where it beats compensated
+    resampled,   // compensated, light samples resampled by their product with the BSDF
 };
 // How GGX lobes are sampled (kernels/bsdf.h): automatic picks vndf for the strategies beyond the
 // paper -- compensated, visibility, cosine -- and ndf, the paper's, for the others, so that

@@ -1,6 +1,7 @@
 #include "prepare/technique.h"
 
 #include "kernels/light_sampling.h"
+#include <cstdlib>
 
 namespace et {
 
@@ -9,6 +10,7 @@ namespace {
 struct Technique {
     int light_first, light_deeper; // ETK_LIGHT_*
     bool mis, continuation, thin_last_bsdf;
+    int candidates_first = 1, candidates_deeper = 1; // light_resampling.h
 };
 
 // The compensated map serves only where a BSDF sample can reach the same direction (MIS, below
@@ -43,6 +45,9 @@ Technique technique_of(Strategy s) {
         return {ETK_LIGHT_LEARNED, ETK_LIGHT_LEARNED, true, true, false};
     case Strategy::cosine:
         return {ETK_LIGHT_BINNED, ETK_LIGHT_COMPENSATED, true, true, true};
+    case Strategy::resampled:
+        return {ETK_LIGHT_MAP, ETK_LIGHT_COMPENSATED, true, true, true,
+                getenv("ETK_CF") ? atoi(getenv("ETK_CF")) : 8, getenv("ETK_CD") ? atoi(getenv("ETK_CD")) : 8};
     }
     return {ETK_LIGHT_MAP, ETK_LIGHT_MAP, true, true, false};
 }
@@ -56,10 +61,13 @@ void set_technique(etk::EtkParams& p, Strategy strategy) {
     p.mis = t.mis ? 1 : 0;
     p.continuation = t.continuation ? 1 : 0;
     p.thin_last_bsdf = t.thin_last_bsdf ? 1 : 0;
+    p.light_candidates_first = t.candidates_first;
+    p.light_candidates_deeper = t.candidates_deeper;
 }
 
 bool technique_batches_light_samples(const etk::EtkParams& p) {
-    return etk::etk_light_batches(p.light_first) && etk::etk_light_batches(p.light_deeper);
+    return etk::etk_light_batches(p.light_first) && etk::etk_light_batches(p.light_deeper) &&
+           p.light_candidates_first <= 1 && p.light_candidates_deeper <= 1;
 }
 
 bool technique_uses_light_set(const etk::EtkParams& p) {
