@@ -187,7 +187,7 @@ ETK_FN void etk_generate(ETK_STAGE_PARAMS) {
     (void)out;
     (void)S;
     (void)F;
-    int pixel = p.first_pixel + i;
+    int pixel = p.first_pixel + i * p.pixel_stride;
     float3 d = etk_camera_dir(p, pixel);
     P.ray_o[i] = etk_f4(etk_p3(p.eye), 0.0f);
     P.ray_d[i] = etk_f4(d, 0.0f);

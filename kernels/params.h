@@ -49,6 +49,7 @@ typedef struct {
     uint seed;
     uint sample_index; // the pass: which sample of each pixel
     int first_pixel;   // pixel of slot 0 in this wave
+    int pixel_stride;  // pixels between slots: 1, or a measuring pass's subset (schedule.h)
     float ray_epsilon; // offset of secondary ray origins, relative to the hit triangle's largest
                        // vertex coordinate (surface.h)
     int light_count;   // directional lights or SIS strata (EtkScene.lights)

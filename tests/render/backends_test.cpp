@@ -265,15 +265,7 @@ class SingleSampleDevice : public et::CpuDevice {
 };
 
 TEST(LightBatch, AutoFollowsTheDevice) {
-    et::RgbImage sky = ett::constant_image(32, 16, 0.2f);
-    for (size_t i = 0; i < sky.rgb.size(); i += 7) // light of uneven strength: a real search
-        sky.rgb[i] = 5.0f;
-    et::Scene s = ett::base_scene(16, 12, et::make_envmap("sky", sky, {}));
-    s.camera.eye = {0, 1, 3};
-    s.materials.push_back(ett::diffuse(0.5f));
-    const glm::vec3 p[3] = {{-2, 0, -2}, {2, 0, -2}, {0, 0, 2}};
-    const glm::vec3 n[3] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
-    et::add_triangle(s.triangles, p, n, 0);
+    const et::Scene s = ett::ground_under_uneven_sky(16, 12);
     std::vector<float> films[3];
     const et::LightBatch modes[] = {et::LightBatch::automatic, et::LightBatch::on,
                                     et::LightBatch::off};

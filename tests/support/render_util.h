@@ -75,6 +75,22 @@ inline et::Scene base_scene(int w, int h, et::EnvMap env) {
     return s;
 }
 
+// A diffuse triangle (albedo 0.5) on y = 0 under a small sky of uneven strength (every 7th value
+// 5, the others 0.2: the map's search is a real one), seen from (0, 1, 3). Settings are the
+// caller's.
+inline et::Scene ground_under_uneven_sky(int w, int h) {
+    et::RgbImage sky = constant_image(32, 16, 0.2f);
+    for (size_t i = 0; i < sky.rgb.size(); i += 7)
+        sky.rgb[i] = 5.0f;
+    et::Scene s = base_scene(w, h, et::make_envmap("sky", sky, {}));
+    s.camera.eye = {0, 1, 3};
+    s.materials.push_back(diffuse(0.5f));
+    const glm::vec3 p[3] = {{-2, 0, -2}, {2, 0, -2}, {0, 0, 2}};
+    const glm::vec3 n[3] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+    et::add_triangle(s.triangles, p, n, 0);
+    return s;
+}
+
 // A closed 2 x 2 x 2 room of diffuse walls (albedo 0.7) lit through one open side by a constant
 // sky, the camera inside looking at the opening's side: what the visibility strategy learns (its
 // tables move the light samples towards the opening). Settings are the caller's.

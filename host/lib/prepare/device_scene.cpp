@@ -268,6 +268,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     p.seed = st.seed;
     p.bsdf_sampling = static_cast<int>(resolved_bsdf_sampling(st));
     p.ray_epsilon = kRayEpsilon;
+    p.pixel_stride = 1;
     check_split(st);
     p.light_samples = st.light_samples;
     p.bsdf_samples = st.bsdf_samples;

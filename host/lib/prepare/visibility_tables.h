@@ -84,6 +84,9 @@ struct VisibilityOptions {
     // the tables throughout.
     int verdict_passes = 8;
     int verdict_after = 16;
+    // The fallback's measuring passes render every verdict_stride-th pixel only, and the verdict
+    // compares the two on those pixels: passes that are not kept cost 1 / verdict_stride of a pass.
+    int verdict_stride = 1;
     double verdict_cost = 1.25;
     double verdict_cost_guided = 1.4;
     // What the verdict weighs the tables against, and what renders after a verdict against them:

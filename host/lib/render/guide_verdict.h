@@ -10,7 +10,9 @@
 // Which of the two a scene is, is measured, not modelled: `passes` passes of the tables after
 // some learning (VisibilityOptions::verdict_after; part of the image, as any) and as many passes
 // of the fallback (the paper's MIS, or compensated for auto), rendered only to measure (sample
-// indices of their own, renderer.h), each in two blocks of passes / 2 consecutive samples. Per
+// indices of their own, renderer.h; for auto on every 4th pixel only, VisibilityOptions::
+// verdict_stride, and the two compared there), each in two blocks of passes / 2 consecutive
+// samples. Per
 // pixel and technique, half the squared difference of its two blocks' means estimates the error of
 // a block-sized estimate, relative to the squared mean of the pixel's 5 x 5 neighbourhood (plus 1%
 // of the image's mean, so black pixels do not divide by zero, as tools/experiments' relative MSE);
@@ -27,7 +29,9 @@
 // 1.7x where the two-seed variance of the images favoured MIS -- as the adaptive strategy found,
 // docs/history/results-journal.md). Comparing the same pixels rendered both ways measures the
 // estimators on this image: a model of the second moments (the learned shares' way) leaves out the
-// MIS weights, the stratification and the continuation's indirect light.
+// MIS weights, the stratification and the continuation's indirect light. The larger the blocks,
+// the more of the stratification they see: blocks of 2 overstated the tables under the open sky
+// by 1.5x, blocks of 8 did not (auto_visibility_options).
 //
 // The verdict depends on the passes' film values alone: the seed's, on every thread count and
 // wave size, and on a process that starts past them (it renders them first, renderer.cpp).

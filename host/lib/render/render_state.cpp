@@ -90,6 +90,7 @@ uint64_t render_key(const DeviceScene& scene) {
         h.add_value(static_cast<int32_t>(o.learning_passes));
         h.add_value(static_cast<int32_t>(o.verdict_passes));
         h.add_value(static_cast<int32_t>(o.verdict_after));
+        h.add_value(static_cast<int32_t>(o.verdict_stride));
         h.add_value(verdict_cost_for(o, scene.params.guide_continuation != 0));
         if (o.fallback != Strategy::mis) // keys of the visibility strategy's states as before
             h.add_value(static_cast<int32_t>(o.fallback));

@@ -52,6 +52,7 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
 bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
               const StopRequest& stop) {
     p.first_pixel = first;
+    p.pixel_stride = std::max(1, p.pixel_stride);
     // A light set sums all its lights at a hit; every other technique takes one light sample.
     const int shade =
         technique_uses_light_set(p) ? etk::ETK_STAGE_shade_lights : etk::ETK_STAGE_shade_hits;
@@ -89,7 +90,10 @@ bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
 }
 
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, const StopRequest& stop) {
-    const int pixels = params.width * params.height, wave = device.wave_size();
+    // Paths for pixels 0, stride, 2 stride ...: slot k of the pass is pixel k x stride.
+    const int stride = std::max(1, params.pixel_stride);
+    const int pixels = (params.width * params.height + stride - 1) / stride,
+              wave = device.wave_size();
     std::atomic<int> next{0};
     std::atomic<bool> abandoned{false};
     std::vector<RayCounts> counts(device.lanes());
@@ -103,7 +107,7 @@ RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, const 
                 break;
             }
             const int n = std::min(wave, pixels - first);
-            if (!run_wave(device.lane(k), params, first, n, counts[k], stop)) {
+            if (!run_wave(device.lane(k), params, first * stride, n, counts[k], stop)) {
                 abandoned = true;
                 break;
             }

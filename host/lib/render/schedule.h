@@ -85,13 +85,14 @@ class WavefrontDevice {
 // minutes; a signal or a time limit should not wait for it. Empty: never asked.
 using StopRequest = std::function<bool()>;
 
-// One wave: paths for pixels first .. first+n-1, sample params.sample_index, all bounces, into
-// the film. Adds the rays traced to `counts`. Returns false where `stop` ended the wave before its
-// film was written.
+// One wave: paths for pixels first, first + s ... first + (n - 1) s (s = params.pixel_stride, 1
+// where it is 0), sample params.sample_index, all bounces, into the film. Adds the rays traced to
+// `counts`. Returns false where `stop` ended the wave before its film was written.
 bool run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
               const StopRequest& stop = {});
 
-// One pass: sample params.sample_index of every pixel, in waves of the device's size handed
+// One pass: sample params.sample_index of every pixel (of every params.pixel_stride-th: a
+// measuring pass's subset, the others left as they are), in waves of the device's size handed
 // to its lanes as they free up. `stop` may abandon it (the result's `abandoned`); the waiting
 // lanes then take no more waves.
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,

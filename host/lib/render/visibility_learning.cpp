@@ -117,6 +117,7 @@ bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
     for (int k = 0; k < options_.verdict_passes; ++k) {
         etk::EtkParams p = scene_.params;
         p.sample_index = kVerdictFallbackBase + static_cast<uint32_t>(k);
+        p.pixel_stride = options_.verdict_stride;
         configure(p, p.sample_index, false);
         const Film* film = measure(p);
         if (!film)
@@ -147,6 +148,7 @@ nlohmann::json VisibilityLearning::stats() const {
                         : chosen_   ? "tables"
                                     : name_of(options_.fallback)},
             {"verdict_passes", options_.verdict_passes},
+            {"verdict_stride", options_.verdict_stride},
             {"verdict_cost", verdict_cost_for(options_, scene_.params.guide_continuation != 0)},
             {"verdict_seconds", verdict_seconds_},
             {"verdict_fallback_error", verdict_fallback_error_},
