@@ -82,6 +82,19 @@ TEST(DeviceScene, LightSetsTurnAndScaleWithTheEnvironment) {
     EXPECT_FLOAT_EQ(ds.lights[1].z, 6.0f);
 }
 
+// A sphere under a sky on a w x h film, the visibility strategy at depth 3, written to dir and
+// prepared.
+et::DeviceScene visibility_scene(const std::string& dir, int w, int h) {
+    std::ofstream(dir + "/s.json")
+        << R"({"camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
+  "film": {"width": )"
+        << w << R"(, "height": )" << h << R"(},
+  "environment": {"sky": {"resolution": [64, 32]}},
+  "shapes": [{"type": "sphere"}], "render": {"strategy": "visibility", "max_depth": 3}})";
+    const et::Scene s = et::load_scene(dir + "/s.json");
+    return et::prepare_device_scene(s, s.settings);
+}
+
 } // namespace
 
 // The visibility strategy's learning passes follow the film: enough passes to learn from about
@@ -99,14 +112,7 @@ TEST(DeviceScene, VisibilityLearningPassesFollowTheFilm) {
     const std::string dir = ett::scratch_dir("device-scene-learning");
     for (const auto& [w, h, passes] :
          {std::make_tuple(320, 240, 32), std::make_tuple(64, 48, 64)}) {
-        std::ofstream(dir + "/s.json")
-            << R"({"camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
-  "film": {"width": )"
-            << w << R"(, "height": )" << h << R"(},
-  "environment": {"sky": {"resolution": [64, 32]}},
-  "shapes": [{"type": "sphere"}], "render": {"strategy": "visibility", "max_depth": 3}})";
-        const et::Scene s = et::load_scene(dir + "/s.json");
-        const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+        const et::DeviceScene ds = visibility_scene(dir, w, h);
         EXPECT_EQ(ds.guide_options.learning_passes, passes) << w << " x " << h;
     }
 }
@@ -127,14 +133,7 @@ TEST(DeviceScene, VisibilitySlotsFollowSmallFilms) {
     const std::string dir = ett::scratch_dir("device-scene-slots");
     for (const auto& [w, h, slots] : {std::make_tuple(10, 6, 64), std::make_tuple(40, 30, 2048),
                                       std::make_tuple(128, 96, 8192)}) {
-        std::ofstream(dir + "/s.json")
-            << R"({"camera": {"eye": [0, 1, 4], "target": [0, 0.3, 0], "fov": 40},
-  "film": {"width": )"
-            << w << R"(, "height": )" << h << R"(},
-  "environment": {"sky": {"resolution": [64, 32]}},
-  "shapes": [{"type": "sphere"}], "render": {"strategy": "visibility", "max_depth": 3}})";
-        const et::Scene s = et::load_scene(dir + "/s.json");
-        const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+        const et::DeviceScene ds = visibility_scene(dir, w, h);
         EXPECT_EQ(ds.guide_options.slots, slots) << w << " x " << h;
         EXPECT_EQ(ds.params.guide_slots, slots) << w << " x " << h;
         EXPECT_EQ(ds.guide_cells.size(), et::guide_cells_size(slots, true)) << w << " x " << h;
