@@ -12,16 +12,15 @@
 // of the fallback (the paper's MIS, or compensated for auto), rendered only to measure (sample
 // indices of their own, renderer.h; for auto on every 4th pixel only, VisibilityOptions::
 // verdict_stride, and the two compared there), each in two blocks of passes / 2 consecutive
-// samples. Per
-// pixel and technique, half the squared difference of its two blocks' means estimates the error of
-// a block-sized estimate, relative to the squared mean of the pixel's 5 x 5 neighbourhood (plus 1%
-// of the image's mean, so black pixels do not divide by zero, as tools/experiments' relative MSE);
-// the mean over the image of each technique's value, every pixel's capped at the 99.9% quantile (a
-// firefly in one block must not decide), is its error. The tables stay when the fallback's error is
-// at least `cost` times theirs (the time they cost per sample); otherwise the passes that follow
-// render the fallback, with its batched map samples. The fallback's passes are not kept: in a room
-// lit through a window, 8 of them among 300 passes of the tables would add 20% to the image's
-// variance.
+// samples. Per pixel and technique, half the squared difference of its two blocks' means estimates
+// the error of a block-sized estimate, relative to the squared mean of the pixel's 5 x 5
+// neighbourhood (plus 1% of the image's mean, so black pixels do not divide by zero, as
+// tools/experiments' relative MSE); the mean over the image of each technique's value, every
+// pixel's capped at the 99.9% quantile (a firefly in one block must not decide), is its error. The
+// tables stay when the fallback's error is at least `cost` times theirs (the time they cost per
+// sample); otherwise the passes that follow render the fallback, with its batched map samples.
+// The fallback's passes are not kept: in a room lit through a window, 8 of them among 300 passes
+// of the tables would add 20% to the image's variance.
 //
 // Blocks of consecutive samples, not the samples' variance: the Sobol' points stratify each
 // block, and the map's smooth warp keeps more of that stratification than the learned tables'

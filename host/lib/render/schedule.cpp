@@ -90,9 +90,9 @@ bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
 }
 
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, const StopRequest& stop) {
-    // Paths for pixels 0, stride, 2 stride ...: slot k of the pass is pixel k x stride.
+    // Paths for pixels 0, stride, 2 stride ...: path k of the pass is pixel k x stride.
     const int stride = std::max(1, params.pixel_stride);
-    const int pixels = (params.width * params.height + stride - 1) / stride,
+    const int paths = (params.width * params.height + stride - 1) / stride,
               wave = device.wave_size();
     std::atomic<int> next{0};
     std::atomic<bool> abandoned{false};
@@ -100,13 +100,13 @@ RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, const 
     device.run_lanes([&](int k) {
         for (;;) {
             const int first = next.fetch_add(wave);
-            if (first >= pixels)
+            if (first >= paths)
                 break; // (the pass may be whole: no stop asked for once every wave is out)
             if (abandoned.load() || (stop && stop())) {
                 abandoned = true;
                 break;
             }
-            const int n = std::min(wave, pixels - first);
+            const int n = std::min(wave, paths - first);
             if (!run_wave(device.lane(k), params, first * stride, n, counts[k], stop)) {
                 abandoned = true;
                 break;
