@@ -106,7 +106,7 @@ VisibilityOptions auto_visibility_options() {
     // In blocks of 8 passes, not 2: the Sobol' points stratify a block, and compensated's smooth
     // warp keeps more of that than the tables' piecewise one, so blocks of 2 saw mostly each
     // technique's per-sample variance and overstated the tables under the open sky (error ratio
-    // 2.1-2.2 where the images at 96-400 spp measured 1.3-1.5), while blocks of 8 separate the
+    // 2.1-2.2 where equal-spp images at 96 spp measured 0.8-1.7), while blocks of 8 separate the
     // open scenes (0.7-1.3) from the rooms (2.1-7.7). The fallback's 16 measuring passes render
     // every 4th pixel only: they cost what 4 whole ones did, and the verdict on a quarter of the
     // pixels measured within 10% of the whole film's (docs/history/results-journal.md, "The

@@ -325,14 +325,16 @@ void ClDevice::upload_guide(const std::vector<float>& cells) {
 
 // Zeroes written from the host, a few megabytes at a time, rather than by zero_words: tens of
 // megabytes of work-items take minutes under Oclgrind, whose uninitialised-value check counts a
-// host write (not a fill) as a definition.
+// host write (not a fill) as a definition. The writes are queued without waiting (their source
+// is a static block of zeros, alive and unchanged throughout) and waited for once.
 void ClDevice::zero_guide_sums() {
     static const std::vector<cl_uint> zeros(size_t(1) << 20, 0u);
     cl::CommandQueue& q = lanes_[0]->queue();
     for (size_t at = 0; at < guide_words_; at += zeros.size())
-        q.enqueueWriteBuffer(args_[etk::ETK_ARG_guide_sums], CL_TRUE, sizeof(cl_uint) * at,
+        q.enqueueWriteBuffer(args_[etk::ETK_ARG_guide_sums], CL_FALSE, sizeof(cl_uint) * at,
                              sizeof(cl_uint) * std::min(zeros.size(), guide_words_ - at),
                              zeros.data());
+    q.finish();
 }
 
 // Between passes (no lane is running): the sums, then zeroes in their place.

@@ -30,7 +30,7 @@
 // estimators on this image: a model of the second moments (the learned shares' way) leaves out the
 // MIS weights, the stratification and the continuation's indirect light. The larger the blocks,
 // the more of the stratification they see: blocks of 2 overstated the tables under the open sky
-// by 1.5x, blocks of 8 did not (auto_visibility_options).
+// by 1.2-1.7x, blocks of 8 did not (auto_visibility_options).
 //
 // The verdict depends on the passes' film values alone: the seed's, on every thread count and
 // wave size, and on a process that starts past them (it renders them first, renderer.cpp).
