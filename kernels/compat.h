@@ -168,6 +168,7 @@ using std::sin;
 using std::sqrt;
 typedef std::uint32_t uint;
 typedef std::uint64_t ulong;
+typedef std::uint8_t uchar;
 
 struct float2 {
     float x, y;

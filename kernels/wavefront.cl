@@ -3,6 +3,7 @@
 // takes the same argument list, expanded from the same declarations, so the host sets it once;
 // each runs over exactly the live entries of its queue (global size rounded up to the
 // work-group size, the tail returning at once).
+#include "film_fixed.h"
 #include "integrator.h"
 
 #define ETK_ARG_CONST(type, name) __global const type *name,
@@ -73,4 +74,13 @@ __kernel void zero_words(__global uint* words, int n) {
     int i = get_global_id(0);
     if (i < n)
         words[i] = 0u;
+}
+
+// Adds the pass's film (one sample per pixel, or none) to the render's exact sums on the device
+// (film_fixed.h), n pixels: on a GPU the pass's film then never crosses the bus (ClDevice).
+__kernel void fold_film(__global const float4* film_sum, __global const float4* film_sq,
+                        __global EtkFixedPixel* sums, int n) {
+    int i = get_global_id(0);
+    if (i < n)
+        etk_fixed_add_pixel(sums + i, film_sum[i], film_sq[i]);
 }

@@ -156,6 +156,11 @@ std::vector<CLI::Option*> add_expert_options(CLI::App& cmd, RenderArgs& a) {
                            "CPU devices, off on GPUs) | on | off; the same image")
             ->check(CLI::IsMember(light_batch_names()))
             ->default_str("auto"),
+        cmd.add_option("--film-sums", a.film_sums,
+                       "Where each pass is added to the film's exact sums: auto (device on "
+                       "GPUs, host otherwise) | host | device (OpenCL only); the same image")
+            ->check(CLI::IsMember(film_sums_names()))
+            ->default_str("auto"),
         cmd.add_option("--guide-verdict", a.guide_verdict,
                        "Visibility strategy: after learning, measure its tables against MIS on "
                        "the image and keep the one cheaper per error (on) | off (the tables "
@@ -216,6 +221,8 @@ void apply_overrides(const RenderArgs& a, const Globals& g, RenderSettings& st) 
         st.bsdf_sampling = parse_bsdf_sampling(a.bsdf_sampling, cli);
     if (!a.light_batch.empty())
         st.light_batch = parse_light_batch(a.light_batch, cli);
+    if (!a.film_sums.empty())
+        st.film_sums = parse_film_sums(a.film_sums, cli);
     if (!a.guide_verdict.empty())
         st.guide_verdict = a.guide_verdict == "on";
     if (a.light_samples_given)
@@ -248,6 +255,12 @@ void warn_idle_options(const RenderArgs& a, const RenderSettings& st) {
     if (st.backend == Backend::cpu && a.paths_given)
         warn("--paths sets the OpenCL back end's paths in flight: ignored with --backend cpu "
              "(each native thread keeps its own wave)");
+    if (st.backend == Backend::cpu && st.film_sums == FilmSumsAt::device)
+        warn("--film-sums device applies to the OpenCL back end: ignored with --backend cpu (its "
+             "threads write the host's film)");
+    else if (st.film_sums == FilmSumsAt::device && st.aovs)
+        warn("--film-sums device: a render with AOVs (--aovs, --denoise) adds its passes on the "
+             "host");
 }
 
 } // namespace

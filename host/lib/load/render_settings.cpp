@@ -31,6 +31,8 @@ constexpr Named<BsdfSampling> kBsdfSamplings[] = {
     {BsdfSampling::automatic, "auto"}, {BsdfSampling::ndf, "ndf"}, {BsdfSampling::vndf, "vndf"}};
 constexpr Named<LightBatch> kLightBatches[] = {
     {LightBatch::automatic, "auto"}, {LightBatch::on, "on"}, {LightBatch::off, "off"}};
+constexpr Named<FilmSumsAt> kFilmSums[] = {
+    {FilmSumsAt::automatic, "auto"}, {FilmSumsAt::host, "host"}, {FilmSumsAt::device, "device"}};
 constexpr Named<Backend> kBackends[] = {{Backend::opencl, "opencl"}, {Backend::cpu, "cpu"}};
 
 template <typename E, size_t N> const char* name_in(const Named<E> (&table)[N], E v) {
@@ -107,6 +109,15 @@ LightBatch parse_light_batch(const std::string& s, const std::string& what) {
 }
 std::vector<std::string> light_batch_names() {
     return names_in(kLightBatches);
+}
+const char* name_of(FilmSumsAt v) {
+    return name_in(kFilmSums, v);
+}
+FilmSumsAt parse_film_sums(const std::string& s, const std::string& what) {
+    return parse_in(kFilmSums, s, what, "film sums setting");
+}
+std::vector<std::string> film_sums_names() {
+    return names_in(kFilmSums);
 }
 namespace {
 // The MIS strategies beyond the paper's estimator: what `auto` gives them, it never gives `mis`.

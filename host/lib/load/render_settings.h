@@ -50,6 +50,11 @@ enum class Backend : int { opencl, cpu };
 // OpenCL prefers_light_batches_on, render/executor_cl.h: CPUs yes, GPUs no). The same image
 // either way.
 enum class LightBatch : int { automatic, on, off };
+// Where the film's exact sums (render/film_sums.h) take each pass: on the host, after the pass's
+// film is read back, or on the device (OpenCL only: ClDevice::fold_film), read back only when
+// the sums are asked for. automatic: on the device on a GPU, where the read-back and the host's
+// fold took two thirds of a 2048x2048 pass. The same sums either way, bit for bit.
+enum class FilmSumsAt : int { automatic, host, device };
 
 const char* name_of(Strategy v);
 const char* name_of(MisHeuristic v);
@@ -57,6 +62,7 @@ const char* name_of(SamplerKind v);
 const char* name_of(Backend v);
 const char* name_of(BsdfSampling v);
 const char* name_of(LightBatch v);
+const char* name_of(FilmSumsAt v);
 
 // Throws et::Error "`what`: unknown strategy 'x' (use light, bsdf, ...)".
 Strategy parse_strategy(const std::string& s, const std::string& what);
@@ -65,6 +71,7 @@ SamplerKind parse_sampler(const std::string& s, const std::string& what);
 Backend parse_backend(const std::string& s, const std::string& what);
 BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what);
 LightBatch parse_light_batch(const std::string& s, const std::string& what);
+FilmSumsAt parse_film_sums(const std::string& s, const std::string& what);
 
 // A split count ("`what`: must be a power of two from 1 to 64" otherwise).
 int check_split_count(int n, const std::string& what);
@@ -76,6 +83,7 @@ std::vector<std::string> sampler_names();
 std::vector<std::string> backend_names();
 std::vector<std::string> bsdf_sampling_names();
 std::vector<std::string> light_batch_names();
+std::vector<std::string> film_sums_names();
 
 struct RenderSettings;
 // bsdf_sampling with automatic resolved for the strategy.
@@ -124,6 +132,7 @@ struct RenderSettings {
     // Draw the light samples of the strategies that allow it in the sample_lights stage, in
     // batches (kernels/integrator.h); off, the shade stage draws each: the same image.
     LightBatch light_batch = LightBatch::automatic;
+    FilmSumsAt film_sums = FilmSumsAt::automatic;
     // The visibility strategy's verdict (render/guide_verdict.h): after learning, measure its
     // tables against the paper's MIS on this image and keep the cheaper-per-error one.
     bool guide_verdict = true;

@@ -1,9 +1,11 @@
 #include "render/executor_cl.h"
 
+#include "render/film_sums.h"
 #include "util/error.h"
 #include "util/parallel.h"
 
 #include <algorithm>
+#include <climits>
 #include <string>
 #include <utility>
 
@@ -77,6 +79,23 @@ int default_cl_lanes(const ClRuntime& rt) {
     return rt.limits().cpu && !rt.is_oclgrind() ? 2 : 1;
 }
 
+bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& lim, uint64_t bytes) {
+    const bool countable = bytes / 4 <= static_cast<uint64_t>(INT_MAX); // zero_words' n
+    switch (st.film_sums) {
+    case FilmSumsAt::host:
+        return false;
+    case FilmSumsAt::device:
+        if (!countable)
+            throw Error("--film-sums device: the film's sums (" + std::to_string(bytes >> 20) +
+                        " MiB) are too large for one device buffer; use --film-sums host");
+        return !st.aovs;
+    case FilmSumsAt::automatic:
+        break;
+    }
+    return !st.aovs && !lim.cpu && countable && bytes <= lim.max_alloc &&
+           bytes <= lim.global_mem / 4;
+}
+
 ClLane::ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
                size_t zero_local, const std::vector<cl::Buffer>& shared, int paths)
     : local_(local), zero_local_(zero_local), args_(shared) {
@@ -125,6 +144,10 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
 #undef ET_FILM_SIZE
     guide_words_ = std::max<size_t>(1, scene.guide_sum_words());
     buffers.push_back({"guide_sums", uint64_t(sizeof(cl_uint)) * guide_words_});
+    const uint64_t fixed_bytes = uint64_t(sizeof(FilmSums::Pixel)) * pixels_;
+    fold_ = wants_film_sums_on_device(scene.settings, lim, fixed_bytes);
+    if (fold_)
+        buffers.push_back({"film sums (--film-sums device)", fixed_bytes});
     uint64_t fixed = 0;
     for (const BufferRequest& b : buffers)
         fixed += b.bytes;
@@ -175,6 +198,15 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * px);
         ETK_FILM_FIELDS(ET_FILM)
 #undef ET_FILM
+        if (fold_) {
+            film_fixed_ = cl::Buffer(ctx, CL_MEM_READ_WRITE, fixed_bytes);
+            fold_kernel_ = cl::Kernel(program_, "fold_film");
+            fold_local_ = choose_local_size(fold_kernel_, dev, lim, kStageLocalTarget);
+            fold_kernel_.setArg(0, args_[etk::ETK_ARG_film_sum]);
+            fold_kernel_.setArg(1, args_[etk::ETK_ARG_film_sq]);
+            fold_kernel_.setArg(2, film_fixed_);
+            fold_kernel_.setArg(3, static_cast<cl_int>(pixels_));
+        }
         for (int l = 0; l < lanes_used; ++l)
             lanes_.push_back(
                 std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_));
@@ -182,9 +214,15 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
 #define ET_FILM_WORDS(type, name) widest = std::max<uint64_t>(widest, sizeof(type) / 4 * px);
         ETK_FILM_FIELDS(ET_FILM_WORDS)
 #undef ET_FILM_WORDS
+        if (fold_)
+            widest = std::max<uint64_t>(widest, fixed_bytes / 4);
         lanes_[0]->prime_kernels(paths_, widest);
         clear_film(true);
         zero_guide_sums();
+        if (fold_) {
+            lanes_[0]->zero_words(film_fixed_, fixed_bytes / 4);
+            lanes_[0]->finish();
+        }
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot set up the OpenCL renderer (") + e.what() +
                     "): " + cl_error_name(e.err()) + "; try a smaller film or --paths");
@@ -375,6 +413,37 @@ void ClDevice::clear_film(bool aovs) {
     ETK_FILM_FIELDS(ET_CLEAR)
 #undef ET_CLEAR
     l.queue().finish();
+}
+
+// After finish(): lane 0's queue runs the fold after every lane's launches, and the next
+// clear_film (on that queue, waited for) after the fold.
+void ClDevice::fold_film() {
+    try {
+        lanes_[0]->queue().enqueueNDRangeKernel(
+            fold_kernel_, cl::NullRange,
+            cl::NDRange((pixels_ + fold_local_ - 1) / fold_local_ * fold_local_),
+            cl::NDRange(fold_local_));
+    } catch (const cl::Error& e) {
+        throw Error(std::string("cannot add the pass to the film's sums on the device (") +
+                    e.what() + "): " + cl_error_name(e.err()));
+    }
+}
+
+void ClDevice::take_film_sums(FilmSums& sums) {
+    if (sums.pixels() != static_cast<size_t>(pixels_))
+        throw Error("the device's film sums are for another film size (a bug)");
+    std::vector<FilmSums::Pixel> device(sums.pixels());
+    try {
+        ClLane& l = *lanes_[0];
+        l.queue().enqueueReadBuffer(film_fixed_, CL_TRUE, 0,
+                                    sizeof(FilmSums::Pixel) * device.size(), device.data());
+        l.zero_words(film_fixed_, sizeof(FilmSums::Pixel) / 4 * device.size());
+        l.finish();
+    } catch (const cl::Error& e) {
+        throw Error(std::string("cannot read the film's sums from the device (") + e.what() +
+                    "): " + cl_error_name(e.err()));
+    }
+    FilmSums::add_pixels(sums.data(), device.data(), device.size());
 }
 
 // After finish(): every lane's launches are done.

@@ -37,6 +37,14 @@ inline bool prefers_light_batches_on(const DeviceLimits& limits) {
     return limits.cpu;
 }
 
+// Whether a render keeps the film's exact sums on this device (RenderSettings::film_sums; the
+// sums take `bytes`): automatic on a GPU, where reading each pass back and adding it on the host
+// took two thirds of a 2048x2048 pass (docs/devices.md), if they fit in a quarter of its memory;
+// never for a render with AOVs, whose sums the host keeps. Throws where device is asked for a
+// film too large for one buffer of words a kernel can count.
+bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& limits,
+                               uint64_t bytes);
+
 // One lane of the OpenCL back end: a command queue with path state, queues and counters of its
 // own (kernels/path_state.h), running waves one after another; the scene, the film and the
 // visibility tables are the device's, shared by every lane.
@@ -103,6 +111,9 @@ class ClDevice : public WavefrontDevice {
     bool prefers_light_batches() const override { return prefers_light_batches_on(rt_->limits()); }
     void upload_guide(const std::vector<float>& cells) override;
     void take_guide_sums(std::vector<uint32_t>& sums) override;
+    bool folds_film() const override { return fold_; }
+    void fold_film() override;
+    void take_film_sums(FilmSums& sums) override;
 
     // Events of launches not yet accounted, all lanes (for tests: stays bounded during a render).
     size_t pending_events() const;
@@ -116,7 +127,13 @@ class ClDevice : public WavefrontDevice {
     std::vector<size_t> local_;    // work-group size per kernel
     std::vector<cl::Buffer> args_; // the shared buffers, by ETK_ARG_*
     std::vector<std::unique_ptr<ClLane>> lanes_;
-    void zero_guide_sums();   // before the first pass and after each take_guide_sums
+    void zero_guide_sums(); // before the first pass and after each take_guide_sums
+    // The film's exact sums on the device (folds_film; kernels/film_fixed.h): a buffer of
+    // FilmSums::Pixel, 28 words each, and the kernel that adds a pass to it.
+    bool fold_ = false;
+    cl::Buffer film_fixed_;
+    cl::Kernel fold_kernel_;
+    size_t fold_local_ = 1;
     size_t guide_floats_ = 1; // size of the visibility tables' buffer
     size_t guide_words_ = 1;  // size of the visibility records' sums (visibility_record.h)
 };

@@ -1,9 +1,12 @@
 #include "render/film_sums.h"
 
+#include "kernels/film_fixed.h"
+
 #include "util/error.h"
 #include "util/parallel.h"
 
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -11,11 +14,24 @@
 namespace et {
 namespace {
 
-constexpr float kLimit = 72057594037927936.0f; // 2^56
+// The device's pixel (kernels/film_fixed.h) is this one, byte for byte: a GPU's sums are read
+// straight into pixels_.
+static_assert(sizeof(etk::EtkFixedPixel) == sizeof(FilmSums::Pixel), "film_fixed.h");
+static_assert(offsetof(etk::EtkFixedPixel, sq) == offsetof(FilmSums::Pixel, sq), "film_fixed.h");
+static_assert(offsetof(etk::EtkFixedPixel, count) == offsetof(FilmSums::Pixel, count),
+              "film_fixed.h");
+static_assert(offsetof(etk::EtkFixedPixel, special) == offsetof(FilmSums::Pixel, special),
+              "film_fixed.h");
+static_assert(FilmSums::kFractionBits == ETK_FILM_FRACTION_BITS &&
+                  FilmSums::kPositiveOverflow == ETK_FILM_POSITIVE_OVERFLOW &&
+                  FilmSums::kNegativeOverflow == ETK_FILM_NEGATIVE_OVERFLOW &&
+                  FilmSums::kNaN == ETK_FILM_NAN,
+              "film_fixed.h");
 
-inline void add_sample(int128& acc, uint8_t& special, float v) {
-    film_accumulate(acc, special, v);
+int128 from_words(etk::EtkFixed128 x) {
+    return static_cast<int128>((static_cast<unsigned __int128>(x.hi) << 64) | x.lo);
 }
+
 inline double channel(int128 acc, uint8_t special) {
     return film_channel_value(acc, special);
 }
@@ -24,13 +40,10 @@ inline double channel(int128 acc, uint8_t special) {
 
 // Adds one float sample to a channel: exact fixed point, or a flag when it cannot be held.
 void film_accumulate(int128& acc, uint8_t& special, float v) {
-    if (std::isnan(v)) {
-        special |= FilmSums::kNaN;
-    } else if (!(std::fabs(v) < kLimit)) {
-        special |= v > 0 ? FilmSums::kPositiveOverflow : FilmSums::kNegativeOverflow;
-    } else {
-        acc += film_fixed_point(v);
-    }
+    if (const uint8_t flag = static_cast<uint8_t>(etk::etk_fixed_special(v)))
+        special |= flag;
+    else
+        acc += from_words(etk::etk_fixed_from_float(v));
 }
 
 // What a channel's value becomes: the finite sum, or inf/NaN as its flags say.
@@ -45,27 +58,7 @@ double film_channel_value(int128 acc, uint8_t special) {
 }
 
 int128 film_fixed_point(float v) {
-    uint32_t bits;
-    std::memcpy(&bits, &v, sizeof bits);
-    const bool negative = bits >> 31;
-    const int exponent = static_cast<int>((bits >> 23) & 0xffu);
-    uint32_t mantissa = bits & 0x7fffffu;
-    int e; // v = mantissa * 2^e
-    if (exponent == 0) {
-        e = -149; // subnormal
-    } else {
-        mantissa |= 0x800000u;
-        e = exponent - 150;
-    }
-    const int shift = e + FilmSums::kFractionBits;
-    int128 magnitude;
-    if (shift >= 0)
-        magnitude = static_cast<int128>(mantissa) << shift; // < 2^24 * 2^102 = 2^126 for |v| < 2^56
-    else if (shift > -25)
-        magnitude = (static_cast<uint64_t>(mantissa) + (uint64_t(1) << (-shift - 1))) >> -shift;
-    else
-        magnitude = 0; // below half a unit
-    return negative ? -magnitude : magnitude;
+    return from_words(etk::etk_fixed_from_float(v));
 }
 
 double film_fixed_to_double(int128 x) {
@@ -93,15 +86,11 @@ void FilmSums::add_pass(const Film& pass, int threads_wanted) {
     run_on_threads(threads, [&](int t) {
         const size_t begin = n * t / threads, end = n * (t + 1) / threads;
         for (size_t i = begin; i < end; ++i) {
-            Pixel& p = pixels_[i];
-            const etk::float4 s = pass.film_sum[i], q = pass.film_sq[i];
-            add_sample(p.sum[0], p.special[0], s.x);
-            add_sample(p.sum[1], p.special[1], s.y);
-            add_sample(p.sum[2], p.special[2], s.z);
-            add_sample(p.sq[0], p.special[3], q.x);
-            add_sample(p.sq[1], p.special[4], q.y);
-            add_sample(p.sq[2], p.special[5], q.z);
-            p.count += static_cast<uint32_t>(s.w);
+            // The device's fold (kernels/film_fixed.h), on a copy: no aliasing of the int128s.
+            etk::EtkFixedPixel p;
+            std::memcpy(&p, &pixels_[i], sizeof p);
+            etk::etk_fixed_add_pixel(&p, pass.film_sum[i], pass.film_sq[i]);
+            std::memcpy(&pixels_[i], &p, sizeof p);
         }
         if (has_aovs())
             add_aov_pass(aovs_.data() + begin, pass.film_albedo.data() + begin,

@@ -1,6 +1,7 @@
 // The film's sums in exact arithmetic, so that they do not depend on the order of the samples:
 // the renderer adds each pass (one float sample per pixel, kernels/film_accumulate.h) here,
-// converted to fixed point, and two films of disjoint sample sets add exactly. A render split over
+// converted to fixed point (kernels/film_fixed.h, which a GPU runs on its own copy of these
+// sums: ClDevice::fold_film), and two films of disjoint sample sets add exactly. A render split over
 // MPI ranks or farm tasks (--sample-range, `envtrace merge`) therefore gives the bit-identical
 // image of one process: integer addition is associative, float addition is not.
 //

@@ -153,6 +153,12 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         count(c);
         return false;
     }
+    if (keep && !hold_ && !learn && device_->folds_film()) { // the film stays on the device
+        device_->fold_film();
+        device_sums_ahead_ = true;
+        count(c);
+        return true;
+    }
     device_->download_film(film_, sums_.has_aovs());
     if (keep && hold_) { // a copy: a learning technique's measuring passes render into film_
         held_film_ = film_;
@@ -169,6 +175,14 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     return true;
 }
 
+const FilmSums& Renderer::sums() const {
+    if (device_sums_ahead_) {
+        device_->take_film_sums(sums_);
+        device_sums_ahead_ = false;
+    }
+    return sums_;
+}
+
 void Renderer::resume(const FilmSums& sums) {
     if (sums.width() != sums_.width() || sums.height() != sums_.height())
         throw Error("cannot resume a " + std::to_string(sums_.width()) + "x" +
@@ -178,6 +192,7 @@ void Renderer::resume(const FilmSums& sums) {
         throw Error(std::string("cannot resume a render ") +
                     (sums_.has_aovs() ? "with" : "without") + " AOVs from a film " +
                     (sums.has_aovs() ? "with" : "without") + " them");
+    this->sums(); // (the device's own sums, if any, start again from zero)
     sums_ = sums;
 }
 

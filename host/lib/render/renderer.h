@@ -65,14 +65,17 @@ class Renderer {
         stats_.samples_per_pixel -= held_ ? 1 : 0;
         held_ = false;
     }
-    // The sums of every sample rendered (and resumed from) so far.
-    const FilmSums& sums() const { return sums_; }
+    // The sums of every sample rendered (and resumed from) so far (read from the device first
+    // where it keeps them: WavefrontDevice::folds_film).
+    const FilmSums& sums() const;
+    // Whether the device adds the passes to the sums itself (RenderSettings::film_sums).
+    bool sums_on_device() const { return device_->folds_film(); }
     // Whether the sample_lights stage draws the light samples (RenderSettings::light_batch).
     bool batches_light_samples() const { return light_batch_; }
     // Continues from sums of the same size (an earlier, interrupted render, or another rank's).
     void resume(const FilmSums& sums);
     // Mean radiance per pixel (RGB, row-major, row 0 at the top).
-    std::vector<float> image() const { return sums_.mean(); }
+    std::vector<float> image() const { return sums().mean(); }
     const RenderStats& stats();
     int paths() const { return device_->lanes() * device_->wave_size(); }
     std::string name() const { return device_->name(); }
@@ -87,7 +90,10 @@ class Renderer {
     void count(const RayCounts& c);
     const DeviceScene& scene_;
     Film film_; // one pass; declared before device_: the native back end writes into it
-    FilmSums sums_;
+    // The sums, but for the passes the device has added to its own since sums() last took them
+    // (device_sums_ahead_): sums() is a const view whose reads bring those over.
+    mutable FilmSums sums_;
+    mutable bool device_sums_ahead_ = false;
     std::unique_ptr<WavefrontDevice> device_;
     RenderStats stats_;
     bool light_batch_ = false;

@@ -39,6 +39,14 @@ void WavefrontDevice::take_guide_sums(std::vector<uint32_t>&) {
     throw Error("this back end keeps no visibility records");
 }
 
+void WavefrontDevice::fold_film() {
+    throw Error("this back end keeps no film sums (a bug)");
+}
+
+void WavefrontDevice::take_film_sums(FilmSums&) {
+    throw Error("this back end keeps no film sums (a bug)");
+}
+
 RayCounts& RayCounts::operator+=(const RayCounts& o) {
     camera += o.camera;
     continuation += o.continuation;

@@ -14,6 +14,8 @@
 
 namespace et {
 
+class FilmSums;
+
 // The stage names (the OpenCL kernel names), indexed by ETK_STAGE_*.
 const char* stage_name(int stage);
 
@@ -78,6 +80,13 @@ class WavefrontDevice {
     virtual void take_guide_sums(std::vector<uint32_t>& sums);
     // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
     virtual bool prefers_light_batches() const { return true; }
+    // Whether the device keeps the film's exact sums itself (FilmSumsAt): then fold_film adds
+    // the pass just rendered to them (after finish(), in place of download_film and the host's
+    // FilmSums::add_pass), and take_film_sums adds them, exactly, to `sums` and starts them again
+    // from zero.
+    virtual bool folds_film() const { return false; }
+    virtual void fold_film();
+    virtual void take_film_sums(FilmSums& sums);
 };
 
 // Asked between waves and between bounces (from any lane's thread): true abandons the pass in
