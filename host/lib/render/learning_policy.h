@@ -30,10 +30,14 @@ class LearningPolicy {
     virtual int learning_passes() const = 0;
     // Sets pass `sample_index`'s parameters; learn: it is the next learning pass.
     virtual void configure(etk::EtkParams& p, uint32_t sample_index, bool learn) const = 0;
-    // After learning pass `pass` (sample index `sample_index`, its film whole in `film`,
-    // `seconds` of rendering): learn from it, upload what the passes after it use, measure what
-    // it needs to with `measure`. False where a measuring pass was abandoned.
-    virtual bool after_pass(int pass, uint32_t sample_index, const Film& film, double seconds,
+    // Whether after_pass reads learning pass `sample_index`'s film (the others' may stay on the
+    // device: WavefrontDevice::folds_film).
+    virtual bool reads_film(uint32_t sample_index) const = 0;
+    // After learning pass `pass` (sample index `sample_index`, its film whole in `film` where
+    // reads_film said so, else null; `seconds` of rendering): learn from it, upload what the
+    // passes after it use, measure what it needs to with `measure`. False where a measuring pass
+    // was abandoned.
+    virtual bool after_pass(int pass, uint32_t sample_index, const Film* film, double seconds,
                             WavefrontDevice& device, const MeasuringPass& measure) = 0;
     // Its figures for the render's report: a JSON object.
     virtual nlohmann::json stats() const = 0;

@@ -153,22 +153,25 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         count(c);
         return false;
     }
-    if (keep && !hold_ && !learn && device_->folds_film()) { // the film stays on the device
+    // The film stays on the device where it keeps the sums and nobody reads this pass's film.
+    const bool read = (keep && hold_) || (learn && policy_->reads_film(sample_index)) ||
+                      (keep && !device_->folds_film());
+    if (keep && !hold_ && device_->folds_film()) {
         device_->fold_film();
         device_sums_ahead_ = true;
-        count(c);
-        return true;
     }
-    device_->download_film(film_, sums_.has_aovs());
+    if (read)
+        device_->download_film(film_, sums_.has_aovs());
     if (keep && hold_) { // a copy: a learning technique's measuring passes render into film_
         held_film_ = film_;
         held_ = true;
-    } else if (keep)
+    } else if (keep && !device_->folds_film())
         sums_.add_pass(film_, scene_.settings.threads); // the render's cores, idle now
     if (learn) {
         // (An abandoned measuring pass leaves this pass whole; abandoned_ stops what follows.)
-        policy_->after_pass(next_learning_pass_, sample_index, film_, pass_timer.seconds(),
-                            *device_, [this](const etk::EtkParams& q) { return measure(q); });
+        policy_->after_pass(next_learning_pass_, sample_index, read ? &film_ : nullptr,
+                            pass_timer.seconds(), *device_,
+                            [this](const etk::EtkParams& q) { return measure(q); });
         ++next_learning_pass_;
     }
     count(c);

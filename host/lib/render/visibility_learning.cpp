@@ -3,6 +3,7 @@
 #include "prepare/device_scene.h"
 #include "prepare/technique.h"
 #include "render/film.h"
+#include "util/error.h"
 #include "util/timer.h"
 
 #include <algorithm>
@@ -82,7 +83,13 @@ void VisibilityLearning::take_records(WavefrontDevice& device) {
     continuation_records_ = cache_->continuation_records();
 }
 
-bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film& film,
+// The verdict's passes of the tables are measured on their films.
+bool VisibilityLearning::reads_film(uint32_t sample_index) const {
+    const int64_t verdict_pass = int64_t(sample_index) - verdict_start();
+    return verdict_pass >= 0 && verdict_pass < options_.verdict_passes;
+}
+
+bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film* film,
                                     double seconds, WavefrontDevice& device,
                                     const MeasuringPass& measure) {
     if (learns_tables(sample_index) && cache_) {
@@ -92,15 +99,17 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film&
         if (pass + 1 == options_.learning_passes)
             cache_.reset(); // learned: the sums are no longer needed
     }
-    const int64_t verdict_pass = int64_t(sample_index) - verdict_start();
-    if (verdict_pass < 0 || verdict_pass >= options_.verdict_passes)
+    if (!reads_film(sample_index))
         return true;
+    if (!film)
+        throw Error("a verdict pass without its film (a bug)");
+    const int64_t verdict_pass = int64_t(sample_index) - verdict_start();
     // The verdict's passes of the tables, then the fallback's, then the choice.
     if (!verdict_)
         verdict_ = std::make_unique<GuideVerdict>(
-            film.width(), film.height(), options_.verdict_passes,
+            film->width(), film->height(), options_.verdict_passes,
             verdict_cost_for(options_, scene_.params.guide_continuation != 0));
-    verdict_->add(1, static_cast<int>(verdict_pass), &film.film_sum[0].x);
+    verdict_->add(1, static_cast<int>(verdict_pass), &film->film_sum[0].x);
     if (verdict_pass + 1 < options_.verdict_passes)
         return true;
     const Timer t;

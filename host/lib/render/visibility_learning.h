@@ -21,7 +21,8 @@ class VisibilityLearning : public LearningPolicy {
     VisibilityLearning(const DeviceScene& scene, bool batches);
     int learning_passes() const override;
     void configure(etk::EtkParams& p, uint32_t sample_index, bool learn) const override;
-    bool after_pass(int pass, uint32_t sample_index, const Film& film, double seconds,
+    bool reads_film(uint32_t sample_index) const override;
+    bool after_pass(int pass, uint32_t sample_index, const Film* film, double seconds,
                     WavefrontDevice& device, const MeasuringPass& measure) override;
     nlohmann::json stats() const override;
 
