@@ -11,8 +11,8 @@
 ETK_BEGIN
 
 #define ETK_FILM_FRACTION_BITS 70
-// Samples of this magnitude (2^56) or more are flagged, never added: 2^72 of the largest that is
-// added still fit in 127 bits.
+// Samples of this magnitude (2^56) or more are flagged, never added (what a sum holds:
+// host/lib/render/film_sums.h).
 #define ETK_FILM_FIXED_LIMIT 72057594037927936.0f
 // Flags of a channel that met a sample it cannot add (FilmSums::kPositiveOverflow ...).
 #define ETK_FILM_POSITIVE_OVERFLOW 1u

@@ -60,6 +60,17 @@ TEST(FilmFold, TheDevicesSumsAreTheHostsBitForBit) {
               !et::ClRuntime(0).limits().cpu);
 }
 
+// Read back in chunks of 65,536 pixels (ClDevice::take_film_sums): a film of two, the second
+// partial.
+TEST(FilmFold, AFilmOfSeveralChunksReadsBackWhole) {
+    et::Scene s = ett::ground_under_uneven_sky(300, 250);
+    s.settings.max_depth = 1;
+    s.settings.strategy = et::Strategy::mis;
+    const Sums device = render_sums(s, et::FilmSumsAt::device, 0, 2);
+    EXPECT_TRUE(device.sums == render_sums(s, et::FilmSumsAt::host, 0, 2).sums);
+    EXPECT_EQ(device.sums.data()[device.sums.pixels() - 1].count, 2u);
+}
+
 TEST(FilmFold, AResumedRenderAddsToTheHostsSums) {
     const et::Scene s = lit_ground();
     const Sums first = render_sums(s, et::FilmSumsAt::host, 0, 3);
@@ -68,18 +79,49 @@ TEST(FilmFold, AResumedRenderAddsToTheHostsSums) {
     EXPECT_TRUE(resumed.sums == all.sums);
 }
 
-// A learning technique's passes go through the host (its policy reads each pass's film), the
-// passes after them stay on the device: the sums are still the host's.
-TEST(FilmFold, ALearningRenderMixesHostAndDevicePasses) {
+// A learning technique's passes: those its policy reads (the verdict's) are read back and folded
+// on the device, the others only folded there; the passes after them too: the host's sums.
+TEST(FilmFold, ALearningRenderHasTheHostsSums) {
     et::Scene s = ett::side_lit_room(12, 9);
     s.settings.max_depth = 2;
     s.settings.strategy = et::Strategy::visibility;
-    const int spp = 72; // 64 learning passes on a film this small, then 8 on the device
+    const int spp = 72; // 64 learning passes on a film this small, then 8 more
     const Sums host = render_sums(s, et::FilmSumsAt::host, 0, spp);
     const Sums device = render_sums(s, et::FilmSumsAt::device, 0, spp, {spp / 2});
     EXPECT_TRUE(device.on_device);
     EXPECT_EQ(device.sums.data()[0].count, static_cast<uint32_t>(spp));
     EXPECT_TRUE(host.sums == device.sums);
+}
+
+// MPI ranks hold each round's sample until every rank's is whole: held passes, kept or dropped,
+// are added on the host, the others on the device, and the sums are those of the kept samples.
+// A stop request that abandons a pass adds nothing of it.
+TEST(FilmFold, HeldAndAbandonedPassesAddAsOnTheHost) {
+    const et::Scene s = lit_ground();
+    et::RenderSettings st = s.settings;
+    st.backend = et::Backend::opencl;
+    st.film_sums = et::FilmSumsAt::device;
+    const et::DeviceScene ds = et::prepare_device_scene(s, st);
+    auto r = et::make_renderer(ds);
+    r->set_hold(true);
+    EXPECT_FALSE(r->sums_on_device()); // held passes: the host's
+    ASSERT_TRUE(r->render_sample(0));
+    r->keep_held();
+    ASSERT_TRUE(r->render_sample(1));
+    r->drop_held();
+    ASSERT_TRUE(r->render_sample(1));
+    r->keep_held();
+    r->set_hold(false);
+    EXPECT_TRUE(r->sums_on_device());
+    ASSERT_TRUE(r->render_sample(2));
+    ASSERT_TRUE(r->render_sample(3));
+    int asked = 0;
+    r->set_stop([&asked] { return ++asked > 2; }); // mid-pass
+    EXPECT_FALSE(r->render_sample(4));
+    EXPECT_TRUE(r->abandoned());
+    const Sums host = render_sums(s, et::FilmSumsAt::host, 0, 4);
+    EXPECT_EQ(r->sums().data()[0].count, 4u);
+    EXPECT_TRUE(r->sums() == host.sums);
 }
 
 // With AOVs the host keeps the sums (the AOVs' own are added there), whatever was asked.

@@ -81,6 +81,8 @@ int default_cl_lanes(const ClRuntime& rt) {
 
 bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& lim, uint64_t bytes) {
     const bool countable = bytes / 4 <= static_cast<uint64_t>(INT_MAX); // zero_words' n
+    if (st.aovs)
+        return false;
     switch (st.film_sums) {
     case FilmSumsAt::host:
         return false;
@@ -88,12 +90,11 @@ bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& lim
         if (!countable)
             throw Error("--film-sums device: the film's sums (" + std::to_string(bytes >> 20) +
                         " MiB) are too large for one device buffer; use --film-sums host");
-        return !st.aovs;
+        return true;
     case FilmSumsAt::automatic:
         break;
     }
-    return !st.aovs && !lim.cpu && countable && bytes <= lim.max_alloc &&
-           bytes <= lim.global_mem / 4;
+    return !lim.cpu && countable && bytes <= lim.max_alloc && bytes <= lim.global_mem / 4;
 }
 
 ClLane::ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
@@ -432,18 +433,24 @@ void ClDevice::fold_film() {
 void ClDevice::take_film_sums(FilmSums& sums) {
     if (sums.pixels() != static_cast<size_t>(pixels_))
         throw Error("the device's film sums are for another film size (a bug)");
-    std::vector<FilmSums::Pixel> device(sums.pixels());
+    // In chunks: a second copy of the whole sums (112 bytes a pixel, 1.9 GB at 4096²) would
+    // double what the renderer's memory check counted.
+    constexpr size_t kChunk = size_t(1) << 16;
+    std::vector<FilmSums::Pixel> chunk(std::min(kChunk, sums.pixels()));
     try {
         ClLane& l = *lanes_[0];
-        l.queue().enqueueReadBuffer(film_fixed_, CL_TRUE, 0,
-                                    sizeof(FilmSums::Pixel) * device.size(), device.data());
-        l.zero_words(film_fixed_, sizeof(FilmSums::Pixel) / 4 * device.size());
+        for (size_t at = 0; at < sums.pixels(); at += kChunk) {
+            const size_t n = std::min(kChunk, sums.pixels() - at);
+            l.queue().enqueueReadBuffer(film_fixed_, CL_TRUE, sizeof(FilmSums::Pixel) * at,
+                                        sizeof(FilmSums::Pixel) * n, chunk.data());
+            FilmSums::add_pixels(sums.data() + at, chunk.data(), n);
+        }
+        l.zero_words(film_fixed_, sizeof(FilmSums::Pixel) / 4 * sums.pixels());
         l.finish();
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot read the film's sums from the device (") + e.what() +
                     "): " + cl_error_name(e.err()));
     }
-    FilmSums::add_pixels(sums.data(), device.data(), device.size());
 }
 
 // After finish(): every lane's launches are done.

@@ -1,16 +1,19 @@
 // The film's sums in exact arithmetic, so that they do not depend on the order of the samples:
 // the renderer adds each pass (one float sample per pixel, kernels/film_accumulate.h) here,
 // converted to fixed point (kernels/film_fixed.h, which a GPU runs on its own copy of these
-// sums: ClDevice::fold_film), and two films of disjoint sample sets add exactly. A render split over
-// MPI ranks or farm tasks (--sample-range, `envtrace merge`) therefore gives the bit-identical
+// sums: ClDevice::fold_film), and two films of disjoint sample sets add exactly. A render split
+// over MPI ranks or farm tasks (--sample-range, `envtrace merge`) therefore gives the bit-identical
 // image of one process: integer addition is associative, float addition is not.
 //
 // Per pixel and channel (RGB of the sum, RGB of the sum of squares): a 128-bit integer counting
 // units of 2^-70 (samples are rounded to that grid, a relative change below 2^-24 for any value
 // above 2^-46 ~ 1.4e-14; smaller ones are below what a float film could hold next to a normal
 // sample anyway). A sample of magnitude 2^56 (7.2e16) or more, or not finite, is not added but
-// flagged, and the channel's mean becomes +inf, -inf or NaN as a float sum would have. 2^72
-// samples of the largest magnitude still fit, so the sums cannot overflow.
+// flagged, and the channel's mean becomes +inf, -inf or NaN as a float sum would have. A sum
+// holds magnitudes below 2^57 (1.4e17): 2^24 samples (the most --spp allows) of up to 2^33 (8.6e9)
+// each, or about 1,400 squares of a 1e7 firefly in the sum of squares. Past that it wraps, as
+// it does in every process alike (merges stay bit-identical), and the pixel is wrong: a known
+// limit, far above the radiance of the maps measured (a sun of ~1e5 squares to 1e10).
 #pragma once
 #include "render/film.h"
 #include "render/film_aovs.h"

@@ -180,8 +180,8 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
 
 const FilmSums& Renderer::sums() const {
     if (device_sums_ahead_) {
+        device_sums_ahead_ = false; // (a failed read ends the render: never added twice)
         device_->take_film_sums(sums_);
-        device_sums_ahead_ = false;
     }
     return sums_;
 }

@@ -68,8 +68,9 @@ class Renderer {
     // The sums of every sample rendered (and resumed from) so far (read from the device first
     // where it keeps them: WavefrontDevice::folds_film).
     const FilmSums& sums() const;
-    // Whether the device adds the passes to the sums itself (RenderSettings::film_sums).
-    bool sums_on_device() const { return device_->folds_film(); }
+    // Whether the device adds the passes to the sums itself (RenderSettings::film_sums); held
+    // passes (set_hold: MPI ranks) are added on the host.
+    bool sums_on_device() const { return device_->folds_film() && !hold_; }
     // Whether the sample_lights stage draws the light samples (RenderSettings::light_batch).
     bool batches_light_samples() const { return light_batch_; }
     // Continues from sums of the same size (an earlier, interrupted render, or another rank's).

@@ -81,9 +81,9 @@ class WavefrontDevice {
     // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
     virtual bool prefers_light_batches() const { return true; }
     // Whether the device keeps the film's exact sums itself (FilmSumsAt): then fold_film adds
-    // the pass just rendered to them (after finish(), in place of download_film and the host's
-    // FilmSums::add_pass), and take_film_sums adds them, exactly, to `sums` and starts them again
-    // from zero.
+    // the pass just rendered to them (after finish(), in place of the host's FilmSums::add_pass;
+    // the film is read back only where someone reads it), and take_film_sums adds them, exactly,
+    // to `sums` and starts them again from zero.
     virtual bool folds_film() const { return false; }
     virtual void fold_film();
     virtual void take_film_sums(FilmSums& sums);
