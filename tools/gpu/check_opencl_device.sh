@@ -22,18 +22,7 @@ py=${PYTHON:-python3}
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 mkdir -p "$out/img"
-summary=$out/summary.txt
-: >"$summary"
-say() { echo "$*" | tee -a "$summary"; }
-
-# The ICD loader reads the vendor list from OCL_ICD_VENDORS: the GPU driver's library beside
-# whatever the system lists (PoCL).
-vendors=$out/vendors
-mkdir -p "$vendors"
-nv=$(ldconfig -p | awk '/libnvidia-opencl\.so\.1 /{print $NF; exit}')
-[ -n "$nv" ] && echo "$nv" >"$vendors/nvidia.icd"
-cp /etc/OpenCL/vendors/*.icd "$vendors/" 2>/dev/null
-export OCL_ICD_VENDORS=$vendors
+. "$here/common.sh"
 export ENVTRACE_CACHE_DIR=$out/kernel-cache POCL_CACHE_DIR=$out/pocl-cache
 say "== driver: $(nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>/dev/null)"
 say "== envtrace devices --kernels"

@@ -16,15 +16,8 @@ out=$(realpath -m "$2")
 platform=${3:-NVIDIA}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 mkdir -p "$out/stats"
-summary=$out/summary.txt
-: >"$summary"
-say() { echo "$*" | tee -a "$summary"; }
-vendors=$out/vendors
-mkdir -p "$vendors"
-nv=$(ldconfig -p | awk '/libnvidia-opencl\.so\.1 /{print $NF; exit}')
-[ -n "$nv" ] && echo "$nv" >"$vendors/nvidia.icd"
-cp /etc/OpenCL/vendors/*.icd "$vendors/" 2>/dev/null
-export OCL_ICD_VENDORS=$vendors ENVTRACE_CACHE_DIR=$out/kernel-cache
+. "$root/tools/gpu/common.sh"
+export ENVTRACE_CACHE_DIR=$out/kernel-cache
 python3 "$root/tools/bench/subdivide_mesh.py" "$ENVTRACE_DATA/meshes/stanford-bunny.obj" 2 \
     "$out/bunny1m.ply" >/dev/null || exit 1
 python3 - "$root/scenes/bunny_esplanade.json" "$out/bunny1m.json" "${SIZE:-2048}" <<'PY' || exit 1
