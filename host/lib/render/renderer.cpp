@@ -153,10 +153,11 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         count(c);
         return false;
     }
-    // The film stays on the device where it keeps the sums and nobody reads this pass's film.
-    const bool read = (keep && hold_) || (learn && policy_->reads_film(sample_index)) ||
-                      (keep && !device_->folds_film());
-    if (keep && !hold_ && device_->folds_film()) {
+    // A kept pass is added where the device keeps the sums (not when held: MPI), else on the
+    // host; the film comes back only for the host or for a policy that reads it.
+    const bool fold = keep && !hold_ && device_->folds_film();
+    const bool read = (keep && !fold) || (learn && policy_->reads_film(sample_index));
+    if (fold) {
         device_->fold_film();
         device_sums_ahead_ = true;
     }
@@ -165,7 +166,7 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
     if (keep && hold_) { // a copy: a learning technique's measuring passes render into film_
         held_film_ = film_;
         held_ = true;
-    } else if (keep && !device_->folds_film())
+    } else if (keep && !fold)
         sums_.add_pass(film_, scene_.settings.threads); // the render's cores, idle now
     if (learn) {
         // (An abandoned measuring pass leaves this pass whole; abandoned_ stops what follows.)
