@@ -1,17 +1,16 @@
-// Closest-hit and any-hit traversal of the flattened 4-wide BVH the host builds
+// Closest-hit and any-hit traversal of the flattened 8-wide BVH the host builds
 // (host/lib/prepare/bvh_build.cpp).
 //
-// Each node is eight float4 holding its four children in the lanes x, y, z, w (structure of
-// arrays, so that the four box tests are the same operation on four lanes: what PoCL's
-// work-item vectoriser and GCC's SLP vectoriser both handle): lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
-// meta, flags; integers are stored as float bits. An inner child has flags 0 and meta = its node
-// index. A leaf child has flags = 0x80000000 | its number of packets (below) and meta = its
-// first packet; leaves are intersected straight from their parent, so a leaf costs no node fetch.
-// An unused lane is an empty leaf (no packet) with a point box. Node 0 is the root. Of the inner
-// children that the ray enters the nearest is visited next and the others are pushed far-first
-// with their entry distance, so a popped node that lies beyond the closest hit found meanwhile is
-// skipped without a fetch. The host keeps the tree shallow enough for ETK_BVH_STACK (at most
-// 1 + 3 x depth entries).
+// Each node is eight rows of eight floats, one child per lane (structure of arrays, so that the
+// eight box tests are one vector operation per step: one AVX instruction natively and in PoCL):
+// lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, meta, flags; integers are stored as float bits. An inner
+// child has flags 0 and meta = its node index. A leaf child has flags = 0x80000000 | its number of
+// packets (below) and meta = its first packet; leaves are intersected straight from their parent,
+// so a leaf costs no node fetch. An unused lane is an empty leaf (no packet) with a point box. Node
+// 0 is the root. Of the inner children that the ray enters the nearest is visited next and the
+// others are pushed far-first with their entry distance, so a popped node that lies beyond the
+// closest hit found meanwhile is skipped without a fetch. The host keeps every path's pushes within
+// ETK_BVH_STACK.
 //
 // A leaf's triangles lie in packets of four, ETK_BVH_PACKET float4 each, again one triangle per
 // lane: v0.x, v0.y, v0.z, v1.x, ..., v2.z and the triangle's index; an unused lane has index -1
@@ -32,7 +31,8 @@
 #include "compat.h"
 
 #define ETK_BVH_STACK 96
-#define ETK_BVH_NODE 8    // float4 per node
+#define ETK_BVH_WIDTH 8   // children per node
+#define ETK_BVH_NODE 16   // float4 per node: 8 rows of ETK_BVH_WIDTH floats
 #define ETK_BVH_PACKET 10 // float4 per packet of four triangles
 // A packet's rows (float4 each, one lane per triangle): v0 x, y, z, then v1, v2, the index.
 #define ETK_PACKET_V0 0
@@ -48,22 +48,36 @@ typedef struct {
     float b1, b2; // barycentrics of v1 and v2
 } EtkHit;
 
-// Slab tests of a node's four boxes against [0, tmax], lane-wise (one vector operation per step
+// Slab tests of a node's eight boxes against [0, tmax], lane-wise (one vector operation per step
 // on both back ends): entry and exit distances. A lane is entered when tnear <= tfar * slack; the
-// slack keeps rays that graze a flat box from missing it.
-ETK_FN void etk_box_hit4(ETK_GLOBAL const float4* nd, float4 ox, float4 oy, float4 oz, float4 ix,
-                         float4 iy, float4 iz, float tmax, float4* tnear, float4* tfar) {
-    float4 tx0 = (nd[0] - ox) * ix, tx1 = (nd[3] - ox) * ix;
-    float4 ty0 = (nd[1] - oy) * iy, ty1 = (nd[4] - oy) * iy;
-    float4 tz0 = (nd[2] - oz) * iz, tz1 = (nd[5] - oz) * iz;
-    // Finite operands only (etk_safe_inverse): plain min/max suffice.
-    float4 zero = make_float4(0.0f, 0.0f, 0.0f, 0.0f);
-    float4 tm = make_float4(tmax, tmax, tmax, tmax);
-    *tnear = ETK_MAXF(ETK_MAXF(ETK_MINF(tx0, tx1), ETK_MINF(ty0, ty1)),
-                      ETK_MAXF(ETK_MINF(tz0, tz1), zero));
-    *tfar = ETK_MINF(ETK_MINF(ETK_MAXF(tx0, tx1), ETK_MAXF(ty0, ty1)),
-                     ETK_MINF(ETK_MAXF(tz0, tz1), tm)) *
-            1.000001f;
+// slack keeps rays that graze a flat box from missing it. Each axis reads only its near and far
+// planes, rows chosen once per ray by the direction's signs (etk_box_rows): with a finite,
+// non-zero inverse (etk_safe_inverse) and lo <= hi, (near - o) * inv <= (far - o) * inv in
+// floats too, so these are the min and max of the two planes' distances bit for bit, without
+// min/max operations per axis.
+typedef struct {
+    int nx, ny, nz; // rows of the near planes (0-2: lo, 3-5: hi)
+    int fx, fy, fz; // and of the far planes
+} EtkBoxRows;
+
+ETK_FN EtkBoxRows etk_box_rows(float3 inv_dir) {
+    EtkBoxRows b;
+    b.nx = inv_dir.x >= 0.0f ? 0 : 3;
+    b.ny = inv_dir.y >= 0.0f ? 1 : 4;
+    b.nz = inv_dir.z >= 0.0f ? 2 : 5;
+    b.fx = 3 - b.nx;
+    b.fy = 5 - b.ny;
+    b.fz = 7 - b.nz;
+    return b;
+}
+
+ETK_FN void etk_box_hit8(ETK_GLOBAL const float* nd, EtkBoxRows b, float8 ox, float8 oy, float8 oz,
+                         float8 ix, float8 iy, float8 iz, float tmax, float8* tnear, float8* tfar) {
+    float8 nx = (etk_row8(nd, b.nx) - ox) * ix, fx = (etk_row8(nd, b.fx) - ox) * ix;
+    float8 ny = (etk_row8(nd, b.ny) - oy) * iy, fy = (etk_row8(nd, b.fy) - oy) * iy;
+    float8 nz = (etk_row8(nd, b.nz) - oz) * iz, fz = (etk_row8(nd, b.fz) - oz) * iz;
+    *tnear = ETK_MAXF(ETK_MAXF(nx, ny), ETK_MAXF(nz, etk_splat8(0.0f)));
+    *tfar = ETK_MINF(ETK_MINF(fx, fy), ETK_MINF(fz, etk_splat8(tmax))) * 1.000001f;
 }
 
 // The ray in the watertight test's frame: kz the axis of the direction's largest component, kx
@@ -228,7 +242,7 @@ ETK_FORCE_INLINE_FN void etk_bvh_push(int child, float t, int* stack, float* sta
     int j = *sp;
     if (j >= ETK_BVH_STACK) // never, for trees the host builds
         return;
-    while (j > base && stack_t[j - 1] < t) { // insertion: at most three moves
+    while (j > base && stack_t[j - 1] < t) { // insertion: at most seven moves
         stack[j] = stack[j - 1];
         stack_t[j] = stack_t[j - 1];
         --j;
@@ -238,55 +252,53 @@ ETK_FORCE_INLINE_FN void etk_bvh_push(int child, float t, int* stack, float* sta
     *sp = *sp + 1;
 }
 
-// Two entered inner children, lanes a < b: pushes the far one and returns the near one, which
-// the sorted pushes would pop next (of equal distances the later lane). A branch, not a select:
-// the near child's index then does not wait for the compare.
-ETK_FORCE_INLINE_FN int etk_bvh_near_far(ETK_GLOBAL const float* meta, float4 tn, int a, int b,
-                                         int* stack, float* stack_t, int* sp) {
-    float ta = etk_lane(tn, a), tb = etk_lane(tn, b);
-    int j = *sp;
-    if (j >= ETK_BVH_STACK) // never, for trees the host builds
-        return (int)as_uint(meta[ta < tb ? a : b]);
-    *sp = j + 1;
-    if (ta < tb) {
-        stack[j] = (int)as_uint(meta[b]);
-        stack_t[j] = tb;
-        return (int)as_uint(meta[a]);
-    }
-    stack[j] = (int)as_uint(meta[a]);
-    stack_t[j] = ta;
-    return (int)as_uint(meta[b]);
-}
-
 // The inner children entered (bit mask `inner` of the lanes, entry distances tn, child indices
 // meta[lane]): pushes all but the nearest and returns it, the node to visit next (-1: none).
-// One or two children, most nodes, take a branch per mask with the lanes as constants: a
-// predicted branch then loads the next node before the box test is done, where a lane index
-// computed from the mask would wait for the test (camera rays ~10% slower that way).
-ETK_FORCE_INLINE_FN int etk_bvh_next(ETK_GLOBAL const float* meta, float4 tn, uint inner,
+// One child, most nodes, is visited without touching the stack, by a branch per mask with the
+// lane as a constant: a predicted branch then loads the next node before the box test is done,
+// where a lane index computed from the mask would wait for the test. Of two, the far one is
+// pushed (of equal distances the near one is the later lane, as the sorted pushes have it).
+ETK_FORCE_INLINE_FN int etk_bvh_next(ETK_GLOBAL const float* meta, float8 tn, uint inner,
                                      int* stack, float* stack_t, int* sp) {
-    if (!inner)
+    switch (inner) { // the lane as a constant: see above
+    case 0u:
         return -1;
-    if (inner == 1u || inner == 2u || inner == 4u || inner == 8u)
-        return (int)as_uint(
-            inner == 1u ? meta[0] : (inner == 2u ? meta[1] : (inner == 4u ? meta[2] : meta[3])));
-    if (inner == 3u)
-        return etk_bvh_near_far(meta, tn, 0, 1, stack, stack_t, sp);
-    if (inner == 5u)
-        return etk_bvh_near_far(meta, tn, 0, 2, stack, stack_t, sp);
-    if (inner == 6u)
-        return etk_bvh_near_far(meta, tn, 1, 2, stack, stack_t, sp);
-    if (inner == 9u)
-        return etk_bvh_near_far(meta, tn, 0, 3, stack, stack_t, sp);
-    if (inner == 10u)
-        return etk_bvh_near_far(meta, tn, 1, 3, stack, stack_t, sp);
-    if (inner == 12u)
-        return etk_bvh_near_far(meta, tn, 2, 3, stack, stack_t, sp);
+    case 1u:
+        return (int)as_uint(meta[0]);
+    case 2u:
+        return (int)as_uint(meta[1]);
+    case 4u:
+        return (int)as_uint(meta[2]);
+    case 8u:
+        return (int)as_uint(meta[3]);
+    case 16u:
+        return (int)as_uint(meta[4]);
+    case 32u:
+        return (int)as_uint(meta[5]);
+    case 64u:
+        return (int)as_uint(meta[6]);
+    case 128u:
+        return (int)as_uint(meta[7]);
+    default:
+        break;
+    }
+    int a = etk_lowest_bit(inner);
+    uint rest = inner & (inner - 1u);
+    if (!(rest & (rest - 1u)) && *sp < ETK_BVH_STACK) {
+        int b = etk_lowest_bit(rest);
+        float ta = etk_lane8(tn, a), tb = etk_lane8(tn, b);
+        int near_lane = ta < tb ? a : b;
+        int j = *sp;
+        stack[j] = (int)as_uint(meta[a + b - near_lane]);
+        stack_t[j] = ta < tb ? tb : ta;
+        *sp = j + 1;
+        return (int)as_uint(meta[near_lane]);
+    }
     int base = *sp;
     do {
         int i = etk_lowest_bit(inner);
         inner &= inner - 1u;
-        etk_bvh_push((int)as_uint(meta[i]), etk_lane(tn, i), stack, stack_t, base, sp);
+        etk_bvh_push((int)as_uint(meta[i]), etk_lane8(tn, i), stack, stack_t, base, sp);
     } while (inner);
     *sp = *sp - 1;
     return stack[*sp];
@@ -311,12 +323,9 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
     hit->b1 = hit->b2 = 0.0f;
     float3 inv_dir = etk_safe_inverse(dir);
     EtkShearedRay sr = etk_sheared_ray(org, dir);
-    float4 ox = make_float4(org.x, org.x, org.x, org.x),
-           oy = make_float4(org.y, org.y, org.y, org.y);
-    float4 oz = make_float4(org.z, org.z, org.z, org.z);
-    float4 ix = make_float4(inv_dir.x, inv_dir.x, inv_dir.x, inv_dir.x);
-    float4 iy = make_float4(inv_dir.y, inv_dir.y, inv_dir.y, inv_dir.y);
-    float4 iz = make_float4(inv_dir.z, inv_dir.z, inv_dir.z, inv_dir.z);
+    float8 ox = etk_splat8(org.x), oy = etk_splat8(org.y), oz = etk_splat8(org.z);
+    float8 ix = etk_splat8(inv_dir.x), iy = etk_splat8(inv_dir.y), iz = etk_splat8(inv_dir.z);
+    EtkBoxRows rows = etk_box_rows(inv_dir);
     int stack[ETK_BVH_STACK];
     float stack_t[ETK_BVH_STACK];
     int sp = 0;
@@ -330,28 +339,27 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
                 continue; // entered beyond the closest hit found since it was pushed
             node = stack[sp];
         }
-        ETK_GLOBAL const float4* nd = nodes + ETK_BVH_NODE * node;
-        float4 tn, tf;
-        etk_box_hit4(nd, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
-        ETK_GLOBAL const float* meta = (ETK_GLOBAL const float*)(nd + 6); // lane i: meta[i]
+        ETK_GLOBAL const float* nd = (ETK_GLOBAL const float*)(nodes + ETK_BVH_NODE * node);
+        float8 tn, tf;
+        etk_box_hit8(nd, rows, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
+        ETK_GLOBAL const float* meta = nd + 6 * ETK_BVH_WIDTH; // lane i: meta[i]
         // Entered: tnear <= tfar and within the ray's reach.
-        etk_lanes lim = etk_lanes_splat(etk_bvh_reach(hit));
-        uint enter =
-            etk_lane_bits((etk_lanes_of(tn) <= etk_lanes_of(tf)) & (etk_lanes_of(tn) <= lim));
-        uint leaf = etk_sign_bits(nd[7]); // flags: the sign bit marks a leaf
+        float8 lim = etk_splat8(etk_bvh_reach(hit));
+        uint enter = etk_lane_bits8((tn <= tf) & (tn <= lim));
+        uint leaf = etk_sign_bits8(etk_row8(nd, 7)); // flags: the sign bit marks a leaf
         uint leaves = enter & leaf;
         if (leaves) {
-            ETK_GLOBAL const float* flags = (ETK_GLOBAL const float*)(nd + 7);
+            ETK_GLOBAL const float* flags = nd + 7 * ETK_BVH_WIDTH;
             do {
                 int i = etk_lowest_bit(leaves);
                 leaves &= leaves - 1u;
-                if (etk_lane(tn, i) <= etk_bvh_reach(hit) &&
+                if (etk_lane8(tn, i) <= etk_bvh_reach(hit) &&
                     etk_leaf_hit(packets, (int)as_uint(meta[i]),
                                  (int)(as_uint(flags[i]) & 0x7fffffffu), sr, any_hit, hit))
                     return 1;
             } while (leaves);
-            lim = etk_lanes_splat(etk_bvh_reach(hit));
-            enter &= etk_lane_bits(etk_lanes_of(tn) <= lim);
+            lim = etk_splat8(etk_bvh_reach(hit));
+            enter &= etk_lane_bits8(tn <= lim);
         }
         node = etk_bvh_next(meta, tn, enter & ~leaf, stack, stack_t, &sp);
     }

@@ -93,6 +93,29 @@ typedef float4 etk_lanes;
 static inline float etk_lane(float4 v, int i) {
     return i == 0 ? v.x : (i == 1 ? v.y : (i == 2 ? v.z : v.w));
 }
+// Eight lanes (bvh.h's 8-wide nodes): row r of eight floats at p, read by vload8, which needs
+// only a float's alignment (a buffer over a host vector of float4, CL_MEM_USE_HOST_PTR, is
+// 16-byte aligned, and a float8 load from there faults on PoCL); their lane masks as bits 0-7
+// (s0 is bit 0), as for four lanes above.
+#define etk_row8(p, r) vload8((r), (p))
+#define etk_splat8(s) ((float8)(s))
+#if defined(__clang__) && defined(__x86_64__) && defined(__AVX__)
+#define etk_sign_bits8(v) ((uint)__builtin_ia32_movmskps256(as_float8(v)))
+#define etk_lane_bits8(m) etk_sign_bits8(m)
+#else
+#define etk_lane_bits8(m)                                                                          \
+    ((uint)(((m).s0 & 1) | ((m).s1 & 2) | ((m).s2 & 4) | ((m).s3 & 8) | ((m).s4 & 16) |            \
+            ((m).s5 & 32) | ((m).s6 & 64) | ((m).s7 & 128)))
+#define etk_sign_bits8(v) etk_lane_bits8(as_int8(v) < 0)
+#endif
+static inline float etk_lane8(float8 v, int i) {
+    union {
+        float8 v;
+        float a[8];
+    } u;
+    u.v = v;
+    return u.a[i];
+}
 // Reserves a slot in a work queue.
 #define ETK_ATOMIC_INC(p) atomic_inc(p)
 #define ETK_ATOMIC_ADD(p, v) atomic_add((p), (v))
@@ -289,6 +312,41 @@ inline float etk_lane(float4 v, int i) {
 }
 inline float4 operator+(float4 a, float4 b) {
     return etk_from_v4(etk_to_v4(a) + etk_to_v4(b));
+}
+// Eight lanes, as in OpenCL C (above): GCC/Clang vectors of 32 bytes (one AVX instruction per
+// operation, two SSE ones without AVX). Rows are read from buffers of float4, 16-byte aligned:
+// an unaligned load.
+typedef float float8 __attribute__((vector_size(32)));
+inline float8 etk_row8(const float* p, int r) {
+    float8 v;
+    std::memcpy(&v, p + 8 * r, sizeof v);
+    return v;
+}
+inline float8 etk_splat8(float s) {
+    return float8{s, s, s, s, s, s, s, s};
+}
+template <typename Mask> inline uint etk_lane_bits8(Mask m) {
+#if defined(__AVX__)
+    return static_cast<uint>(__builtin_ia32_movmskps256(reinterpret_cast<float8>(m)));
+#else
+    uint b = 0;
+    for (int i = 0; i < 8; ++i)
+        b |= (m[i] & 1u) << i;
+    return b;
+#endif
+}
+inline uint etk_sign_bits8(float8 v) {
+    typedef int int8v __attribute__((vector_size(32)));
+    return etk_lane_bits8(reinterpret_cast<int8v>(v) < 0);
+}
+inline float etk_lane8(float8 v, int i) {
+    return v[i];
+}
+inline float8 fmin(float8 a, float8 b) { // lane-wise, as fmin below
+    return a < b ? a : b;
+}
+inline float8 fmax(float8 a, float8 b) {
+    return a > b ? a : b;
 }
 inline float4 operator/(float4 a, float4 b) {
     return etk_from_v4(etk_to_v4(a) / etk_to_v4(b));

@@ -20,6 +20,7 @@
 #include <glm/gtc/random.hpp>
 
 #include <cmath>
+#include <functional>
 #include <cstring>
 #include <random>
 
@@ -300,9 +301,9 @@ et::TriangleSoup awkward_soup(uint32_t seed) {
     return soup;
 }
 
-void run_host(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const char* name,
-              float max_radius = 1e30f, int max_leaf = 4) {
-    const Prepared p = prepare(soup, max_leaf);
+void run_host(const Prepared& p, int n_rays, uint32_t seed, const char* name,
+              float max_radius = 1e30f) {
+    const et::TriangleSoup& soup = p.soup;
     const std::vector<Ray> rays = make_rays(soup, n_rays, seed, max_radius);
     Outcome closest, any;
     for (size_t i = 0; i < rays.size(); ++i) {
@@ -327,6 +328,11 @@ void run_host(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const cha
     // the rays must be resolved, so the comparison checks something.
     EXPECT_LE(closest.unresolved + any.unresolved, n_rays / 10);
     EXPECT_GT(closest.hits, n_rays / 4); // the rays do exercise the geometry
+}
+
+void run_host(const et::TriangleSoup& soup, int n_rays, uint32_t seed, const char* name,
+              float max_radius = 1e30f, int max_leaf = 4) {
+    run_host(prepare(soup, max_leaf), n_rays, seed, name, max_radius);
 }
 
 // The rays traced by tests/kernels/cl/bvh_test.cl on the OpenCL device: (t, prim bits, b1, b2)
@@ -500,6 +506,74 @@ TEST(Bvh, ClosedMeshesHaveNoCracks) {
         EXPECT_EQ(device_misses, 0) << rays.size() << " rays from inside a sphere of radius " << k.r
                                     << ", " << k.segments << " segments, on the device";
     }
+}
+
+// A binary tree as deep as the builder makes them (60 levels) whose every level offers the 8-wide
+// collapse inner children to take: a spine S_d = (F_d, S_d+1) down to one triangle, where F_d is a
+// fan of eight triangles (three binary levels) around the origin, each fan 0.8 the size of the
+// one above, so that a fan's box is larger than the rest of the spine's and the collapse takes
+// the fans' inner nodes first. Taken greedily, a path would hold 7 pushes per two spine levels,
+// past the traversal's stack; the flattener keeps it within, and traversal stays exact.
+TEST(Bvh, DeepTreeOfFansKeepsTheStackWithin) {
+    et::TriangleSoup soup;
+    std::vector<et::BvhTreeNode> tree(1);
+    std::vector<int> order;
+    auto leaf = [&](const glm::vec3 p[3]) {
+        et::add_triangle(soup, p, nullptr, 0);
+        et::BvhTreeNode n;
+        n.lo = glm::min(p[0], glm::min(p[1], p[2]));
+        n.hi = glm::max(p[0], glm::max(p[1], p[2]));
+        n.first = static_cast<int>(order.size());
+        n.count = 1;
+        order.push_back(static_cast<int>(order.size()));
+        tree.push_back(n);
+        return static_cast<int>(tree.size()) - 1;
+    };
+    auto inner = [&](int node, int a, int b) {
+        tree[static_cast<size_t>(node)].left = a;
+        tree[static_cast<size_t>(node)].right = b;
+        tree[static_cast<size_t>(node)].lo = glm::min(tree[a].lo, tree[b].lo);
+        tree[static_cast<size_t>(node)].hi = glm::max(tree[a].hi, tree[b].hi);
+    };
+    auto new_node = [&]() {
+        tree.emplace_back();
+        return static_cast<int>(tree.size()) - 1;
+    };
+    // Fan of eight triangles at the corners of a cube of half-size r: a complete binary tree.
+    std::function<int(float, int, int)> fan = [&](float r, int lo, int count) -> int {
+        if (count == 1) {
+            const glm::vec3 c(lo & 1 ? r : -r, lo & 2 ? r : -r, lo & 4 ? r : -r);
+            const float s = 0.2f * r;
+            const glm::vec3 p[3] = {c, c + glm::vec3(s, 0, 0), c + glm::vec3(0, s, s)};
+            return leaf(p);
+        }
+        const int n = new_node();
+        const int a = fan(r, lo, count / 2), b = fan(r, lo + count / 2, count / 2);
+        inner(n, a, b);
+        return n;
+    };
+    const int spine = 56; // the tree's height: spine + fan levels (3) + 1 <= 60
+    std::function<int(int, float)> build = [&](int d, float r) -> int {
+        if (d == spine) {
+            const glm::vec3 p[3] = {glm::vec3(0), glm::vec3(r, 0, 0), glm::vec3(0, r, 0)};
+            return leaf(p);
+        }
+        const int n = d == 0 ? 0 : new_node();
+        const int f = fan(r, 0, 8);
+        const int rest = build(d + 1, r * 0.8f);
+        inner(n, f, rest);
+        return n;
+    };
+    build(0, 1.0f);
+    Prepared p;
+    p.soup = soup;
+    p.bvh = et::flatten_bvh(tree, order);
+    p.tris = et::flatten_triangles(soup, p.bvh.order);
+    p.packets = et::flatten_packets(soup, p.bvh);
+    EXPECT_EQ(p.bvh.depth, spine + 3);
+    EXPECT_LE(p.bvh.stack, ETK_BVH_STACK);
+    EXPECT_GT(p.bvh.stack, 64); // the fans do fill the nodes' lanes (taken greedily: 133)
+    run_host(p, 4000, 31, "deep tree of fans");
 }
 
 TEST(Bvh, EmptySceneMissesEverything) {

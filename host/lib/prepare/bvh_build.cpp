@@ -33,8 +33,9 @@ constexpr int kBins = 32;
 int packets(int triangles) {
     return (triangles + 3) / 4;
 }
-// Binary depth limit: the 4-wide tree then has at most 31 levels, and traversal needs at most
-// 1 + 3 x 31 stack entries (kernels/bvh.h).
+// Binary depth limit: a wide node descends at least two binary levels, so the wide tree has at
+// most 31 levels, and a path's stack at most 1 + 3 x 30 entries where nodes keep to four
+// children (Flattener, kernels/bvh.h).
 constexpr int kMaxDepth = 60;
 // A split's two subtrees are built on two threads when both have at least this many triangles
 // (and neither more than three times the other).
@@ -195,12 +196,17 @@ struct Builder {
     }
 };
 
-// Flattens the binary tree depth-first into 4-wide nodes of eight float4 (kernels/bvh.h). A node's
-// children are its binary node's children, each inner one replaced by its own two children (so
-// every path descends at least two binary levels per node, and the 4-wide depth is at most half
-// the binary one, plus one), then, while a lane is free, the inner child of largest area replaced
-// by its children. Leaf children carry their packets (recorded in `leaves`), inner ones their
-// node index. Measures the binary tree's depth and SAH cost on the way.
+// Flattens the binary tree depth-first into 8-wide nodes (kernels/bvh.h). A node's children are
+// its binary node's children, each inner one replaced by its own two children (so every path
+// descends at least two binary levels per node), then, while a lane is free, the inner child of
+// largest area replaced by its children. Leaf children carry their packets (recorded in
+// `leaves`), inner ones their node index. Measures the binary tree's depth and SAH cost on the
+// way.
+//
+// The traversal's stack: a node with k inner children entered pushes k and pops one, so a path
+// holds at most the sum of its nodes' k - 1, plus one. A node takes more than its first four
+// children only where what its subtrees could still push keeps within ETK_BVH_STACK: the first
+// four alone (the binary levels halve, three pushes per level) always do, from kMaxDepth.
 struct Flattener {
     const std::vector<BvhTreeNode>& tree;
     std::vector<etk::float4>& out;
@@ -208,7 +214,8 @@ struct Flattener {
     int packet_count = 0;
     double root_area = 1.0;
     double cost = 0.0;
-    int depth = 0, wide_depth = 0;
+    int depth = 0, wide_depth = 0, stack = 0;
+    std::vector<int> height{}; // of each binary node's subtree (a leaf: 0)
 
     double area(const BvhTreeNode& t) const {
         Box b;
@@ -216,19 +223,33 @@ struct Flattener {
         b.hi = t.hi;
         return b.area() / root_area;
     }
-    // SAH cost and depth of the binary tree below n (at `level`).
-    void measure(int n, int level) {
+    // SAH cost, depth and heights of the binary tree below n (at `level`).
+    int measure(int n, int level) {
         const BvhTreeNode& t = tree[n];
+        int h = 0;
         if (t.left < 0) {
             cost += area(t) * t.count;
             depth = std::max(depth, level);
-            return;
+        } else {
+            cost += area(t);
+            const int hl = measure(t.left, level + 1); // left first: the cost's sum in order
+            h = 1 + std::max(hl, measure(t.right, level + 1));
         }
-        cost += area(t);
-        measure(t.left, level + 1);
-        measure(t.right, level + 1);
+        height[static_cast<size_t>(n)] = h;
+        return h;
     }
-    int emit(int n, int level) {
+    // Whether children `kids` keep a path that arrives with `used` stack entries within the
+    // stack: their pushes here, then at most three per two binary levels below.
+    bool fits(const std::vector<int>& kids, int used) const {
+        int inner = 0, h = 0;
+        for (int c : kids)
+            if (tree[c].left >= 0) {
+                ++inner;
+                h = std::max(h, height[static_cast<size_t>(c)]);
+            }
+        return inner == 0 || used + inner - 1 + 3 * ((h + 1) / 2) + 1 <= ETK_BVH_STACK;
+    }
+    int emit(int n, int level, int used) {
         wide_depth = std::max(wide_depth, level);
         std::vector<int> kids;
         for (int c : {tree[n].left, tree[n].right}) {
@@ -239,7 +260,7 @@ struct Flattener {
                 kids.push_back(tree[c].right);
             }
         }
-        while (kids.size() < 4) {
+        while (kids.size() < ETK_BVH_WIDTH) {
             int best = -1;
             for (int k = 0; k < static_cast<int>(kids.size()); ++k)
                 if (tree[kids[k]].left >= 0 &&
@@ -247,14 +268,22 @@ struct Flattener {
                     best = k;
             if (best < 0)
                 break;
-            const int c = kids[best];
-            kids[best] = tree[c].left;
-            kids.push_back(tree[c].right);
+            std::vector<int> wider = kids;
+            const int c = wider[best];
+            wider[best] = tree[c].left;
+            wider.push_back(tree[c].right);
+            if (kids.size() >= 4 && !fits(wider, used))
+                break;
+            kids = std::move(wider);
         }
+        int inner = 0;
+        for (int c : kids)
+            inner += tree[c].left >= 0 ? 1 : 0;
+        stack = std::max(stack, used + inner);
         const int index = static_cast<int>(out.size() / ETK_BVH_NODE);
         out.resize(out.size() + ETK_BVH_NODE);
-        float lane[8][4];
-        for (int k = 0; k < 4; ++k) {
+        float lane[8][ETK_BVH_WIDTH];
+        for (int k = 0; k < ETK_BVH_WIDTH; ++k) {
             uint32_t meta = 0u, flags = 0x80000000u; // an unused lane: empty leaf, point box
             glm::vec3 lo(0.0f), hi(0.0f);
             if (k < static_cast<int>(kids.size())) {
@@ -268,7 +297,7 @@ struct Flattener {
                     if (t.count > 0)
                         leaves.emplace_back(t.first, t.count);
                 } else {
-                    meta = static_cast<uint32_t>(emit(kids[k], level + 1));
+                    meta = static_cast<uint32_t>(emit(kids[k], level + 1, used + inner - 1));
                     flags = 0u;
                 }
             }
@@ -278,8 +307,9 @@ struct Flattener {
                 lane[r][k] = v[r];
         }
         for (int r = 0; r < 8; ++r)
-            out[ETK_BVH_NODE * index + r] =
-                etk::make_float4(lane[r][0], lane[r][1], lane[r][2], lane[r][3]);
+            for (int q = 0; q < ETK_BVH_WIDTH / 4; ++q)
+                out[ETK_BVH_NODE * index + (ETK_BVH_WIDTH / 4) * r + q] = etk::make_float4(
+                    lane[r][4 * q], lane[r][4 * q + 1], lane[r][4 * q + 2], lane[r][4 * q + 3]);
         return index;
     }
 };
@@ -335,14 +365,16 @@ Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
     root.hi = tree[0].hi;
     Flattener f{tree, bvh.nodes, bvh.leaves};
     f.root_area = std::max(root.area(), 1e-30f);
+    f.height.assign(tree.size(), 0);
     f.measure(0, 0);
-    f.emit(0, 0);
-    if (1 + 3 * (f.wide_depth + 1) > ETK_BVH_STACK) // kMaxDepth keeps the builder's trees within
-        throw Error("BVH of depth " + std::to_string(f.wide_depth + 1) +
-                    " (4-wide) needs more than the kernels' stack of " +
+    f.emit(0, 0, 0);
+    if (f.stack > ETK_BVH_STACK) // never: kMaxDepth and Flattener::fits keep the trees within
+        throw Error("BVH of depth " + std::to_string(f.wide_depth + 1) + " needs " +
+                    std::to_string(f.stack) + " stack entries, more than the kernels' " +
                     std::to_string(ETK_BVH_STACK));
     bvh.depth = f.depth;
     bvh.wide_depth = f.wide_depth + 1;
+    bvh.stack = f.stack;
     bvh.sah_cost = order.empty() ? 0.0 : f.cost;
     bvh.order = std::move(order);
     return bvh;

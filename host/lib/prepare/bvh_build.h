@@ -10,12 +10,13 @@
 namespace et {
 
 struct Bvh {
-    std::vector<etk::float4> nodes; // ETK_BVH_NODE per 4-wide node (kernels/bvh.h)
+    std::vector<etk::float4> nodes; // ETK_BVH_NODE per 8-wide node (kernels/bvh.h)
     std::vector<int> order; // triangle order: flattened triangle i is soup triangle order[i]
     // (first flattened triangle, count) of each non-empty leaf, in the order of their packets
     std::vector<std::pair<int, int>> leaves;
     int depth = 0;      // of the binary tree the builder made (leaves' level)
-    int wide_depth = 0; // of the 4-wide tree the kernels traverse (nodes on the longest path)
+    int wide_depth = 0; // of the 8-wide tree the kernels traverse (nodes on the longest path)
+    int stack = 0;      // entries a traversal's stack may hold at most (<= ETK_BVH_STACK)
     double build_seconds = 0.0;
     double sah_cost = 0.0; // of the binary tree: traversal 1, triangle test 1, per root area
     int node_count() const { return static_cast<int>(nodes.size() / ETK_BVH_NODE); }
