@@ -8,7 +8,7 @@
 
 // Scene buffers, read-only, one element type each: X(type, name).
 #define ETK_SCENE_BUFFERS(X)                                                                       \
-    X(float4, nodes)        /* BVH: 4-wide nodes (bvh.h) */                                        \
+    X(float4, nodes)        /* BVH: 8-wide nodes (bvh.h) */                                        \
     X(float4, packets)      /* BVH: the leaves' triangles, four per packet (bvh.h) */              \
     X(float4, face_normals) /* geometric normal per triangle */                                    \
     X(int, packet_slot)     /* per triangle: its packet x 4 + lane (bvh.h), for its vertices */    \
