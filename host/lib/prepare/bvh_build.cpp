@@ -33,9 +33,9 @@ constexpr int kBins = 32;
 int packets(int triangles) {
     return (triangles + 3) / 4;
 }
-// Binary depth limit: a wide node descends at least two binary levels, so the wide tree has at
-// most 31 levels, and a path's stack at most 1 + 3 x 30 entries where nodes keep to four
-// children (Flattener, kernels/bvh.h).
+// Binary depth limit: wide nodes of four children, each two binary levels down, would make at
+// most 31 levels and a path's stack of at most 1 + 3 x 30 entries, the bound the flattener keeps
+// to (Flattener, kernels/bvh.h).
 constexpr int kMaxDepth = 60;
 // A split's two subtrees are built on two threads when both have at least this many triangles
 // (and neither more than three times the other).
@@ -197,16 +197,16 @@ struct Builder {
 };
 
 // Flattens the binary tree depth-first into 8-wide nodes (kernels/bvh.h). A node's children are
-// its binary node's children, each inner one replaced by its own two children (so every path
-// descends at least two binary levels per node), then, while a lane is free, the inner child of
-// largest area replaced by its children. Leaf children carry their packets (recorded in
-// `leaves`), inner ones their node index. Measures the binary tree's depth and SAH cost on the
-// way.
+// those of least SAH cost (plan: each binary subtree spread over at most eight lanes). Leaf
+// children carry their packets (recorded in `leaves`), inner ones their node index. Measures the
+// binary tree's depth and SAH cost on the way.
 //
 // The traversal's stack: a node with k inner children entered pushes k and pops one, so a path
-// holds at most the sum of its nodes' k - 1, plus one. A node takes more than its first four
-// children only where what its subtrees could still push keeps within ETK_BVH_STACK: the first
-// four alone (the binary levels halve, three pushes per level) always do, from kMaxDepth.
+// holds at most the sum of its nodes' k - 1, plus one. A node takes the plan's children only where
+// what its subtrees could still push keeps within ETK_BVH_STACK; otherwise its binary node's
+// children, each inner one replaced by its own two (so the path descends at least two binary
+// levels), and more, greedy by area, only as far as that holds: the first four alone (the binary
+// levels halve, three pushes per level) always keep within it, from kMaxDepth.
 struct Flattener {
     const std::vector<BvhTreeNode>& tree;
     std::vector<etk::float4>& out;
@@ -249,9 +249,72 @@ struct Flattener {
             }
         return inner == 0 || used + inner - 1 + 3 * ((h + 1) / 2) + 1 <= ETK_BVH_STACK;
     }
-    int emit(int n, int level, int used) {
-        wide_depth = std::max(wide_depth, level);
+    // SAH-optimal collapse (dynamic programming over the binary tree, as Ylitie, Karras and Laine
+    // 2017 do for their 8-wide trees): best[W * n + i - 1] is the least SAH cost of binary node
+    // n's subtree spread over at most i children of a wide node (a leaf: its packets; an inner
+    // node as one child: a wide node of its own, traversal cost 1), split[...] how: 0 as one
+    // child, k > 0 its left subtree over k children and its right over i - k.
+    static constexpr int W = ETK_BVH_WIDTH;
+    std::vector<float> best{};
+    std::vector<unsigned char> split{};
+    // The cost of n's children spread over at most i lanes, and the left's share.
+    float spread(int n, int i, int* share) const {
+        const BvhTreeNode& t = tree[n];
+        float c = 3e38f;
+        for (int k = 1; k < i; ++k) {
+            const float v = best[W * t.left + k - 1] + best[W * t.right + (i - k) - 1];
+            if (v < c) {
+                c = v;
+                *share = k;
+            }
+        }
+        return c;
+    }
+    void plan(int n) {
+        const BvhTreeNode& t = tree[n];
+        float* b = &best[static_cast<size_t>(W) * n];
+        unsigned char* sp = &split[static_cast<size_t>(W) * n];
+        if (t.left < 0) {
+            for (int i = 0; i < W; ++i)
+                b[i] = static_cast<float>(area(t) * packets(t.count)), sp[i] = 0;
+            return;
+        }
+        plan(t.left);
+        plan(t.right);
+        int k = 0;
+        b[0] = static_cast<float>(area(t)) + spread(n, W, &k);
+        sp[0] = 0;
+        for (int i = 2; i <= W; ++i) {
+            b[i - 1] = b[0];
+            sp[i - 1] = 0;
+            const float c = spread(n, i, &k);
+            if (c < b[i - 1]) {
+                b[i - 1] = c;
+                sp[i - 1] = static_cast<unsigned char>(k);
+            }
+        }
+    }
+    // The children the plan gives binary node n over at most i lanes.
+    void collect(int n, int i, std::vector<int>& kids) const {
+        const int k = split[static_cast<size_t>(W) * n + i - 1];
+        if (k == 0) {
+            kids.push_back(n);
+            return;
+        }
+        collect(tree[n].left, k, kids);
+        collect(tree[n].right, i - k, kids);
+    }
+    // The children of the wide node made of inner binary node n: the plan's, or, where they would
+    // not keep the stack within, the first four and greedy by area as far as they do.
+    std::vector<int> children(int n, int used) const {
         std::vector<int> kids;
+        int k = 0;
+        spread(n, W, &k);
+        collect(tree[n].left, k, kids);
+        collect(tree[n].right, W - k, kids);
+        if (fits(kids, used))
+            return kids;
+        kids.clear();
         for (int c : {tree[n].left, tree[n].right}) {
             if (tree[c].left < 0) {
                 kids.push_back(c);
@@ -261,21 +324,26 @@ struct Flattener {
             }
         }
         while (kids.size() < ETK_BVH_WIDTH) {
-            int best = -1;
-            for (int k = 0; k < static_cast<int>(kids.size()); ++k)
-                if (tree[kids[k]].left >= 0 &&
-                    (best < 0 || area(tree[kids[k]]) > area(tree[kids[best]])))
-                    best = k;
-            if (best < 0)
+            int widest = -1;
+            for (int j = 0; j < static_cast<int>(kids.size()); ++j)
+                if (tree[kids[j]].left >= 0 &&
+                    (widest < 0 || area(tree[kids[j]]) > area(tree[kids[widest]])))
+                    widest = j;
+            if (widest < 0)
                 break;
             std::vector<int> wider = kids;
-            const int c = wider[best];
-            wider[best] = tree[c].left;
+            const int c = wider[widest];
+            wider[widest] = tree[c].left;
             wider.push_back(tree[c].right);
             if (kids.size() >= 4 && !fits(wider, used))
                 break;
             kids = std::move(wider);
         }
+        return kids;
+    }
+    int emit(int n, int level, int used) {
+        wide_depth = std::max(wide_depth, level);
+        const std::vector<int> kids = children(n, used);
         int inner = 0;
         for (int c : kids)
             inner += tree[c].left >= 0 ? 1 : 0;
@@ -366,7 +434,10 @@ Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
     Flattener f{tree, bvh.nodes, bvh.leaves};
     f.root_area = std::max(root.area(), 1e-30f);
     f.height.assign(tree.size(), 0);
+    f.best.assign(tree.size() * ETK_BVH_WIDTH, 0.0f);
+    f.split.assign(tree.size() * ETK_BVH_WIDTH, 0);
     f.measure(0, 0);
+    f.plan(0);
     f.emit(0, 0, 0);
     if (f.stack > ETK_BVH_STACK) // never: kMaxDepth and Flattener::fits keep the trees within
         throw Error("BVH of depth " + std::to_string(f.wide_depth + 1) + " needs " +
