@@ -284,14 +284,16 @@ ETK_FORCE_INLINE_FN int etk_bvh_next(ETK_GLOBAL const float* meta, float8 tn, ui
     }
     int a = etk_lowest_bit(inner);
     uint rest = inner & (inner - 1u);
-    if (!(rest & (rest - 1u)) && *sp < ETK_BVH_STACK) {
+    if (!(rest & (rest - 1u))) {
         int b = etk_lowest_bit(rest);
         float ta = etk_lane8(tn, a), tb = etk_lane8(tn, b);
         int near_lane = ta < tb ? a : b;
         int j = *sp;
-        stack[j] = (int)as_uint(meta[a + b - near_lane]);
-        stack_t[j] = ta < tb ? tb : ta;
-        *sp = j + 1;
+        if (j < ETK_BVH_STACK) { // always, for trees the host builds
+            stack[j] = (int)as_uint(meta[a + b - near_lane]);
+            stack_t[j] = ta < tb ? tb : ta;
+            *sp = j + 1;
+        }
         return (int)as_uint(meta[near_lane]);
     }
     int base = *sp;

@@ -77,26 +77,15 @@ typedef float4 etk_lanes;
 #define etk_lanes_of(a) (a)
 #define etk_lanes_splat(s) ((float4)(s))
 #define etk_any_lane(m) any(m)
-// The lanes of a mask as bits 0-3 (x is bit 0), the sign bits of a float4's lanes, the lowest
-// set bit's index and lane i of a float4 (bvh.h's node: entered children without a branch each).
-// Clang for x86-64 (PoCL's CPU device): movmskps, or kmov straight from the mask's compare. Lane
-// by lane, clang makes it a masked move and an OR over the lanes, six instructions between a
-// node's box test and the branch on its children.
-#if defined(__clang__) && defined(__x86_64__)
-#define etk_sign_bits(v) ((uint)__builtin_ia32_movmskps(as_float4(v)))
-#define etk_lane_bits(m) etk_sign_bits(m)
-#else
-#define etk_lane_bits(m) ((uint)(((m).x & 1) | ((m).y & 2) | ((m).z & 4) | ((m).w & 8)))
-#define etk_sign_bits(v) etk_lane_bits(as_int4(v) < 0)
-#endif
+// The lowest set bit's index (bvh.h: a node's entered children as a bit mask).
 #define etk_lowest_bit(b) (31 - (int)clz((b) & (0u - (b))))
-static inline float etk_lane(float4 v, int i) {
-    return i == 0 ? v.x : (i == 1 ? v.y : (i == 2 ? v.z : v.w));
-}
 // Eight lanes (bvh.h's 8-wide nodes): row r of eight floats at p, read by vload8, which needs
 // only a float's alignment (a buffer over a host vector of float4, CL_MEM_USE_HOST_PTR, is
-// 16-byte aligned, and a float8 load from there faults on PoCL); their lane masks as bits 0-7
-// (s0 is bit 0), as for four lanes above.
+// 16-byte aligned, and a float8 load from there faults on PoCL); a mask's lanes as bits 0-7 (s0
+// is bit 0), a float8's sign bits, and lane i. Clang for x86-64 with AVX (PoCL's CPU device):
+// vmovmskps, or kmov straight from the mask's compare; lane by lane, clang makes it a masked
+// move and an OR over the lanes, instructions between a node's box test and the branch on its
+// children.
 #define etk_row8(p, r) vload8((r), (p))
 #define etk_splat8(s) ((float8)(s))
 #if defined(__clang__) && defined(__x86_64__) && defined(__AVX__)
@@ -247,9 +236,9 @@ inline float3& operator*=(float3& a, float s) {
     return a = a * s;
 }
 
-// Lane-wise float4 arithmetic, as OpenCL has it: the 4-wide BVH's box and triangle tests
-// (bvh.h). Done on GCC/Clang vector types, one SSE instruction per operation (the same
-// arithmetic lane by lane is left scalar by the SLP vectoriser).
+// Lane-wise float4 arithmetic, as OpenCL has it: the BVH's triangle packets (bvh.h). Done on
+// GCC/Clang vector types, one SSE instruction per operation (the same arithmetic lane by lane is
+// left scalar by the SLP vectoriser).
 typedef float etk_v4 __attribute__((vector_size(16)));
 inline etk_v4 etk_to_v4(float4 a) {
     etk_v4 v;
@@ -285,30 +274,9 @@ template <typename Mask> inline int etk_any_lane(Mask m) {
     return (m[0] | m[1] | m[2] | m[3]) != 0;
 #endif
 }
-// As in OpenCL C (above): a mask's lanes as bits 0-3, a float4's sign bits, the lowest set
-// bit's index and lane i.
-template <typename Mask> inline uint etk_lane_bits(Mask m) {
-#if defined(__SSE__)
-    return static_cast<uint>(__builtin_ia32_movmskps(reinterpret_cast<etk_v4>(m)));
-#else
-    return static_cast<uint>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
-#endif
-}
-inline uint etk_sign_bits(float4 v) {
-#if defined(__SSE__)
-    return static_cast<uint>(__builtin_ia32_movmskps(etk_to_v4(v)));
-#else
-    uint b = 0;
-    for (int i = 0; i < 4; ++i)
-        b |= (std::signbit((&v.x)[i]) ? 1u : 0u) << i;
-    return b;
-#endif
-}
+// As in OpenCL C (above): the lowest set bit's index.
 inline int etk_lowest_bit(uint b) {
     return __builtin_ctz(b);
-}
-inline float etk_lane(float4 v, int i) {
-    return etk_to_v4(v)[i];
 }
 inline float4 operator+(float4 a, float4 b) {
     return etk_from_v4(etk_to_v4(a) + etk_to_v4(b));

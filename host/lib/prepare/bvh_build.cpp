@@ -217,12 +217,13 @@ struct Flattener {
     int depth = 0, wide_depth = 0, stack = 0;
     std::vector<int> height{}; // of each binary node's subtree (a leaf: 0)
 
-    double area(const BvhTreeNode& t) const {
-        Box b;
-        b.lo = t.lo;
-        b.hi = t.hi;
-        return b.area() / root_area;
+    // Surface area in doubles: finite for any box (flatten_bvh also takes other builders'
+    // trees), so the plan's costs never become 0 or NaN.
+    static double box_area(const glm::vec3& lo, const glm::vec3& hi) {
+        const double x = double(hi.x) - lo.x, y = double(hi.y) - lo.y, z = double(hi.z) - lo.z;
+        return x < 0.0 ? 0.0 : 2.0 * (x * y + y * z + z * x);
     }
+    double area(const BvhTreeNode& t) const { return box_area(t.lo, t.hi) / root_area; }
     // SAH cost, depth and heights of the binary tree below n (at `level`).
     int measure(int n, int level) {
         const BvhTreeNode& t = tree[n];
@@ -260,9 +261,11 @@ struct Flattener {
     // The cost of n's children spread over at most i lanes, and the left's share.
     float spread(int n, int i, int* share) const {
         const BvhTreeNode& t = tree[n];
+        const size_t l = static_cast<size_t>(W) * t.left, r = static_cast<size_t>(W) * t.right;
         float c = 3e38f;
+        *share = 1; // a valid split whatever the costs
         for (int k = 1; k < i; ++k) {
-            const float v = best[W * t.left + k - 1] + best[W * t.right + (i - k) - 1];
+            const float v = best[l + k - 1] + best[r + (i - k) - 1];
             if (v < c) {
                 c = v;
                 *share = k;
@@ -428,11 +431,8 @@ Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
         tree.push_back(leaf);
         tree.push_back(empty);
     }
-    Box root;
-    root.lo = tree[0].lo;
-    root.hi = tree[0].hi;
     Flattener f{tree, bvh.nodes, bvh.leaves};
-    f.root_area = std::max(root.area(), 1e-30f);
+    f.root_area = std::max(Flattener::box_area(tree[0].lo, tree[0].hi), 1e-30);
     f.height.assign(tree.size(), 0);
     f.best.assign(tree.size() * ETK_BVH_WIDTH, 0.0f);
     f.split.assign(tree.size() * ETK_BVH_WIDTH, 0);
