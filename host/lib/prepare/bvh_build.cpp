@@ -258,6 +258,7 @@ struct Flattener {
     static constexpr int W = ETK_BVH_WIDTH;
     std::vector<float> best{};
     std::vector<unsigned char> split{};
+    std::vector<unsigned char> wide_split{}; // an inner node's own: its left's share of W lanes
     // The cost of n's children spread over at most i lanes, and the left's share.
     float spread(int n, int i, int* share) const {
         const BvhTreeNode& t = tree[n];
@@ -287,6 +288,7 @@ struct Flattener {
         int k = 0;
         b[0] = static_cast<float>(area(t)) + spread(n, W, &k);
         sp[0] = 0;
+        wide_split[static_cast<size_t>(n)] = static_cast<unsigned char>(k);
         for (int i = 2; i <= W; ++i) {
             b[i - 1] = b[0];
             sp[i - 1] = 0;
@@ -311,8 +313,7 @@ struct Flattener {
     // not keep the stack within, the first four and greedy by area as far as they do.
     std::vector<int> children(int n, int used) const {
         std::vector<int> kids;
-        int k = 0;
-        spread(n, W, &k);
+        const int k = wide_split[static_cast<size_t>(n)];
         collect(tree[n].left, k, kids);
         collect(tree[n].right, W - k, kids);
         if (fits(kids, used))
@@ -436,6 +437,7 @@ Bvh flatten_bvh(std::vector<BvhTreeNode> tree, std::vector<int> order) {
     f.height.assign(tree.size(), 0);
     f.best.assign(tree.size() * ETK_BVH_WIDTH, 0.0f);
     f.split.assign(tree.size() * ETK_BVH_WIDTH, 0);
+    f.wide_split.assign(tree.size(), 1);
     f.measure(0, 0);
     f.plan(0);
     f.emit(0, 0, 0);
