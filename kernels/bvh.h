@@ -72,12 +72,13 @@ ETK_FN EtkBoxRows etk_box_rows(float3 inv_dir) {
 }
 
 ETK_FN void etk_box_hit8(ETK_GLOBAL const float* nd, EtkBoxRows b, float8 ox, float8 oy, float8 oz,
-                         float8 ix, float8 iy, float8 iz, float tmax, float8* tnear, float8* tfar) {
+                         float8 ix, float8 iy, float8 iz, float8 tmax, float8* tnear,
+                         float8* tfar) {
     float8 nx = (etk_row8(nd, b.nx) - ox) * ix, fx = (etk_row8(nd, b.fx) - ox) * ix;
     float8 ny = (etk_row8(nd, b.ny) - oy) * iy, fy = (etk_row8(nd, b.fy) - oy) * iy;
     float8 nz = (etk_row8(nd, b.nz) - oz) * iz, fz = (etk_row8(nd, b.fz) - oz) * iz;
     *tnear = ETK_MAXF(ETK_MAXF(nx, ny), ETK_MAXF(nz, etk_splat8(0.0f)));
-    *tfar = ETK_MINF(ETK_MINF(fx, fy), ETK_MINF(fz, etk_splat8(tmax))) * 1.000001f;
+    *tfar = ETK_MINF(ETK_MINF(fx, fy), ETK_MINF(fz, tmax)) * 1.000001f;
 }
 
 // The ray in the watertight test's frame: kz the axis of the direction's largest component, kx
@@ -178,15 +179,16 @@ ETK_FORCE_INLINE_FN int etk_packet_hit(ETK_GLOBAL const float4* pk, EtkShearedRa
     float4 ox = make_float4(r.ox, r.ox, r.ox, r.ox), oy = make_float4(r.oy, r.oy, r.oy, r.oy);
     float4 oz = make_float4(r.oz, r.oz, r.oz, r.oz);
     float4 sx = make_float4(r.sx, r.sx, r.sx, r.sx), sy = make_float4(r.sy, r.sy, r.sy, r.sy);
-    // The vertices relative to the origin, sheared: the ray is then the kz axis.
-    float4 az = pk[ETK_PACKET_V0 + r.kz] - oz, bz = pk[ETK_PACKET_V1 + r.kz] - oz,
-           cz = pk[ETK_PACKET_V2 + r.kz] - oz;
-    float4 ax = (pk[ETK_PACKET_V0 + r.kx] - ox) - sx * az,
-           ay = (pk[ETK_PACKET_V0 + r.ky] - oy) - sy * az;
-    float4 bx = (pk[ETK_PACKET_V1 + r.kx] - ox) - sx * bz,
-           by = (pk[ETK_PACKET_V1 + r.ky] - oy) - sy * bz;
-    float4 cx = (pk[ETK_PACKET_V2 + r.kx] - ox) - sx * cz,
-           cy = (pk[ETK_PACKET_V2 + r.ky] - oy) - sy * cz;
+    // The vertices relative to the origin, sheared: the ray is then the kz axis. Each axis's
+    // rows from one pointer, the vertices at constant offsets from it: three registers across
+    // the traversal, where an index per row took nine.
+    ETK_GLOBAL const float4* px = pk + r.kx;
+    ETK_GLOBAL const float4* py = pk + r.ky;
+    ETK_GLOBAL const float4* pz = pk + r.kz;
+    float4 az = pz[ETK_PACKET_V0] - oz, bz = pz[ETK_PACKET_V1] - oz, cz = pz[ETK_PACKET_V2] - oz;
+    float4 ax = (px[ETK_PACKET_V0] - ox) - sx * az, ay = (py[ETK_PACKET_V0] - oy) - sy * az;
+    float4 bx = (px[ETK_PACKET_V1] - ox) - sx * bz, by = (py[ETK_PACKET_V1] - oy) - sy * bz;
+    float4 cx = (px[ETK_PACKET_V2] - ox) - sx * cz, cy = (py[ETK_PACKET_V2] - oy) - sy * cz;
     // Edge functions: twice the signed areas seen along the ray, of edges bc, ca and ab.
     float4 u = cx * by - cy * bx;
     float4 v = ax * cy - ay * cx;
@@ -320,9 +322,10 @@ ETK_FORCE_INLINE_FN float etk_bvh_reach(const EtkHit* hit) {
 ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
                                         ETK_GLOBAL const float4* packets, float3 org, float3 dir,
                                         float tmax, int any_hit, EtkHit* hit) {
-    hit->t = tmax;
-    hit->prim = -1;
-    hit->b1 = hit->b2 = 0.0f;
+    EtkHit h; // a local: the stack's floats cannot alias it, so its distance stays in a register
+    h.t = tmax;
+    h.prim = -1;
+    h.b1 = h.b2 = 0.0f;
     float3 inv_dir = etk_safe_inverse(dir);
     EtkShearedRay sr = etk_sheared_ray(org, dir);
     float8 ox = etk_splat8(org.x), oy = etk_splat8(org.y), oz = etk_splat8(org.z);
@@ -332,22 +335,23 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
     float stack_t[ETK_BVH_STACK];
     int sp = 0;
     int node = 0; // the node to visit; -1: pop one
+    // The closest hit's distance and reach, splatted: they change only where a leaf is hit.
+    float8 t8 = etk_splat8(h.t), lim = etk_splat8(etk_bvh_reach(&h));
     for (;;) {
         if (node < 0) {
             if (sp == 0)
                 break;
             --sp;
-            if (!(stack_t[sp] <= etk_bvh_reach(hit)))
+            if (!(stack_t[sp] <= etk_bvh_reach(&h)))
                 continue; // entered beyond the closest hit found since it was pushed
             node = stack[sp];
         }
         ETK_GLOBAL const float* nd = (ETK_GLOBAL const float*)(nodes + ETK_BVH_NODE * node);
         float8 tn, tf;
-        etk_box_hit8(nd, rows, ox, oy, oz, ix, iy, iz, hit->t, &tn, &tf);
+        etk_box_hit8(nd, rows, ox, oy, oz, ix, iy, iz, t8, &tn, &tf);
         ETK_GLOBAL const float* meta = nd + 6 * ETK_BVH_WIDTH; // lane i: meta[i]
         // Entered: tnear <= tfar and within the ray's reach.
-        float8 lim = etk_splat8(etk_bvh_reach(hit));
-        uint enter = etk_lane_bits8((tn <= tf) & (tn <= lim));
+        uint enter = etk_le_bits8(tn, tf) & etk_le_bits8(tn, lim);
         uint leaf = etk_sign_bits8(etk_row8(nd, 7)); // flags: the sign bit marks a leaf
         uint leaves = enter & leaf;
         if (leaves) {
@@ -355,17 +359,21 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
             do {
                 int i = etk_lowest_bit(leaves);
                 leaves &= leaves - 1u;
-                if (etk_lane8(tn, i) <= etk_bvh_reach(hit) &&
+                if (etk_lane8(tn, i) <= etk_bvh_reach(&h) &&
                     etk_leaf_hit(packets, (int)as_uint(meta[i]),
-                                 (int)(as_uint(flags[i]) & 0x7fffffffu), sr, any_hit, hit))
+                                 (int)(as_uint(flags[i]) & 0x7fffffffu), sr, any_hit, &h)) {
+                    *hit = h;
                     return 1;
+                }
             } while (leaves);
-            lim = etk_splat8(etk_bvh_reach(hit));
-            enter &= etk_lane_bits8(tn <= lim);
+            t8 = etk_splat8(h.t);
+            lim = etk_splat8(etk_bvh_reach(&h));
+            enter &= etk_le_bits8(tn, lim);
         }
         node = etk_bvh_next(meta, tn, enter & ~leaf, stack, stack_t, &sp);
     }
-    return hit->prim >= 0;
+    *hit = h;
+    return h.prim >= 0;
 }
 
 ETK_END
