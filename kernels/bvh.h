@@ -123,12 +123,13 @@ ETK_FN EtkShearedRay etk_sheared_ray(float3 org, float3 dir) {
 // either: the ray passes through the edge, and both triangles there take it), a non-degenerate
 // triangle (det = u + v + w non-zero and finite), t in (0, tmax) up to its rounding error terr
 // (the estimate's sum cancels for triangles far larger than their distance: a ground quad 1e9
-// wide seen from 1 unit lost most of its hits; the hit lane computes the distance it keeps). One
-// expression for a lane (floats: 0 or 1) and for four lanes at once (etk_lanes: a mask per lane),
-// so the two can never disagree.
-#define ETK_TRIANGLE_HIT(u, v, w, det, t, terr, tmax, zero)                                        \
+// wide seen from 1 unit lost most of its hits; the hit lane computes the distance it keeps). The
+// edges' part does not depend on tmax: four lanes test both parts at once (etk_lanes: a mask per
+// lane), and a lane taken after another lane's hit shortened tmax tests its range again alone.
+#define ETK_TRIANGLE_EDGES(u, v, w, det, zero)                                                     \
     ((((u >= zero) & (v >= zero) & (w >= zero)) | ((u <= zero) & (v <= zero) & (w <= zero))) &     \
-     (det != zero) & (det - det == zero) & (t + terr > zero) & (t - terr < tmax))
+     (det != zero) & (det - det == zero))
+#define ETK_TRIANGLE_RANGE(t, terr, tmax, zero) ((t + terr > zero) & (t - terr < tmax))
 
 // The vertices of the triangle in `slot` (packet index x 4 + lane) of the packets.
 ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, float3* v0, float3* v1,
@@ -143,16 +144,16 @@ ETK_FN void etk_packet_triangle(ETK_GLOBAL const float4* packets, int slot, floa
                       pk[4 * ETK_PACKET_V2 + 8 + lane]);
 }
 
-// One lane of a packet test: the hit is taken when closer than hit->t (so of two triangles at
-// the same distance the one tested first keeps it). Its distance is the ray's to the triangle's
-// plane, from the edges in the scene's coordinates (as Moller-Trumbore has it): the edge
-// functions' t, from vertices relative to the ray's origin, loses the digits of the distance
-// over the triangle's size (a triangle 1e-6 the size of its distance is placed ~10% off), which
-// the sign tests tolerate but the closest hit's choice and the boxes' culling do not.
+// One lane of a packet test whose edges' part passed: the hit is taken when closer than hit->t
+// (so of two triangles at the same distance the one tested first keeps it). Its distance is the
+// ray's to the triangle's plane, from the edges in the scene's coordinates (as Moller-Trumbore has
+// it): the edge functions' t, from vertices relative to the ray's origin, loses the digits of the
+// distance over the triangle's size (a triangle 1e-6 the size of its distance is placed ~10% off),
+// which the sign tests tolerate but the closest hit's choice and the boxes' culling do not.
 ETK_FORCE_INLINE_FN int etk_triangle_lane(ETK_GLOBAL const float4* pk, int lane, EtkShearedRay r,
-                                          float u, float v, float w, float det, float t0,
-                                          float terr, float prim, EtkHit* hit) {
-    if (!ETK_TRIANGLE_HIT(u, v, w, det, t0, terr, hit->t * 2.0f, 0.0f))
+                                          float v, float w, float det, float t0, float terr,
+                                          float prim, EtkHit* hit) {
+    if (!ETK_TRIANGLE_RANGE(t0, terr, hit->t * 2.0f, 0.0f))
         return 0;
     float3 v0, v1, v2;
     etk_packet_triangle(pk, lane, &v0, &v1, &v2); // slot `lane` of this packet
@@ -202,18 +203,21 @@ ETK_FORCE_INLINE_FN int etk_packet_hit(ETK_GLOBAL const float4* pk, EtkShearedRa
     // per lane. Its distance is a first estimate, taken with slack: etk_triangle_lane computes
     // the one the hit keeps.
     etk_lanes zero = etk_lanes_splat(0.0f);
-    if (!etk_any_lane(ETK_TRIANGLE_HIT(etk_lanes_of(u), etk_lanes_of(v), etk_lanes_of(w),
-                                       etk_lanes_of(det), etk_lanes_of(t), etk_lanes_of(terr),
-                                       etk_lanes_splat(hit->t * 2.0f), zero)))
+    etk_lanes lu = etk_lanes_of(u), lv = etk_lanes_of(v), lw = etk_lanes_of(w),
+              ld = etk_lanes_of(det), lt = etk_lanes_of(t), le = etk_lanes_of(terr);
+    uint lanes = etk_lane_bits4(ETK_TRIANGLE_EDGES(lu, lv, lw, ld, zero) &
+                                ETK_TRIANGLE_RANGE(lt, le, etk_lanes_splat(hit->t * 2.0f), zero));
+    if (!lanes)
         return 0;
     float4 prim = pk[ETK_PACKET_PRIM];
-    return (etk_triangle_lane(pk, 0, r, u.x, v.x, w.x, det.x, t.x, terr.x, prim.x, hit) &&
-            any_hit) ||
-           (etk_triangle_lane(pk, 1, r, u.y, v.y, w.y, det.y, t.y, terr.y, prim.y, hit) &&
-            any_hit) ||
-           (etk_triangle_lane(pk, 2, r, u.z, v.z, w.z, det.z, t.z, terr.z, prim.z, hit) &&
-            any_hit) ||
-           (etk_triangle_lane(pk, 3, r, u.w, v.w, w.w, det.w, t.w, terr.w, prim.w, hit) && any_hit);
+    return ((lanes & 1u) &&
+            etk_triangle_lane(pk, 0, r, v.x, w.x, det.x, t.x, terr.x, prim.x, hit) && any_hit) ||
+           ((lanes & 2u) &&
+            etk_triangle_lane(pk, 1, r, v.y, w.y, det.y, t.y, terr.y, prim.y, hit) && any_hit) ||
+           ((lanes & 4u) &&
+            etk_triangle_lane(pk, 2, r, v.z, w.z, det.z, t.z, terr.z, prim.z, hit) && any_hit) ||
+           ((lanes & 8u) &&
+            etk_triangle_lane(pk, 3, r, v.w, w.w, det.w, t.w, terr.w, prim.w, hit) && any_hit);
 }
 
 ETK_FN float3 etk_safe_inverse(float3 d) {

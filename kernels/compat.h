@@ -72,11 +72,17 @@
 #define make_float3(a, b, c) ((float3)((a), (b), (c)))
 #define ETK_UINT_MAX 0xffffffffu
 #define make_float4(a, b, c, d) ((float4)((a), (b), (c), (d)))
-// Four lanes compared at once (bvh.h): comparisons give a mask per lane (-1 or 0).
+// Four lanes compared at once (bvh.h): comparisons give a mask per lane (-1 or 0); its lanes as
+// bits 0-3 (s0 is bit 0).
 typedef float4 etk_lanes;
 #define etk_lanes_of(a) (a)
 #define etk_lanes_splat(s) ((float4)(s))
 #define etk_any_lane(m) any(m)
+#if defined(__clang__) && defined(__x86_64__)
+#define etk_lane_bits4(m) ((uint)__builtin_ia32_movmskps(as_float4(m)))
+#else
+#define etk_lane_bits4(m) ((uint)(((m).s0 & 1) | ((m).s1 & 2) | ((m).s2 & 4) | ((m).s3 & 8)))
+#endif
 // The lowest set bit's index (bvh.h: a node's entered children as a bit mask).
 #define etk_lowest_bit(b) (31 - (int)clz((b) & (0u - (b))))
 // Eight lanes (bvh.h's 8-wide nodes): row r of eight floats at p, read by vload8, which needs
@@ -278,6 +284,14 @@ template <typename Mask> inline int etk_any_lane(Mask m) {
     return (m[0] | m[1] | m[2] | m[3]) != 0;
 #endif
 }
+// A four-lane mask's lanes as bits 0-3.
+template <typename Mask> inline uint etk_lane_bits4(Mask m) {
+#if defined(__SSE__)
+    return static_cast<uint>(__builtin_ia32_movmskps(reinterpret_cast<etk_v4>(m)));
+#else
+    return (m[0] & 1u) | (m[1] & 2u) | (m[2] & 4u) | (m[3] & 8u);
+#endif
+}
 // As in OpenCL C (above): the lowest set bit's index.
 inline int etk_lowest_bit(uint b) {
     return __builtin_ctz(b);
@@ -355,9 +369,10 @@ inline float4 fmax(float4 a, float4 b) {
     etk_v4 x = etk_to_v4(a), y = etk_to_v4(b);
     return etk_from_v4(x > y ? x : y);
 }
-inline float4 fabs(float4 a) { // lane-wise: the sign bits cleared
-    etk_v4 x = etk_to_v4(a);
-    return etk_from_v4(x < 0.0f ? -x : x);
+inline float4 fabs(float4 a) { // lane-wise: the sign bits cleared (one AND; -0 gives +0)
+    typedef int etk_i4 __attribute__((vector_size(16)));
+    etk_i4 x = reinterpret_cast<etk_i4>(etk_to_v4(a)) & 0x7fffffff;
+    return etk_from_v4(reinterpret_cast<etk_v4>(x));
 }
 inline float dot(float3 a, float3 b) {
     return a.x * b.x + a.y * b.y + a.z * b.z;
