@@ -331,7 +331,10 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
     h.prim = -1;
     h.b1 = h.b2 = 0.0f;
     float3 inv_dir = etk_safe_inverse(dir);
-    EtkShearedRay sr = etk_sheared_ray(org, dir);
+    // The triangle test's frame, made at the first leaf: most shadow and bounce rays under an
+    // open sky reach none, and it costs a division and a few branches.
+    EtkShearedRay sr;
+    int sheared = 0;
     float8 ox = etk_splat8(org.x), oy = etk_splat8(org.y), oz = etk_splat8(org.z);
     float8 ix = etk_splat8(inv_dir.x), iy = etk_splat8(inv_dir.y), iz = etk_splat8(inv_dir.z);
     EtkBoxRows rows = etk_box_rows(inv_dir);
@@ -360,6 +363,10 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
         uint leaves = enter & leaf;
         if (leaves) {
             ETK_GLOBAL const float* flags = nd + 7 * ETK_BVH_WIDTH;
+            if (!sheared) {
+                sr = etk_sheared_ray(org, dir);
+                sheared = 1;
+            }
             do {
                 int i = etk_lowest_bit(leaves);
                 leaves &= leaves - 1u;
