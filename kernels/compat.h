@@ -77,7 +77,6 @@
 typedef float4 etk_lanes;
 #define etk_lanes_of(a) (a)
 #define etk_lanes_splat(s) ((float4)(s))
-#define etk_any_lane(m) any(m)
 #if defined(__clang__) && defined(__x86_64__)
 #define etk_lane_bits4(m) ((uint)__builtin_ia32_movmskps(as_float4(m)))
 #else
@@ -277,14 +276,7 @@ inline etk_lanes etk_lanes_of(float4 a) {
 inline etk_lanes etk_lanes_splat(float s) {
     return etk_v4{s, s, s, s};
 }
-template <typename Mask> inline int etk_any_lane(Mask m) {
-#if defined(__SSE__)
-    return __builtin_ia32_movmskps(reinterpret_cast<etk_v4>(m)) != 0; // one instruction
-#else
-    return (m[0] | m[1] | m[2] | m[3]) != 0;
-#endif
-}
-// A four-lane mask's lanes as bits 0-3.
+// A four-lane mask's lanes as bits 0-3 (one instruction with SSE).
 template <typename Mask> inline uint etk_lane_bits4(Mask m) {
 #if defined(__SSE__)
     return static_cast<uint>(__builtin_ia32_movmskps(reinterpret_cast<etk_v4>(m)));
