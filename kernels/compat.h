@@ -54,17 +54,6 @@
 #else
 #define ETK_CL_NOINLINE_FN ETK_FN
 #endif
-// A call in OpenCL C on CPU devices, forced inline elsewhere (natively too): for the BVH's leaf
-// test. Inlined into the traversal loop, its live vectors and row pointers make clang spill the
-// loop's own state (the next node's index, through a pointer on the stack, and the stack's
-// depth), which every node's visit then waits for (PoCL, all rays: 0.89-0.93x -> 0.92-1.00x
-// native); GCC keeps that state in registers, and as a call passes the leaf's vectors through
-// memory.
-#if defined(ETK_CPU_DEVICE) && (defined(__clang__) || defined(__GNUC__))
-#define ETK_CPU_CALL_FN static __attribute__((noinline))
-#else
-#define ETK_CPU_CALL_FN ETK_FORCE_INLINE_FN
-#endif
 #define ETK_GLOBAL __global
 // A table of numbers at program scope (kernels/base_albedo_table.h).
 #define ETK_TABLE __constant
@@ -166,9 +155,8 @@ static inline float3 etk_normalize3(float3 a) {
 #else
 #define ETK_FORCE_INLINE_FN inline
 #endif
-#define ETK_CL_INLINE_FN inline             // forced in OpenCL C only (above)
-#define ETK_CL_NOINLINE_FN inline           // a call in OpenCL C only (above)
-#define ETK_CPU_CALL_FN ETK_FORCE_INLINE_FN // a call in OpenCL C on CPU devices only (above)
+#define ETK_CL_INLINE_FN inline   // forced in OpenCL C only (above)
+#define ETK_CL_NOINLINE_FN inline // a call in OpenCL C only (above)
 #define ETK_GLOBAL
 #define ETK_TABLE static const
 #define ETK_UINT_MAX 0xffffffffu
