@@ -374,8 +374,8 @@ ETK_CL_NOINLINE_FN int etk_bvh_traverse(ETK_GLOBAL const float4* nodes,
                 break;
             node = etk_bvh_next(nd + 6 * ETK_BVH_WIDTH, tn, enter & ~leaf, stack, stack_t, &sp);
         }
-        if (node < 0)
-            break;                                             // the stack is empty
+        if (node < 0) // the stack is empty
+            break;
         ETK_GLOBAL const float* meta = nd + 6 * ETK_BVH_WIDTH; // lane i: meta[i]
         ETK_GLOBAL const float* flags = nd + 7 * ETK_BVH_WIDTH;
         if (!sheared) {
