@@ -63,6 +63,30 @@ TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
     }
 }
 
+// A render that says how many samples it takes stops learning at the update after which no
+// sample reaches the next one (passes 33-64 of a 64-sample render recorded for tables after pass
+// 64): the same film bits; one sample past the next update keeps it.
+TEST(VisibilityRender, LearningEndsWhereNoPlannedSampleUsesTheNextTables) {
+    et::Scene s = room();
+    s.settings.guide_verdict = false; // (a verdict for MIS would end the learning at its passes)
+    auto passes = [](const ett::SampleRun& run) {
+        return ett::learning_count(run.renderer->stats(), "learning_passes");
+    };
+    const ett::SampleRun unplanned = ett::render_samples(s, 2, 0, 40);
+    ASSERT_EQ(passes(unplanned), 64u) << "the film's learning passes changed: adjust the plans";
+    for (int64_t plan : {40, 64}) {
+        const ett::SampleRun planned = ett::render_samples(s, 2, 0, 40, nullptr, plan);
+        EXPECT_EQ(passes(planned), 32u) << "plan " << plan;
+        EXPECT_TRUE(planned.renderer->sums().mean() == unplanned.renderer->sums().mean())
+            << "plan " << plan << ": a sample's tables changed";
+    }
+    EXPECT_EQ(passes(ett::render_samples(s, 2, 0, 40, nullptr, 65)), 64u);
+    // Resumed inside the shortened learning, with the plan of the whole render.
+    const et::FilmSums part = ett::render_samples(s, 2, 0, 20, nullptr, 40).renderer->sums();
+    EXPECT_TRUE(ett::render_samples(s, 2, 20, 40, &part, 40).renderer->sums().mean() ==
+                unplanned.renderer->sums().mean());
+}
+
 // Samples [from, to) of `s` under `strategy`, natively.
 std::vector<float> samples(et::Scene s, et::Strategy strategy, int from, int to,
                            int* verdict = nullptr) {

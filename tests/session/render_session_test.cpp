@@ -60,6 +60,25 @@ TEST(RenderSession, StopsOnRequestAndResumesBitIdentical) {
     EXPECT_TRUE(resumed.sums == all.sums) << "the resumed film differs from the unbroken one";
 }
 
+// The session tells a learning technique the render's samples: a 40-sample render of the
+// visibility strategy learns from 32 passes (the tables after pass 64 would serve no sample).
+TEST(RenderSession, LearningTechniqueLearnsOnlyForSamplesTheRenderTakes) {
+    et::Scene s = ett::side_lit_room(24, 16);
+    s.settings.backend = et::Backend::cpu;
+    s.settings.threads = 2;
+    s.settings.spp = 40;
+    s.settings.max_depth = 2;
+    s.settings.strategy = et::Strategy::visibility;
+    s.settings.guide_verdict = false;
+    const et::RenderSettings st = s.settings;
+    const auto p = et::prepare_render(std::move(s), st);
+    et::RenderSession session(ett::single_cluster(), *p, {});
+    session.start();
+    const et::SessionResult r = session.run();
+    EXPECT_EQ(r.spp, 40);
+    EXPECT_EQ(ett::learning_count(r.stats, "learning_passes"), 32u);
+}
+
 // Every fact with a place in both outputs says the same in both; facts of one output only stay
 // out of the other.
 TEST(RenderReport, StatsAndMetadataFromOneList) {

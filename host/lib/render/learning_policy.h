@@ -39,6 +39,10 @@ class LearningPolicy {
     // was abandoned.
     virtual bool after_pass(int pass, uint32_t sample_index, const Film* film, double seconds,
                             WavefrontDevice& device, const MeasuringPass& measure) = 0;
+    // The samples per pixel the render will take in all, as far as the caller knows (0: not
+    // known), given before each after_pass: learning whose tables no later sample would use is
+    // skipped.
+    virtual void plan(int64_t samples) { (void)samples; }
     // Its figures for the render's report: a JSON object.
     virtual nlohmann::json stats() const = 0;
 };

@@ -15,7 +15,7 @@
 namespace et {
 
 VisibilityLearning::VisibilityLearning(const DeviceScene& scene, bool batches)
-    : scene_(scene), options_(scene.guide_options) {
+    : scene_(scene), options_(scene.guide_options), learn_until_(options_.learning_passes) {
     etk::EtkParams fallback = scene.params;
     set_technique(fallback, options_.fallback);
     fallback_light_batch_ = technique_batches_light_samples(fallback) && batches;
@@ -40,7 +40,7 @@ int VisibilityLearning::learning_passes() const {
     // learning.
     const int verdict_end =
         options_.verdict_passes > 0 ? verdict_start() + options_.verdict_passes : 0;
-    return dropped_ ? verdict_end : std::max(options_.learning_passes, verdict_end);
+    return dropped_ ? verdict_end : std::max(learn_until_, verdict_end);
 }
 
 bool VisibilityLearning::fallback_pass(uint32_t sample_index) const {
@@ -48,7 +48,19 @@ bool VisibilityLearning::fallback_pass(uint32_t sample_index) const {
 }
 
 bool VisibilityLearning::learns_tables(uint32_t sample_index) const {
-    return !fallback_pass(sample_index) && sample_index < uint32_t(options_.learning_passes);
+    return !fallback_pass(sample_index) && sample_index < uint32_t(learn_until_);
+}
+
+// Updates come after passes 1, 2, 4 ... L, so ending at one of them changes no sample's tables
+// below the plan (whatever the plan, sample s < planned renders with the tables of the last
+// update at or before it): a render resumed with more samples, or a farm task, agrees with one
+// rendered whole.
+bool VisibilityLearning::learning_ends_after(int pass) const {
+    const int done = pass + 1;
+    if (done >= options_.learning_passes)
+        return true;
+    return planned_ > 0 && VisibilityCache::update_after(pass, options_.learning_passes) &&
+           planned_ <= 2 * int64_t(done);
 }
 
 void VisibilityLearning::configure(etk::EtkParams& p, uint32_t sample_index, bool learn) const {
@@ -96,8 +108,10 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film*
         const Timer t;
         update_tables(pass, device);
         learning_seconds_ += seconds + t.seconds();
-        if (pass + 1 == options_.learning_passes)
+        if (learning_ends_after(pass)) {
+            learn_until_ = pass + 1;
             cache_.reset(); // learned: the sums are no longer needed
+        }
     }
     if (!reads_film(sample_index))
         return true;
@@ -145,7 +159,7 @@ nlohmann::json VisibilityLearning::stats() const {
     nlohmann::json counts = nlohmann::json::object();
     for (const auto& [n, cells] : light_counts_)
         counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
-    return {{"learning_passes", options_.learning_passes},
+    return {{"learning_passes", learn_until_},
             {"learning_seconds", learning_seconds_},
             {"update_seconds", update_seconds_},
             {"records", records_},

@@ -129,6 +129,23 @@ void RenderSession::check_noise(const SessionCallbacks& cb) {
         cb.progress_total(static_cast<int>(std::min(end_, next_check_)));
 }
 
+// The samples the render will take in all, for a learning technique (Renderer::set_plan): a
+// sample count where one caps it -- the whole render's for a farm task, so that every task learns
+// alike -- and, for one process under a time limit, what the rate so far leaves room for (the
+// learning passes it is asked after are the slower ones: an estimate on the short side). 0 where
+// nothing says (a noise target alone; MPI ranks, whose clocks would disagree).
+int64_t RenderSession::planned_samples() const {
+    if (options_.partial)
+        return whole_render();
+    const int64_t capped = uncapped_render(options_, settings()) ? 0 : end_;
+    const double limit = settings().time_limit, t = render_.seconds();
+    if (limit <= 0 || cluster_.size() > 1 || !(t > 0))
+        return capped;
+    const int64_t passes = done_ - resumed_from_ + 1; // this run's, the one just rendered included
+    const int64_t timed = done_ + 1 + int64_t(std::max(0.0, limit - t) * double(passes) / t);
+    return capped > 0 ? std::min(capped, timed) : timed;
+}
+
 // What the ranks agree on before each round: stop (a signal on any rank, the time limit by rank
 // 0's clock, or the range done), save a checkpoint (rank 0's clock), a failure.
 RenderSession::RoundVerdict RenderSession::agree_round() {
@@ -183,6 +200,7 @@ void RenderSession::render_round(const SessionCallbacks& cb) {
 
 SessionResult RenderSession::run(const SessionCallbacks& cb) {
     renderer_->set_stop([this] { return done_ > 0 && (stop_signal() != 0 || time_up()); });
+    renderer_->set_plan([this] { return planned_samples(); });
     renderer_->set_hold(cluster_.size() > 1);
     noise_error_ = std::numeric_limits<double>::infinity();
     next_check_ = std::max<int64_t>(kNoiseFirstCheck, done_);

@@ -110,6 +110,7 @@ class RenderSession {
     };
     int stop_signal() const;
     bool time_up() const;
+    int64_t planned_samples() const;
     void agree_on_key() const;
     void agree_on_samples() const;
     void check_noise(const SessionCallbacks& cb);
