@@ -65,7 +65,8 @@ TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
 
 // A render that says how many samples it takes stops learning at the update after which no
 // sample reaches the next one (passes 33-64 of a 64-sample render recorded for tables after pass
-// 64): the same film bits; one sample past the next update keeps it.
+// 64): the same film bits; one sample past the next update keeps it. A render planned at least
+// 4x as long as the learning learns on, an update at a time, with the same tables up to there.
 TEST(VisibilityRender, LearningEndsWhereNoPlannedSampleUsesTheNextTables) {
     et::Scene s = room();
     s.settings.guide_verdict = false; // (a verdict for MIS would end the learning at its passes)
@@ -81,6 +82,12 @@ TEST(VisibilityRender, LearningEndsWhereNoPlannedSampleUsesTheNextTables) {
             << "plan " << plan << ": a sample's tables changed";
     }
     EXPECT_EQ(passes(ett::render_samples(s, 2, 0, 40, nullptr, 65)), 64u);
+    EXPECT_EQ(passes(ett::render_samples(s, 2, 0, 40, nullptr, 255)), 64u);
+    const ett::SampleRun longer = ett::render_samples(s, 2, 0, 128, nullptr, 256);
+    EXPECT_EQ(passes(longer), 128u);
+    EXPECT_TRUE(longer.renderer->sums().mean() ==
+                ett::render_samples(s, 2, 0, 128).renderer->sums().mean())
+        << "the samples before the longer learning's first new tables changed";
     // Resumed inside the shortened learning, with the plan of the whole render.
     const et::FilmSums part = ett::render_samples(s, 2, 0, 20, nullptr, 40).renderer->sums();
     EXPECT_TRUE(ett::render_samples(s, 2, 20, 40, &part, 40).renderer->sums().mean() ==

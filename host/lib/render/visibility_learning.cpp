@@ -51,16 +51,17 @@ bool VisibilityLearning::learns_tables(uint32_t sample_index) const {
     return !fallback_pass(sample_index) && sample_index < uint32_t(learn_until_);
 }
 
-// Updates come after passes 1, 2, 4 ... L, so ending at one of them changes no sample's tables
-// below the plan (whatever the plan, sample s < planned renders with the tables of the last
-// update at or before it): a render resumed with more samples, or a farm task, agrees with one
-// rendered whole.
-bool VisibilityLearning::learning_ends_after(int pass) const {
-    const int done = pass + 1;
-    if (done >= options_.learning_passes)
-        return true;
-    return planned_ > 0 && VisibilityCache::update_after(pass, options_.learning_passes) &&
-           planned_ <= 2 * int64_t(done);
+// Updates come after passes 1, 2, 4 ... (and the last learning pass), and the learning ends only
+// at one: a sample renders with the tables of the last update at or before it, so a plan that
+// ends the learning before a sample's tables would change changes no sample of the film below it
+// (farm tasks, given the whole render's plan, learn alike).
+int VisibilityLearning::learning_end_at(int done) const {
+    const int64_t planned = planned_;
+    if (done < options_.learning_passes) // the film's learning, unless no planned sample needs it
+        return planned > 0 && planned <= 2 * int64_t(done) ? done : options_.learning_passes;
+    const bool long_render = planned > 0 && done < options_.planned_learning_passes &&
+                             double(planned) >= options_.long_render * double(done);
+    return long_render ? 2 * done : done;
 }
 
 void VisibilityLearning::configure(etk::EtkParams& p, uint32_t sample_index, bool learn) const {
@@ -77,8 +78,8 @@ void VisibilityLearning::configure(etk::EtkParams& p, uint32_t sample_index, boo
 }
 
 void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
-    // Rebuilt after passes 1, 2, 4, ... L.
-    if (VisibilityCache::update_after(pass, options_.learning_passes)) {
+    // Rebuilt after passes 1, 2, 4, ... and the last learning pass.
+    if (VisibilityCache::update_after(pass, learn_until_)) {
         const Timer t;
         take_records(device);
         device.upload_guide(cache_->tables());
@@ -108,10 +109,10 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film*
         const Timer t;
         update_tables(pass, device);
         learning_seconds_ += seconds + t.seconds();
-        if (learning_ends_after(pass)) {
-            learn_until_ = pass + 1;
+        if (VisibilityCache::update_after(pass, learn_until_))
+            learn_until_ = learning_end_at(pass + 1);
+        if (pass + 1 >= learn_until_)
             cache_.reset(); // learned: the sums are no longer needed
-        }
     }
     if (!reads_film(sample_index))
         return true;

@@ -5,10 +5,12 @@
 // (visibility_cache.h) takes the sums and the cells' tables are rebuilt and uploaded; after the
 // verdict's passes of the tables, as many passes of the fallback (the paper's MIS for the
 // visibility strategy, compensated for auto: VisibilityOptions::fallback) measure it
-// (guide_verdict.h), and the cheaper one per error renders the rest of the image. The learning
-// ends at an update whose successor no sample of the render would use (plan): a learning pass
-// costs about 1.25 steady ones, and a 64-sample render at 128 x 96 paid it on passes 33-64 for
-// tables after pass 64 that nothing rendered with.
+// (guide_verdict.h), and the cheaper one per error renders the rest of the image. How long the
+// learning goes on is decided at each update from the samples the render will take (plan): it
+// ends at an update whose successor no planned sample would use (a learning pass costs about
+// 1.25 steady ones, and a 64-sample render at 128 x 96 paid it on passes 33-64 for tables after
+// pass 64 that nothing rendered with), and goes on past L in a render planned long enough
+// (VisibilityOptions::long_render).
 #pragma once
 #include "render/guide_verdict.h"
 #include "render/learning_policy.h"
@@ -39,9 +41,9 @@ class VisibilityLearning : public LearningPolicy {
     bool fallback_pass(uint32_t sample_index) const;
     bool learns_tables(uint32_t sample_index) const;
     int verdict_start() const; // the first of the verdict's passes of the tables
-    // Whether the learning ends after learning pass `pass`: the last one, or an update after
-    // which no planned sample would reach the next one.
-    bool learning_ends_after(int pass) const;
+    // Where the learning ends, decided at the update after `done` learning passes: there, or at
+    // the next update, or at L.
+    int learning_end_at(int done) const;
     // The tables after learning pass `pass`, where the schedule rebuilds them.
     void update_tables(int pass, WavefrontDevice& device);
     // The device's record sums since the last call, into the cache (and the figures).
@@ -54,8 +56,8 @@ class VisibilityLearning : public LearningPolicy {
     bool fallback_light_batch_; // the sample_lights stage for the fallback's passes
     bool ready_ = false;        // the cells' tables hold something learned
     bool dropped_ = false;      // the verdict chose the fallback: the passes after it render it
-    // Passes 0 .. learn_until_ - 1 record (options_.learning_passes, or fewer where the plan ends
-    // the learning at an update); planned_: LearningPolicy::plan's samples, 0 if not known.
+    // Passes 0 .. learn_until_ - 1 record: options_.learning_passes, fewer or more as the plan
+    // decides at the updates; planned_: LearningPolicy::plan's samples, 0 if not known.
     int learn_until_ = 0;
     int64_t planned_ = 0;
     std::unique_ptr<VisibilityCache> cache_;
