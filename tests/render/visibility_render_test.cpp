@@ -65,32 +65,37 @@ TEST(VisibilityRender, SameBitsOnAnyThreadCountAndWhenResumed) {
 
 // A render that says how many samples it takes stops learning at the update after which no
 // sample reaches the next one (passes 33-64 of a 64-sample render recorded for tables after pass
-// 64): the same film bits; one sample past the next update keeps it. A render planned at least
-// 4x as long as the learning learns on, an update at a time, with the same tables up to there.
+// 64): the same film bits, and a render resumed to more samples agrees with one rendered whole;
+// one sample past the next update keeps it. A time limit's estimate at least 4x the passes
+// learnt takes the learning on, an update at a time, with the same tables up to there; a fixed
+// count never does.
 TEST(VisibilityRender, LearningEndsWhereNoPlannedSampleUsesTheNextTables) {
     et::Scene s = room();
     s.settings.guide_verdict = false; // (a verdict for MIS would end the learning at its passes)
     auto passes = [](const ett::SampleRun& run) {
         return ett::learning_count(run.renderer->stats(), "learning_passes");
     };
+    auto fixed = [](int64_t n) { return et::LearningPlan{n, true}; };
     const ett::SampleRun unplanned = ett::render_samples(s, 2, 0, 40);
     ASSERT_EQ(passes(unplanned), 64u) << "the film's learning passes changed: adjust the plans";
     for (int64_t plan : {40, 64}) {
-        const ett::SampleRun planned = ett::render_samples(s, 2, 0, 40, nullptr, plan);
+        const ett::SampleRun planned = ett::render_samples(s, 2, 0, 40, nullptr, fixed(plan));
         EXPECT_EQ(passes(planned), 32u) << "plan " << plan;
         EXPECT_TRUE(planned.renderer->sums().mean() == unplanned.renderer->sums().mean())
             << "plan " << plan << ": a sample's tables changed";
     }
-    EXPECT_EQ(passes(ett::render_samples(s, 2, 0, 40, nullptr, 65)), 64u);
-    EXPECT_EQ(passes(ett::render_samples(s, 2, 0, 40, nullptr, 255)), 64u);
-    const ett::SampleRun longer = ett::render_samples(s, 2, 0, 128, nullptr, 256);
+    EXPECT_EQ(passes(ett::render_samples(s, 2, 0, 40, nullptr, fixed(65))), 64u);
+    EXPECT_EQ(passes(ett::render_samples(s, 2, 0, 40, nullptr, fixed(1000))), 64u);
+    EXPECT_EQ(passes(ett::render_samples(s, 2, 0, 40, nullptr, {255, false})), 64u);
+    const ett::SampleRun longer = ett::render_samples(s, 2, 0, 128, nullptr, {256, false});
     EXPECT_EQ(passes(longer), 128u);
     EXPECT_TRUE(longer.renderer->sums().mean() ==
                 ett::render_samples(s, 2, 0, 128).renderer->sums().mean())
         << "the samples before the longer learning's first new tables changed";
-    // Resumed inside the shortened learning, with the plan of the whole render.
-    const et::FilmSums part = ett::render_samples(s, 2, 0, 20, nullptr, 40).renderer->sums();
-    EXPECT_TRUE(ett::render_samples(s, 2, 20, 40, &part, 40).renderer->sums().mean() ==
+    // The first 20 of a 24-sample render (learning 16 passes), resumed to 40 (learning 32): the
+    // 40-sample render's bits.
+    const et::FilmSums part = ett::render_samples(s, 2, 0, 20, nullptr, fixed(24)).renderer->sums();
+    EXPECT_TRUE(ett::render_samples(s, 2, 20, 40, &part, fixed(40)).renderer->sums().mean() ==
                 unplanned.renderer->sums().mean());
 }
 

@@ -194,15 +194,15 @@ struct SampleRun {
     std::unique_ptr<et::DeviceScene> scene;
     std::unique_ptr<et::Renderer> renderer;
 };
-// plan: the samples the render is said to take in all (Renderer::set_plan; 0: not said).
+// plan: what the render is said to take (Renderer::set_plan; no samples: nothing said).
 inline SampleRun render_samples(const et::Scene& s, int threads, int from, int to,
-                                const et::FilmSums* resume = nullptr, int64_t plan = 0) {
+                                const et::FilmSums* resume = nullptr, et::LearningPlan plan = {}) {
     et::RenderSettings st = s.settings;
     st.threads = threads;
     SampleRun run;
     run.scene = std::make_unique<et::DeviceScene>(et::prepare_device_scene(s, st));
     run.renderer = et::make_renderer(*run.scene);
-    if (plan > 0)
+    if (plan.samples > 0)
         run.renderer->set_plan([plan] { return plan; });
     if (resume)
         run.renderer->resume(*resume);

@@ -37,15 +37,18 @@ struct VisibilityOptions {
     int learning_passes = 64;
     int min_learning_passes = 16, max_learning_passes = 64;
     double learning_paths = 2.0e6;
-    // A render known to be long (LearningPolicy::plan) learns on past L, from the update after U
-    // passes to the one after 2U, while the plan holds at least long_render x U samples (so at
-    // most about half of it learns), up to planned_learning_passes. The tables are record-starved
-    // at 128 x 96: on the held-out rooms at depth 1 (4 s, ~950 samples), learning to 256 passes
-    // rather than 64 measured 1.43x / 1.75x the efficiency; at depth 5 (~170 samples, where 2
-    // learnt to 128) factor 2 lost 6-15%, 4 neither gained nor lost
-    // (docs/history/results-journal.md, "Learning as long as the render").
+    // A render whose time limit leaves room (LearningPlan not fixed) learns on past L, from the
+    // update after U passes to the one after 2U, while the estimate holds at least long_render x U
+    // samples (so at most about half of it learns), up to planned_learning_passes (the measured
+    // range). A fixed count never does: a resume to more samples would learn where the first run
+    // had stopped, and render its samples with other tables. The tables are
+    // record-starved at 128 x 96 in rooms lit by a sun through small openings: at depth 1 (4 s,
+    // ~950 samples) learning to 256 passes rather than 64 measured 1.4-1.7x the efficiency on
+    // three such rooms, the same on the others; at depth 5 (~170 samples) factor 4 stops at 64, 2
+    // learnt to 128 and lost 6-15% (docs/history/results-journal.md, "Learning as long as the
+    // render").
     double long_render = 4.0;
-    int planned_learning_passes = 1024;
+    int planned_learning_passes = 256;
     // n0: records a cell needs before its own sums weigh half (its light table's and its guided
     // continuations' share). At 128 x 96 (12,288 paths a pass) a cell's records are few and
     // noisy: 512 against 32 left 10% less equal-spp error in geometric mean on both halves of

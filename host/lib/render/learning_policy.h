@@ -22,6 +22,16 @@ class Film;
 // (a technique's measuring pass): the film, or null where a stop request abandoned it.
 using MeasuringPass = std::function<const Film*(const etk::EtkParams& p)>;
 
+// The samples per pixel a render will take in all, as far as its session knows.
+struct LearningPlan {
+    int64_t samples = 0; // 0: not known (a noise target; a progressive render, which may go on)
+    // A count fixed in advance (a cap, which a resumed render, farm tasks and MPI ranks share):
+    // the learning may end before it but never goes on past its usual end, so that a render
+    // resumed to more samples renders the same bits as one rendered whole. Not fixed: a time
+    // limit's estimate, where a learning may go on as long as the render.
+    bool fixed = true;
+};
+
 class LearningPolicy {
   public:
     virtual ~LearningPolicy() = default;
@@ -39,10 +49,9 @@ class LearningPolicy {
     // was abandoned.
     virtual bool after_pass(int pass, uint32_t sample_index, const Film* film, double seconds,
                             WavefrontDevice& device, const MeasuringPass& measure) = 0;
-    // The samples per pixel the render will take in all, as far as the caller knows (0: not
-    // known), given before each after_pass: learning whose tables no later sample would use is
-    // skipped.
-    virtual void plan(int64_t samples) { (void)samples; }
+    // The render's plan, given before each after_pass: learning whose tables no later sample
+    // would use is skipped.
+    virtual void plan(const LearningPlan& plan) { (void)plan; }
     // Its figures for the render's report: a JSON object.
     virtual nlohmann::json stats() const = 0;
 };

@@ -170,7 +170,7 @@ bool Renderer::run(uint32_t sample_index, bool learn, bool keep) {
         sums_.add_pass(film_, scene_.settings.threads); // the render's cores, idle now
     if (learn) {
         // (An abandoned measuring pass leaves this pass whole; abandoned_ stops what follows.)
-        policy_->plan(plan_ ? plan_() : 0);
+        policy_->plan(plan_ ? plan_() : LearningPlan{});
         policy_->after_pass(next_learning_pass_, sample_index, read ? &film_ : nullptr,
                             pass_timer.seconds(), *device_,
                             [this](const etk::EtkParams& q) { return measure(q); });

@@ -52,9 +52,8 @@ class Renderer {
     bool render_sample(uint32_t sample_index);
     // Asked between waves and bounces of every pass from now on (schedule.h).
     void set_stop(StopRequest stop) { stop_ = std::move(stop); }
-    // The samples per pixel the render will take in all (0: not known), asked after each learning
-    // pass for the learning policy (LearningPolicy::plan).
-    void set_plan(std::function<int64_t()> plan) { plan_ = std::move(plan); }
+    // The render's plan (LearningPolicy::plan), asked after each learning pass.
+    void set_plan(std::function<LearningPlan()> plan) { plan_ = std::move(plan); }
     // Whether a stop request abandoned a pass (a whole sample may still have been added: a
     // learning technique's measuring passes come after it); render_sample may not be called
     // again.
@@ -102,7 +101,7 @@ class Renderer {
     RenderStats stats_;
     bool light_batch_ = false;
     StopRequest stop_;
-    std::function<int64_t()> plan_;
+    std::function<LearningPlan()> plan_;
     bool hold_ = false, held_ = false; // set_hold; a sample waits in held_film_
     Film held_film_;
     bool abandoned_ = false;                 // a stop request ended a pass: no more rendering

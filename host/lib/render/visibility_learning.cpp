@@ -54,12 +54,16 @@ bool VisibilityLearning::learns_tables(uint32_t sample_index) const {
 // Updates come after passes 1, 2, 4 ... (and the last learning pass), and the learning ends only
 // at one: a sample renders with the tables of the last update at or before it, so a plan that
 // ends the learning before a sample's tables would change changes no sample of the film below it
-// (farm tasks, given the whole render's plan, learn alike).
+// (farm tasks, given the whole render's plan, learn alike; a render resumed to more samples
+// learns more and renders the samples it had with the same tables). Only an estimate (a time
+// limit) takes the learning past L: with a fixed count, a resume to more samples would learn on
+// where the first run had stopped, and render its samples with other tables.
 int VisibilityLearning::learning_end_at(int done) const {
-    const int64_t planned = planned_;
+    const int64_t planned = plan_.samples;
     if (done < options_.learning_passes) // the film's learning, unless no planned sample needs it
         return planned > 0 && planned <= 2 * int64_t(done) ? done : options_.learning_passes;
-    const bool long_render = planned > 0 && done < options_.planned_learning_passes &&
+    const bool long_render = !plan_.fixed && planned > 0 &&
+                             done < options_.planned_learning_passes &&
                              double(planned) >= options_.long_render * double(done);
     return long_render ? 2 * done : done;
 }

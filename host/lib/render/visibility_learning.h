@@ -9,8 +9,8 @@
 // learning goes on is decided at each update from the samples the render will take (plan): it
 // ends at an update whose successor no planned sample would use (a learning pass costs about
 // 1.25 steady ones, and a 64-sample render at 128 x 96 paid it on passes 33-64 for tables after
-// pass 64 that nothing rendered with), and goes on past L in a render planned long enough
-// (VisibilityOptions::long_render).
+// pass 64 that nothing rendered with), and goes on past L in a render whose time limit leaves
+// room enough (VisibilityOptions::long_render).
 #pragma once
 #include "render/guide_verdict.h"
 #include "render/learning_policy.h"
@@ -27,7 +27,7 @@ class VisibilityLearning : public LearningPolicy {
     int learning_passes() const override;
     void configure(etk::EtkParams& p, uint32_t sample_index, bool learn) const override;
     bool reads_film(uint32_t sample_index) const override;
-    void plan(int64_t samples) override { planned_ = samples; }
+    void plan(const LearningPlan& plan) override { plan_ = plan; }
     bool after_pass(int pass, uint32_t sample_index, const Film* film, double seconds,
                     WavefrontDevice& device, const MeasuringPass& measure) override;
     nlohmann::json stats() const override;
@@ -57,9 +57,9 @@ class VisibilityLearning : public LearningPolicy {
     bool ready_ = false;        // the cells' tables hold something learned
     bool dropped_ = false;      // the verdict chose the fallback: the passes after it render it
     // Passes 0 .. learn_until_ - 1 record: options_.learning_passes, fewer or more as the plan
-    // decides at the updates; planned_: LearningPolicy::plan's samples, 0 if not known.
+    // decides at the updates from the render's plan.
     int learn_until_ = 0;
-    int64_t planned_ = 0;
+    LearningPlan plan_;
     std::unique_ptr<VisibilityCache> cache_;
     std::vector<uint32_t> sums_; // the device's record sums, read at each update
     std::unique_ptr<GuideVerdict> verdict_;

@@ -16,6 +16,7 @@ void ProgressiveRender::new_session(RenderState resumed) {
     SessionOptions o;
     o.scene = name_;
     o.resume = resumed.spp > 0;
+    o.open_ended = true;
     session_ = std::make_unique<RenderSession>(cluster_, *prepared_, o, &build_);
     session_->resume(std::move(resumed));
     session_->start();

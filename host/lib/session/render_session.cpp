@@ -129,21 +129,26 @@ void RenderSession::check_noise(const SessionCallbacks& cb) {
         cb.progress_total(static_cast<int>(std::min(end_, next_check_)));
 }
 
-// The samples the render will take in all, for a learning technique (Renderer::set_plan): a
-// sample count where one caps it -- the whole render's for a farm task, so that every task learns
-// alike -- and, for one process under a time limit, what the rate so far leaves room for (the
-// learning passes it is asked after are the slower ones: an estimate on the short side). 0 where
-// nothing says (a noise target alone; MPI ranks, whose clocks would disagree).
-int64_t RenderSession::planned_samples() const {
+// The samples the render will take in all, for a learning technique (Renderer::set_plan): the
+// count where one caps it -- the whole render's for a farm task, so that every task learns alike
+// -- and, for one process under a time limit that ends it sooner, what the rate so far leaves
+// room for (the learning passes it is asked after are the slower ones: an estimate on the short
+// side). Not known for a progressive render, which may be extended (RenderSession::extend), a
+// noise target alone, or under a time limit on MPI ranks, whose clocks would disagree.
+LearningPlan RenderSession::planned_samples() const {
+    if (options_.open_ended)
+        return {};
     if (options_.partial)
-        return whole_render();
+        return {whole_render(), true};
     const int64_t capped = uncapped_render(options_, settings()) ? 0 : end_;
     const double limit = settings().time_limit, t = render_.seconds();
     if (limit <= 0 || cluster_.size() > 1 || !(t > 0))
-        return capped;
+        return {capped, true};
     const int64_t passes = done_ - resumed_from_ + 1; // this run's, the one just rendered included
     const int64_t timed = done_ + 1 + int64_t(std::max(0.0, limit - t) * double(passes) / t);
-    return capped > 0 ? std::min(capped, timed) : timed;
+    if (capped > 0 && capped <= timed)
+        return {capped, true};
+    return {timed, false};
 }
 
 // What the ranks agree on before each round: stop (a signal on any rank, the time limit by rank

@@ -39,6 +39,9 @@ struct SessionOptions {
     bool partial = false;      // a farm task: sample indices first .. end-1 only
     int first = 0, end = 0;    // the range of a partial render
     std::string state_path;    // where states are saved and read
+    // A progressive render (extend): its end so far is no plan for a learning technique, which
+    // would otherwise stop learning where a later call needs it.
+    bool open_ended = false;
 };
 
 // A render that only a time limit or a noise target ends: neither capped by a user's spp nor a
@@ -110,7 +113,7 @@ class RenderSession {
     };
     int stop_signal() const;
     bool time_up() const;
-    int64_t planned_samples() const;
+    LearningPlan planned_samples() const;
     void agree_on_key() const;
     void agree_on_samples() const;
     void check_noise(const SessionCallbacks& cb);
