@@ -82,15 +82,17 @@ void VisibilityLearning::configure(etk::EtkParams& p, uint32_t sample_index, boo
 }
 
 void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
-    // Rebuilt after passes 1, 2, 4, ... and the last learning pass.
-    if (VisibilityCache::update_after(pass, learn_until_)) {
-        const Timer t;
-        take_records(device);
-        device.upload_guide(cache_->tables());
-        ready_ = true;
-        light_counts_ = cache_->fewer_light_samples();
-        update_seconds_ += t.seconds();
-    }
+    // Rebuilt after passes 1, 2, 4, ... and the last learning pass; where the learning ends is
+    // decided there.
+    if (!VisibilityCache::update_after(pass, learn_until_))
+        return;
+    const Timer t;
+    take_records(device);
+    device.upload_guide(cache_->tables());
+    ready_ = true;
+    light_counts_ = cache_->fewer_light_samples();
+    learn_until_ = learning_end_at(pass + 1);
+    update_seconds_ += t.seconds();
 }
 
 void VisibilityLearning::take_records(WavefrontDevice& device) {
@@ -113,8 +115,6 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film*
         const Timer t;
         update_tables(pass, device);
         learning_seconds_ += seconds + t.seconds();
-        if (VisibilityCache::update_after(pass, learn_until_))
-            learn_until_ = learning_end_at(pass + 1);
         if (pass + 1 >= learn_until_)
             cache_.reset(); // learned: the sums are no longer needed
     }

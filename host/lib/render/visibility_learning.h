@@ -44,7 +44,8 @@ class VisibilityLearning : public LearningPolicy {
     // Where the learning ends, decided at the update after `done` learning passes: there, or at
     // the next update, or at L.
     int learning_end_at(int done) const;
-    // The tables after learning pass `pass`, where the schedule rebuilds them.
+    // The tables after learning pass `pass`, where the schedule rebuilds them, and where the
+    // learning ends (learning_end_at).
     void update_tables(int pass, WavefrontDevice& device);
     // The device's record sums since the last call, into the cache (and the figures).
     void take_records(WavefrontDevice& device);

@@ -135,7 +135,7 @@ void RenderSession::check_noise(const SessionCallbacks& cb) {
 // room for (the learning passes it is asked after are the slower ones: an estimate on the short
 // side). Not known for a progressive render, which may be extended (RenderSession::extend), a
 // noise target alone, or under a time limit on MPI ranks, whose clocks would disagree.
-LearningPlan RenderSession::planned_samples() const {
+LearningPlan RenderSession::learning_plan() const {
     if (options_.open_ended)
         return {};
     if (options_.partial)
@@ -205,7 +205,7 @@ void RenderSession::render_round(const SessionCallbacks& cb) {
 
 SessionResult RenderSession::run(const SessionCallbacks& cb) {
     renderer_->set_stop([this] { return done_ > 0 && (stop_signal() != 0 || time_up()); });
-    renderer_->set_plan([this] { return planned_samples(); });
+    renderer_->set_plan([this] { return learning_plan(); });
     renderer_->set_hold(cluster_.size() > 1);
     noise_error_ = std::numeric_limits<double>::infinity();
     next_check_ = std::max<int64_t>(kNoiseFirstCheck, done_);

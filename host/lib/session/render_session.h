@@ -113,7 +113,7 @@ class RenderSession {
     };
     int stop_signal() const;
     bool time_up() const;
-    LearningPlan planned_samples() const;
+    LearningPlan learning_plan() const;
     void agree_on_key() const;
     void agree_on_samples() const;
     void check_noise(const SessionCallbacks& cb);
