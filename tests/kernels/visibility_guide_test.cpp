@@ -450,6 +450,85 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     }
 }
 
+// An update rewrites the tables of the slots with records since the last one, and names those
+// floats (changed()): a device that copies only them (the native one) holds every update's
+// tables, and a slot whose records stopped keeps its tables and is not copied again.
+TEST(VisibilityGuideTables, UpdatesNameWhatTheyRewrite) {
+    Fixture f;
+    make(f, 64, 32, 5u);
+    et::VisibilityOptions o;
+    o.slots = 64;
+    o.continuation = true;
+    const float lo[3] = {-1.0f, 0.0f, 2.0f}, hi[3] = {3.0f, 1.0f, 2.5f};
+    const std::array<float, 6> box = et::guide_portal_box(lo, hi);
+    et::VisibilityCache cache(o, f.regions, 3.0, box);
+    std::vector<float> device = et::guide_prior_cells(f.regions, o.slots, true, box);
+    std::mt19937 rng(21u);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    // n records of each kind in slots [first, end), light and continuation.
+    auto record = [&](int first, int end, int n) {
+        std::vector<int> keys(n), exits(n);
+        std::vector<float> values(n), parts(2 * n), rays(8 * n, 0.0f);
+        for (int i = 0; i < n; ++i) {
+            keys[i] = (first + int(rng() % uint32_t(end - first))) * K + int(rng() % K);
+            values[i] =
+                rng() % 3 == 0 ? 0.0f : std::ldexp(float(rng() % 1000 + 1), -int(rng() % 12));
+            exits[i] = values[i] > 0.0f ? int(rng() % ETK_PORTAL_CELLS) : -1;
+            parts[2 * i] = std::ldexp(float(rng() % 1000 + 1), -int(rng() % 12));
+            parts[2 * i + 1] = std::ldexp(float(rng() % 1000 + 1), -int(rng() % 12));
+            float* r = &rays[8 * i];
+            for (int k = 0; k < 3; ++k)
+                r[k] = lo[k] + (hi[k] - lo[k]) * U(rng);
+            const etk::float3 d =
+                etk::normalize(etk::make_float3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f));
+            r[4] = d.x;
+            r[5] = d.y;
+            r[6] = d.z;
+            r[7] = std::ldexp(float(rng() % 1000 + 1), -int(rng() % 12));
+        }
+        cache.add(keys.data(), values.data(), exits.data(), parts.data(), n);
+        cache.add_continuations(keys.data(), values.data(), rays.data(), n);
+    };
+    // Whether any float of slot s's light table is in the spans.
+    auto named = [&](int s) {
+        const size_t a = size_t(s) * ETK_GUIDE_CELL_FLOATS, b = a + ETK_GUIDE_CELL_FLOATS;
+        for (const auto& [first, end] : cache.changed())
+            if (first < b && a < end)
+                return true;
+        return false;
+    };
+    auto update = [&]() {
+        const std::vector<float>& t = cache.tables();
+        for (const auto& [first, end] : cache.changed()) {
+            if (first > end || end > t.size()) {
+                ADD_FAILURE() << "span " << first << " .. " << end << " of " << t.size();
+                return t;
+            }
+            std::copy(t.begin() + first, t.begin() + end, device.begin() + first);
+        }
+        EXPECT_TRUE(device == t) << "a float the update rewrote is not in its spans";
+        return t;
+    };
+    record(0, 40, 6000);
+    const std::vector<float> first = update();
+    EXPECT_TRUE(named(10) && named(35));
+    EXPECT_FALSE(named(50)); // no records: the prior, as the device holds it
+    record(0, 20, 4000);     // slots 20 .. 39 learn nothing more
+    const std::vector<float> second = update();
+    EXPECT_TRUE(named(10));
+    EXPECT_FALSE(named(35));
+    for (int s : {25, 35}) { // the light table and the continuation guide's, as they were
+        const size_t a = size_t(s) * ETK_GUIDE_CELL_FLOATS;
+        EXPECT_TRUE(std::equal(first.begin() + a, first.begin() + a + ETK_GUIDE_CELL_FLOATS,
+                               second.begin() + a));
+        const size_t d = static_cast<size_t>(etk::etk_guide_dir_offset(o.slots, s));
+        EXPECT_TRUE(std::equal(first.begin() + d, first.begin() + d + ETK_GUIDE_DIR_FLOATS,
+                               second.begin() + d));
+    }
+    const size_t a = size_t(10) * ETK_GUIDE_CELL_FLOATS; // a slot with more records: new tables
+    EXPECT_FALSE(std::equal(first.begin() + a, first.begin() + a + K, second.begin() + a));
+}
+
 // The share choice of both tables: the least second moment, a share > 0 charged `cost` of it;
 // ties keep the smaller share.
 TEST(VisibilityGuideTables, LeastMomentShareChargesTheCost) {

@@ -349,7 +349,9 @@ void ClLane::read_fields(int n, const std::vector<FieldRead>& reads) {
 }
 
 // Between passes (no lane is running): a blocking write, which every lane's later launches see.
-void ClDevice::upload_guide(const std::vector<float>& cells) {
+// Every float in one write: one transfer of tens of megabytes costs less than a write per
+// changed cell's table.
+void ClDevice::upload_guide(const std::vector<float>& cells, const std::vector<FloatSpan>&) {
     if (cells.size() != guide_floats_)
         throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
                     std::to_string(guide_floats_));
@@ -377,17 +379,18 @@ void ClDevice::zero_guide_sums() {
 }
 
 // Between passes (no lane is running): the sums, then zeroes in their place.
-void ClDevice::take_guide_sums(std::vector<uint32_t>& out) {
-    out.resize(guide_words_); // (its zeros unused: the device zeroes its own buffer)
+void ClDevice::absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb) {
+    guide_sums_copy_.resize(guide_words_);
     try {
         ClLane& l = *lanes_[0];
         l.queue().enqueueReadBuffer(args_[etk::ETK_ARG_guide_sums], CL_TRUE, 0,
-                                    sizeof(cl_uint) * guide_words_, out.data());
+                                    sizeof(cl_uint) * guide_words_, guide_sums_copy_.data());
         zero_guide_sums();
     } catch (const cl::Error& e) {
         throw Error(std::string("cannot read the visibility records (") + e.what() +
                     "): " + cl_error_name(e.err()));
     }
+    absorb(guide_sums_copy_);
 }
 
 void ClLane::launch(int stage, int n, const etk::EtkParams& params) {

@@ -109,8 +109,9 @@ class ClDevice : public WavefrontDevice {
     void download_film(Film& film, bool aovs) override;
     std::vector<std::pair<std::string, double>> stage_seconds() override;
     bool prefers_light_batches() const override { return prefers_light_batches_on(rt_->limits()); }
-    void upload_guide(const std::vector<float>& cells) override;
-    void take_guide_sums(std::vector<uint32_t>& sums) override;
+    void upload_guide(const std::vector<float>& cells,
+                      const std::vector<FloatSpan>& changed) override;
+    void absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb) override;
     bool folds_film() const override { return fold_; }
     void fold_film() override;
     void take_film_sums(FilmSums& sums) override;
@@ -127,7 +128,7 @@ class ClDevice : public WavefrontDevice {
     std::vector<size_t> local_;    // work-group size per kernel
     std::vector<cl::Buffer> args_; // the shared buffers, by ETK_ARG_*
     std::vector<std::unique_ptr<ClLane>> lanes_;
-    void zero_guide_sums(); // before the first pass and after each take_guide_sums
+    void zero_guide_sums(); // before the first pass and after each absorb_guide_sums
     // The film's exact sums on the device (folds_film; kernels/film_fixed.h): a buffer of
     // FilmSums::Pixel, 28 words each, and the kernel that adds a pass to it.
     bool fold_ = false;
@@ -136,6 +137,7 @@ class ClDevice : public WavefrontDevice {
     size_t fold_local_ = 1;
     size_t guide_floats_ = 1; // size of the visibility tables' buffer
     size_t guide_words_ = 1;  // size of the visibility records' sums (visibility_record.h)
+    std::vector<uint32_t> guide_sums_copy_; // the host's copy of them, read at each update
 };
 
 } // namespace et

@@ -130,19 +130,22 @@ void CpuDevice::clear_film(bool aovs) {
 #undef ET_CLEAR
 }
 
-void CpuDevice::upload_guide(const std::vector<float>& cells) {
+void CpuDevice::upload_guide(const std::vector<float>& cells,
+                             const std::vector<FloatSpan>& changed) {
     if (cells.size() != guide_cells_.size())
         throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
                     std::to_string(guide_cells_.size()));
-    std::copy(cells.begin(), cells.end(), guide_cells_.begin()); // between passes: no reader
+    for (const auto& [first, end] : changed) { // between passes: no reader
+        if (first > end || end > cells.size())
+            throw Error("visibility tables' span " + std::to_string(first) + " .. " +
+                        std::to_string(end) + " past their " + std::to_string(cells.size()) +
+                        " floats (a bug)");
+        std::copy(cells.begin() + first, cells.begin() + end, guide_cells_.begin() + first);
+    }
 }
 
-void CpuDevice::take_guide_sums(std::vector<uint32_t>& sums) {
-    if (sums.size() != guide_sums_.size())
-        sums.assign(guide_sums_.size(), 0u);
-    sums.swap(guide_sums_); // between passes: no lane adds
-    for (auto& l : lanes_)
-        l->set_guide(guide_cells_.data(), guide_sums_.data());
+void CpuDevice::absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb) {
+    absorb(guide_sums_); // between passes: no lane adds; the lanes keep their pointers
 }
 
 CpuDevice::~CpuDevice() = default;

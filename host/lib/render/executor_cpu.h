@@ -28,8 +28,9 @@ class CpuDevice : public WavefrontDevice {
     void clear_film(bool aovs) override;
     void download_film(Film&, bool) override {}
     std::vector<std::pair<std::string, double>> stage_seconds() override;
-    void upload_guide(const std::vector<float>& cells) override;
-    void take_guide_sums(std::vector<uint32_t>& sums) override;
+    void upload_guide(const std::vector<float>& cells,
+                      const std::vector<FloatSpan>& changed) override;
+    void absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb) override;
 
   private:
     std::vector<float> guide_cells_;   // the visibility strategy's tables, read by every lane

@@ -31,11 +31,11 @@ size_t path_field_bytes(int field) {
     return bytes[field];
 }
 
-void WavefrontDevice::upload_guide(const std::vector<float>&) {
+void WavefrontDevice::upload_guide(const std::vector<float>&, const std::vector<FloatSpan>&) {
     throw Error("this back end cannot take the visibility strategy's tables");
 }
 
-void WavefrontDevice::take_guide_sums(std::vector<uint32_t>&) {
+void WavefrontDevice::absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>&) {
     throw Error("this back end keeps no visibility records");
 }
 

@@ -16,6 +16,9 @@ namespace et {
 
 class FilmSums;
 
+// Floats [first, second) of a buffer.
+using FloatSpan = std::pair<size_t, size_t>;
+
 // The stage names (the OpenCL kernel names), indexed by ETK_STAGE_*.
 const char* stage_name(int stage);
 
@@ -71,13 +74,16 @@ class WavefrontDevice {
     // Time per stage so far: summed over the lanes, device time for OpenCL (kernels of two lanes
     // may overlap), thread time natively.
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
-    // A learning technique's tables (EtkScene.guide_cells) for the passes to come.
-    virtual void upload_guide(const std::vector<float>& cells);
-    // The visibility records' sums the stages added since the last call (DeviceScene::
-    // guide_sum_words words, kernels/visibility_record.h), between passes, into `sums`, which
-    // holds zeros (or nothing) on entry: the device's sums start again from zero, natively from
-    // those very words (the buffers trade places: no copy of tens of megabytes per update).
-    virtual void take_guide_sums(std::vector<uint32_t>& sums);
+    // A learning technique's tables (EtkScene.guide_cells) for the passes to come: `cells`, of
+    // which only the spans `changed` (floats [first, second)) differ from the tables uploaded
+    // before -- natively only those are copied (a few of tens of megabytes); OpenCL writes all.
+    virtual void upload_guide(const std::vector<float>& cells,
+                              const std::vector<FloatSpan>& changed);
+    // Hands the visibility records' sums the stages added since the last call (DeviceScene::
+    // guide_sum_words words, kernels/visibility_record.h) to `absorb`, between passes, which
+    // leaves them zero for the passes to come: natively the device's own words (no copy, and no
+    // second buffer of tens of megabytes), from OpenCL a copy (the device zeroes its buffer).
+    virtual void absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb);
     // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
     virtual bool prefers_light_batches() const { return true; }
     // Whether the device keeps the film's exact sums itself (FilmSumsAt): then fold_film adds

@@ -180,16 +180,33 @@ const std::vector<float>& VisibilityCache::tables() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!pending_.empty()) // the records add() summed since the last update
         absorb(pending_);
-    choose_shares(portal_candidates_.data(), ETK_PORTAL_CANDIDATES, 0.0, light_, moments_, shares_);
     const bool continuation = !dir_.sums.empty();
+    // A slot's tables change only with records since the last update: its sums, counts, second
+    // moments and shares move only with them (counted: the counts then).
+    fresh_.resize(opt_.slots);
+    for (int s = 0; s < opt_.slots; ++s)
+        fresh_[s] = light_.counts[s] != light_.counted[s] ||
+                    (continuation && dir_.counts[s] != dir_.counted[s]);
+    choose_shares(portal_candidates_.data(), ETK_PORTAL_CANDIDATES, 0.0, light_, moments_, shares_);
     if (continuation) // before the cells' tables, which take the shares
         choose_guided_shares();
     fewer_.clear();
     // Rebuilt in place (34 MB at 2^13 slots: a fresh copy each update, its pages faulted in and
-    // then copied to last_, was most of an update's 29 ms). Cells without records keep the
-    // prior tables (most cells of a scene); a cell's counts only grow, so every part of a cell
-    // an earlier update wrote is written again below: the same tables as built afresh.
+    // then copied to last_, was most of an update's 29 ms), fresh slots only. Cells without
+    // records keep the prior tables (most cells of a scene), cells without new ones the tables
+    // of the last update; a cell's counts only grow, so every part of a cell an earlier update
+    // wrote is written again below: the same tables as built afresh.
     std::vector<float>& out = last_;
+    // The floats rewritten: the fresh slots' light tables, their continuation tables, the
+    // portal tables (adjacent spans merged).
+    std::vector<FloatSpan> dir_changed;
+    changed_.clear();
+    auto changed = [](std::vector<FloatSpan>& spans, size_t first, size_t end) {
+        if (!spans.empty() && spans.back().second == first)
+            spans.back().second = end;
+        else
+            spans.emplace_back(first, end);
+    };
     std::vector<double> prob(K);
     const std::vector<float> uniform(K, 1.0f / K);
     // Slot s's P = own x S / sum S + (1 - own) x prior, own = n / (n + n0) (0 if nothing came
@@ -206,11 +223,17 @@ const std::vector<float>& VisibilityCache::tables() {
         return own;
     };
     for (int s = 0; s < opt_.slots; ++s) {
+        float* cell = out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
+        if (light_.counts[s] > 0 && !fresh_[s] && cell[ETK_GUIDE_LIGHT_COUNT] < 1.0f)
+            ++fewer_[cell[ETK_GUIDE_LIGHT_COUNT]];
+        if (!fresh_[s])
+            continue;
+        changed(changed_, static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS,
+                static_cast<size_t>(s + 1) * ETK_GUIDE_CELL_FLOATS);
         if (light_.counts[s] > 0) { // the light sample's mixture Q = alpha M + (1 - alpha) P
             learned(light_, s, mass_);
             for (int R = 0; R < K; ++R)
                 prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];
-            float* cell = out.data() + static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS;
             write_guide_cdf(prob, cell);
             const uint32_t nl = light_.counts[s], nc = continuation ? dir_.counts[s] : 0;
             const auto min_records = static_cast<uint32_t>(opt_.min_records);
@@ -229,9 +252,14 @@ const std::vector<float>& VisibilityCache::tables() {
             const double own = learned(dir_, s, uniform);
             write_guide_cdf(prob, dir);
             dir[ETK_GUIDE_DIR_SHARE] = static_cast<float>(guided_shares_[s] * own);
+            const size_t first = static_cast<size_t>(dir - out.data());
+            changed(dir_changed, first, first + ETK_GUIDE_DIR_FLOATS);
         }
     }
-    float* portal = out.data() + etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0);
+    changed_.insert(changed_.end(), dir_changed.begin(), dir_changed.end());
+    const size_t portals = etk::etk_portal_offset(opt_.slots, continuation ? 1 : 0);
+    changed_.emplace_back(portals, out.size());
+    float* portal = out.data() + portals;
     write_portal_table(box_, shares_, std::vector<double>(portal_.begin(), portal_.end()), portal);
     if (continuation) {
         choose_shares(portal_candidates_.data(), ETK_PORTAL_CANDIDATES, opt_.spot_cost, dir_,

@@ -62,6 +62,7 @@
 #include "kernels/visibility_guide.h"
 #include "kernels/visibility_record.h"
 #include "prepare/visibility_tables.h"
+#include "render/schedule.h"
 
 #include <array>
 #include <cstdint>
@@ -106,6 +107,9 @@ class VisibilityCache {
     // Each update also chooses the cells' portal shares and starts their measure afresh.
     // The cache's own buffer, rewritten in place by the next call.
     const std::vector<float>& tables();
+    // The floats of tables() that the last call rewrote; the rest hold what they held (before
+    // the first call the prior tables, guide_prior_cells, as DeviceScene::guide_cells does).
+    const std::vector<FloatSpan>& changed() const { return changed_; }
     // Host memory of the sums, bytes.
     uint64_t bytes() const {
         return light_.bytes() + dir_.bytes() + portal_.size() * 8 + moments_.size() * 8 +
@@ -172,7 +176,9 @@ class VisibilityCache {
     std::map<float, uint64_t> fewer_;
     // The tables of the last update (tables()): those the passes since were drawn with.
     std::vector<float> last_;
-    float inv_power_;                                             // 1 / the map's power
+    std::vector<FloatSpan> changed_; // the spans of last_ the last tables() rewrote
+    std::vector<char> fresh_;        // per slot: records since the last tables()
+    float inv_power_;                // 1 / the map's power
     std::array<double, ETK_PORTAL_CANDIDATES> portal_candidates_; // etk_portal_candidate
     std::array<double, ETK_GUIDED_CANDIDATES> guided_candidates_; // etk_guided_candidate
     std::vector<uint32_t> pending_; // add()'s sums (visibility_record.h's layout) until tables()

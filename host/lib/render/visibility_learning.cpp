@@ -88,7 +88,8 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
         return;
     const Timer t;
     take_records(device);
-    device.upload_guide(cache_->tables());
+    const std::vector<float>& tables = cache_->tables();
+    device.upload_guide(tables, cache_->changed());
     ready_ = true;
     light_counts_ = cache_->fewer_light_samples();
     learn_until_ = learning_end_at(pass + 1);
@@ -96,8 +97,7 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
 }
 
 void VisibilityLearning::take_records(WavefrontDevice& device) {
-    device.take_guide_sums(sums_);
-    cache_->absorb(sums_);
+    device.absorb_guide_sums([this](std::vector<uint32_t>& sums) { cache_->absorb(sums); });
     records_ = cache_->records();
     continuation_records_ = cache_->continuation_records();
 }

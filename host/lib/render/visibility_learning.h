@@ -62,7 +62,6 @@ class VisibilityLearning : public LearningPolicy {
     int learn_until_ = 0;
     LearningPlan plan_;
     std::unique_ptr<VisibilityCache> cache_;
-    std::vector<uint32_t> sums_; // the device's record sums, read at each update
     std::unique_ptr<GuideVerdict> verdict_;
     // Figures (stats()).
     double learning_seconds_ = 0, update_seconds_ = 0, verdict_seconds_ = 0;
