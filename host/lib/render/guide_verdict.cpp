@@ -52,7 +52,7 @@ void GuideVerdict::add(int t, int k, const float* film_sum_rgba) {
 void GuideVerdict::decide() {
     // Each pixel's mean over every block, then over its neighbourhood (kRadius pixels each way,
     // clamped at the film's edges; only the pixels every block has samples of, so with the
-    // fallback on every 4th pixel the measured ones among them): the reference each block's error
+    // fallback on every 8th pixel the measured ones among them): the reference each block's error
     // is relative to. Not the
     // pixel's own mean -- a block that caught a rare bright sample would then be measured
     // against a mean made of that sample, and heavy tails (the errors MIS makes where the map's

@@ -10,7 +10,7 @@
 // Which of the two a scene is, is measured, not modelled: `passes` passes of the tables after
 // some learning (VisibilityOptions::verdict_after; part of the image, as any) and as many passes
 // of the fallback (the paper's MIS, or compensated for auto), rendered only to measure (sample
-// indices of their own, renderer.h; for auto on every 4th pixel only, VisibilityOptions::
+// indices of their own, renderer.h; for auto on every 8th pixel only, VisibilityOptions::
 // verdict_stride, and the two compared there), each in two blocks of passes / 2 consecutive
 // samples. Per pixel and technique, half the squared difference of its two blocks' means estimates
 // the error of a block-sized estimate, relative to the squared mean of the pixel's 5 x 5
