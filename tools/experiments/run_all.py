@@ -6,7 +6,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCRIPTS = ["fig5_roughness.py", "fig6_points.py", "fig8_lights.py", "ld_vs_random.py",
-           "precompute_times.py", "efficiency.py", "split_ceiling.py", "roulette_depth.py"]
+           "precompute_times.py", "efficiency.py", "split_ceiling.py", "roulette_depth.py",
+           "learning_cost.py"]
 
 if __name__ == "__main__":
     args = sys.argv[1:]
