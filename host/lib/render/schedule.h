@@ -5,6 +5,7 @@
 #pragma once
 #include "kernels/params.h"
 #include "kernels/path_state.h"
+#include "util/float_span.h"
 
 #include <cstdint>
 #include <functional>
@@ -15,9 +16,6 @@
 namespace et {
 
 class FilmSums;
-
-// Floats [first, second) of a buffer.
-using FloatSpan = std::pair<size_t, size_t>;
 
 // The stage names (the OpenCL kernel names), indexed by ETK_STAGE_*.
 const char* stage_name(int stage);

@@ -228,9 +228,9 @@ const std::vector<float>& VisibilityCache::tables() {
             ++fewer_[cell[ETK_GUIDE_LIGHT_COUNT]];
         if (!fresh_[s])
             continue;
-        changed(changed_, static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS,
-                static_cast<size_t>(s + 1) * ETK_GUIDE_CELL_FLOATS);
         if (light_.counts[s] > 0) { // the light sample's mixture Q = alpha M + (1 - alpha) P
+            changed(changed_, static_cast<size_t>(s) * ETK_GUIDE_CELL_FLOATS,
+                    static_cast<size_t>(s + 1) * ETK_GUIDE_CELL_FLOATS);
             learned(light_, s, mass_);
             for (int R = 0; R < K; ++R)
                 prob[R] = opt_.alpha * mass_[R] + (1.0 - opt_.alpha) * prob[R];

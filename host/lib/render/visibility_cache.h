@@ -62,7 +62,7 @@
 #include "kernels/visibility_guide.h"
 #include "kernels/visibility_record.h"
 #include "prepare/visibility_tables.h"
-#include "render/schedule.h"
+#include "util/float_span.h"
 
 #include <array>
 #include <cstdint>
