@@ -141,6 +141,28 @@ TEST(DeviceScene, VisibilitySlotsFollowSmallFilms) {
     }
 }
 
+// ... and the grid's keys: no more slots than the smallest power of two >= twice its cells x the
+// six normal directions (prepare/visibility_tables.h).
+TEST(DeviceScene, VisibilitySlotsFollowTheGridsKeys) {
+    const float cube[3] = {2, 2, 2}, ground[3] = {40, 2, 40}, quad[3] = {4, 0, 4}, none[3] = {};
+    EXPECT_EQ(et::guide_grid_slots(8192, cube, 4.0f), 8192);   // 9^3 x 6 = 4,374 keys
+    EXPECT_EQ(et::guide_grid_slots(8192, ground, 0.2f), 1024); // 9 x 1 x 9 x 6 = 486
+    EXPECT_EQ(et::guide_grid_slots(8192, quad, 2.0f), 1024);   // the same cells
+    EXPECT_EQ(et::guide_grid_slots(512, ground, 0.2f), 512);   // the film's cap stays
+    EXPECT_EQ(et::guide_grid_slots(8192, none, 8.0e6f), 64);   // one cell
+    // A flat quad at 128 x 96 (8,192 slots for the film): the grid's 1,024, the tables sized so.
+    const std::string dir = ett::scratch_dir("device-scene-grid-slots");
+    std::ofstream(dir + "/s.json") << R"({"camera": {"eye": [0, 3, 4], "target": [0, 0, 0]},
+  "film": {"width": 128, "height": 96}, "environment": {"sky": {"resolution": [64, 32]}},
+  "shapes": [{"type": "quad", "size": 12}], "render": {"strategy": "auto", "max_depth": 3}})";
+    const et::Scene s = et::load_scene(dir + "/s.json");
+    const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
+    EXPECT_EQ(ds.guide_options.slots, 1024);
+    EXPECT_EQ(ds.params.guide_slots, 1024);
+    EXPECT_EQ(ds.guide_cells.size(), et::guide_cells_size(1024, true));
+    EXPECT_EQ(ds.guide_sum_words(), etk::etk_gsum_words(1024, 1));
+}
+
 // The kernels take the heuristic resolved for the strategy (load/render_settings.h), never auto's
 // -1, which etk_mis_weight would read as balance: the paper's estimator would lose its power
 // heuristic without any image test noticing.

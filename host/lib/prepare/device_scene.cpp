@@ -224,6 +224,7 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
     for (int k = 0; k < 3; ++k)
         p.guide_origin[k] = lo[k];
     p.guide_inv_cell = static_cast<float>(opt.resolution) / longest;
+    d.guide_options.slots = guide_grid_slots(opt.slots, &ext[0], p.guide_inv_cell);
     p.guide_slots = opt.slots;
     // Shadow rays carry their record's key as a float value (integrator.h): exact below 2^24.
     if (static_cast<int64_t>(opt.slots) * ETK_GUIDE_REGIONS > (int64_t(1) << 24))

@@ -133,6 +133,17 @@ int guide_slots(const VisibilityOptions& options, int64_t pixels) {
     return static_cast<int>(std::min<int64_t>(options.slots, cap));
 }
 
+int guide_grid_slots(int slots, const float extent[3], float inv_cell) {
+    // Cells along an axis: a point's cell is floor((x - lo) / cell size), x in [lo, lo + extent].
+    double keys = 6.0;
+    for (int k = 0; k < 3; ++k)
+        keys *= std::floor(double(extent[k]) * double(inv_cell)) + 1.0;
+    int64_t cap = 64;
+    while (double(cap) < 2.0 * keys && cap < slots)
+        cap *= 2;
+    return static_cast<int>(std::min<int64_t>(slots, cap));
+}
+
 size_t guide_cells_size(int slots, bool continuation) {
     return static_cast<size_t>(slots) *
                (ETK_GUIDE_CELL_FLOATS + (continuation ? ETK_GUIDE_DIR_FLOATS : 0)) +

@@ -19,7 +19,7 @@ struct VisibilityOptions {
     // Hash-grid cells (a power of two): 2^13 x 2 x 514 floats = 32 MiB of tables on the device
     // (window_room's variance 0.00887 with 2^13, 0.00875 with 2^14 at twice the memory, 0.00915
     // with 2^12: docs/history/results-journal.md), and 68 MB of record sums. Preparation caps it
-    // for the film (guide_slots).
+    // for the film (guide_slots) and for the cells the scene's grid has (guide_grid_slots).
     int slots = 1 << 13;
     int resolution = 8; // cells along the scene's longest side (few records per cell
                         // otherwise: measured in docs/history/results-journal.md)
@@ -136,6 +136,18 @@ int guide_learning_passes(const VisibilityOptions& options, int64_t pixels);
 // its tables and sums (and a device's time to write and read them). Films of 4,097 pixels and up
 // (64 x 64) keep every slot.
 int guide_slots(const VisibilityOptions& options, int64_t pixels);
+
+// The slots of a grid over a box of extent `extent` with cells of 1 / inv_cell: `slots`, but no
+// more than the smallest power of two >= twice the keys the grid can make (its cells x the six
+// normal directions; at least 64). A room of 6 x 3 x 6 m keeps all 8,192 at 8 cells along its
+// longest side, a statue on a 40 m ground (486 keys) has 1,024: a table no key reaches is
+// memory, preparation and cache lines for nothing. The held-out rooms keep 4,096 and their open
+// scenes 1,024: the device's tables and sums 102 -> 51 / 13 MB, a 1-spp render's setup 0.17 ->
+// 0.05 s under the open sky, efficiency within the seeds' noise (at 4 s against `mis`: tune
+// half 2.09 -> 2.15, report half 2.23 -> 2.25, a fresh set 2.30 -> 2.32; twice the keys rather
+// than once for fewer collisions, the two alike on the tune half;
+// docs/history/results-journal.md, "Slots for the grid's keys").
+int guide_grid_slots(int slots, const float extent[3], float inv_cell);
 
 // Floats of the cells' tables (EtkScene.guide_cells): the light sample's, then the continuation
 // guide's if it is on (kernels/visibility_guide.h), the portal table, and with the continuation
