@@ -102,6 +102,10 @@ ETK_FN int etk_guide_dir_offset(int slots, int cell) {
     return slots * ETK_GUIDE_CELL_FLOATS + cell * ETK_GUIDE_DIR_FLOATS;
 }
 
+// A cell's key is its grid position and the dominant axis and sign of the geometric normal: one
+// of this many normal buckets (etk_guide_cell's nb; the host sizes the grid by it).
+#define ETK_GUIDE_NORMAL_BUCKETS 6
+
 // The hash-grid slot of surface point `pos` with geometric normal `n`.
 ETK_FN int etk_guide_cell(EtkParams p, float3 pos, float3 n) {
     float3 q = (pos - make_float3(p.guide_origin[0], p.guide_origin[1], p.guide_origin[2])) *

@@ -135,7 +135,7 @@ int guide_slots(const VisibilityOptions& options, int64_t pixels) {
 
 int guide_grid_slots(int slots, const float extent[3], float inv_cell) {
     // Cells along an axis: a point's cell is floor((x - lo) / cell size), x in [lo, lo + extent].
-    double keys = 6.0;
+    double keys = ETK_GUIDE_NORMAL_BUCKETS;
     for (int k = 0; k < 3; ++k)
         keys *= std::floor(double(extent[k]) * double(inv_cell)) + 1.0;
     int64_t cap = 64;

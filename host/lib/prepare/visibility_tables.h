@@ -138,9 +138,9 @@ int guide_learning_passes(const VisibilityOptions& options, int64_t pixels);
 int guide_slots(const VisibilityOptions& options, int64_t pixels);
 
 // The slots of a grid over a box of extent `extent` with cells of 1 / inv_cell: `slots`, but no
-// more than the smallest power of two >= twice the keys the grid can make (its cells x the six
-// normal directions; at least 64). A room of 6 x 3 x 6 m keeps all 8,192 at 8 cells along its
-// longest side, a statue on a 40 m ground (486 keys) has 1,024: a table no key reaches is
+// more than the smallest power of two >= twice the keys the grid can make (its cells x
+// ETK_GUIDE_NORMAL_BUCKETS; at least 64). A room of 6 x 3 x 6 m keeps all 8,192 at 8 cells along
+// its longest side, a statue on a 40 m ground (486 keys) has 1,024: a table no key reaches is
 // memory, preparation and cache lines for nothing. The held-out rooms keep 4,096 and their open
 // scenes 1,024: the device's tables and sums 102 -> 51 / 13 MB, a 1-spp render's setup 0.17 ->
 // 0.05 s under the open sky, efficiency within the seeds' noise (at 4 s against `mis`: tune
