@@ -448,7 +448,7 @@ ETK_FN void etk_shade_split(EtkScene S, EtkPaths P, EtkQueues Q, EtkParams p, Et
     uint traced = 0u;
     float3 e = etk_split_samples(S, p, v, &traced);
     if (traced > 0u) // counted with the light set's rays (traced in a shade stage too)
-        ETK_ATOMIC_ADD(Q.counters + ETK_Q_LIGHT_RAYS, traced);
+        ETK_COUNTER_ADD(Q.counters + ETK_Q_LIGHT_RAYS, traced);
     if (etk_max3(e) > 0.0f) {
         float4 r = P.radiance[v.slot];
         P.radiance[v.slot] = etk_f4(etk_xyz(r) + v.beta * e, r.w);
@@ -620,7 +620,7 @@ ETK_FN void etk_shade_lights(ETK_STAGE_PARAMS) {
         L += etk_dl_visible(S, s, etk_xyz(S.lights[2 * k])) ? c : make_float3(0.0f, 0.0f, 0.0f);
     }
     if (traced > 0u)
-        ETK_ATOMIC_ADD(Q.counters + ETK_Q_LIGHT_RAYS, traced);
+        ETK_COUNTER_ADD(Q.counters + ETK_Q_LIGHT_RAYS, traced);
     float4 r = P.radiance[slot];
     P.radiance[slot] = etk_f4(etk_xyz(r) + beta * L, r.w);
 }
@@ -632,7 +632,7 @@ ETK_FN void etk_accumulate(ETK_STAGE_PARAMS) {
     int pixel = P.pixel[i];
     float3 L = etk_xyz(P.radiance[i]);
     if (!(isfinite(L.x) && isfinite(L.y) && isfinite(L.z))) {
-        ETK_ATOMIC_INC(Q.counters + ETK_Q_NONFINITE);
+        ETK_COUNTER_INC(Q.counters + ETK_Q_NONFINITE);
         L = make_float3(0.0f, 0.0f, 0.0f);
     }
     etk_film_add(F, pixel, L);

@@ -148,7 +148,7 @@ typedef struct {
 // (kernels/visibility_record.h; one word where nothing learns).
 typedef struct {
     ETK_QUEUES(ETK_QUEUE_MEMBER)
-    ETK_ATOMIC_PTR counters;
+    ETK_COUNTER_PTR counters;
     ETK_ATOMIC_PTR guide_sums;
 } EtkQueues;
 typedef struct {
@@ -172,7 +172,7 @@ ETK_FN ETK_GLOBAL int* etk_push_queue(EtkQueues Q, int q) {
 ETK_FN void etk_push_each(EtkQueues Q, const EtkPushes* out) {
     for (int q = 0; q < ETK_PUSH_QUEUES; ++q)
         if (out->slot[q] >= 0)
-            etk_push_queue(Q, q)[ETK_ATOMIC_INC(Q.counters + q)] = out->slot[q];
+            etk_push_queue(Q, q)[ETK_COUNTER_INC(Q.counters + q)] = out->slot[q];
 }
 
 // Kernel arguments, in this order: scene buffers, path fields, queues, film, counters, guide sums,
