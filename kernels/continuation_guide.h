@@ -68,10 +68,13 @@ ETK_FN float etk_cguide_share(EtkScene S, EtkParams p, int cell, EtkMaterial m) 
                : 0.0f;
 }
 
+// p_guide of the directions in region R for a cell's directional CDF.
+ETK_FN float etk_cguide_pdf_of_region(ETK_GLOBAL const float* cdf, int R) {
+    return (cdf[R + 1] - cdf[R]) * (ETK_GUIDE_REGIONS * 0.25f * ETK_INV_PI);
+}
 // p_guide of world direction d (unit) for a cell's directional CDF (host and device).
 ETK_FN float etk_cguide_region_pdf(ETK_GLOBAL const float* cdf, float3 d) {
-    int R = etk_cguide_region(d);
-    return (cdf[R + 1] - cdf[R]) * (ETK_GUIDE_REGIONS * 0.25f * ETK_INV_PI);
+    return etk_cguide_pdf_of_region(cdf, etk_cguide_region(d));
 }
 // p_guide of world direction d (unit) in `cell`.
 ETK_FN float etk_cguide_pdf(EtkScene S, EtkParams p, int cell, float3 d) {

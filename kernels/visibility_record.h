@@ -176,7 +176,7 @@ ETK_FN void etk_guide_record_continuation(ETK_ATOMIC_PTR sums, EtkParams p,
     ETK_GLOBAL const float* dir = cells + etk_guide_dir_offset(slots, s);
     float c = dir[ETK_GUIDE_DIR_SHARE];
     float q = spot[ETK_PORTAL_ON] > 0.0f ? spot[ETK_PORTAL_SHARES + s] : 0.0f;
-    float pg = etk_cguide_region_pdf(dir, d);
+    float pg = etk_cguide_pdf_of_region(dir, key % ETK_GUIDE_REGIONS); // key: d's region
     float ps = etk_portal_pdf_exit(spot, d, exit, t);
     // p_b from the mixture the record was drawn with (its BSDF part taken out).
     float pb =

@@ -96,8 +96,9 @@ class VisibilityCache {
     // them as the device's shadow stage (kernels/visibility_record.h), for the next tables().
     void add(const int* keys, const float* values, const int* exits, const float* parts, int n);
     // Continuation records made on the host (thread-safe; a render's are summed on the device,
-    // as add()'s): cell x K + region, value luminance(L_in) / p, and per record 8 floats: the
-    // ray's origin, 0, its direction and density p.
+    // as add()'s): cell x K + region (the direction's, etk_cguide_region: its guide density is
+    // the region's), value luminance(L_in) / p, and per record 8 floats: the ray's origin, 0, its
+    // direction and density p.
     void add_continuations(const int* keys, const float* values, const float* rays, int n);
     // The device's sums of records since the last call (WavefrontDevice::take_guide_sums),
     // added to the cache's and left zero (the device's next sums); between passes.
