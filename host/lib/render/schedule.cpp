@@ -100,8 +100,11 @@ bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, const StopRequest& stop) {
     // Paths for pixels 0, stride, 2 stride ...: path k of the pass is pixel k x stride.
     const int stride = std::max(1, params.pixel_stride);
+    // Waves no larger than an even share of the pass, so that a pass of few paths (the verdict's
+    // every 8th pixel, a small film) still keeps every lane busy.
     const int paths = (params.width * params.height + stride - 1) / stride,
-              wave = device.wave_size();
+              wave = std::min(device.wave_size(), std::max(1, (paths + device.lanes() - 1) /
+                                                                  std::max(1, device.lanes())));
     std::atomic<int> next{0};
     std::atomic<bool> abandoned{false};
     std::vector<RayCounts> counts(device.lanes());
