@@ -15,20 +15,24 @@
 // Layout, in 32-bit words for `slots` hash-grid cells (the host reads a word pair as one
 // little-endian uint64, as every OpenCL device and the native host store it):
 //   light   slots x ETK_GUIDE_REGIONS pairs: per cell and region, the records' values
-//   counts  slots words: the records per cell
-//   m2      slots pairs: per cell, the light sample's second moment
-//   moments slots x ETK_PORTAL_CANDIDATES pairs: per cell and candidate portal share b, the
-//           light sample's second moment had it been drawn with share b
+//   cells   slots blocks of etk_gsum_cell_words words: per cell its statistics, side by side so
+//           that a record adds to one or two cache lines of them (seven arrays of them took a line
+//           each): ETK_GSUM_* below
 //   portal  ETK_PORTAL_CELLS pairs: per cell of the scene's box, the unoccluded records' values
 // and, with the continuation guide (p.guide_continuation), after them:
 //   dir     slots x ETK_GUIDE_REGIONS pairs: per cell and region, the continuations' values
-//   dcounts slots words: the continuation records per cell
-//   cm2     slots pairs: per cell, the continuation's second moment
-//   spotm   slots x ETK_PORTAL_CANDIDATES pairs: per cell and secondary-source share q, the
-//           guided continuation's second moment had it been drawn with share q
-//   guidedm slots x ETK_GUIDED_CANDIDATES pairs: the same per guided share c
-//   gcounts slots words: the records in guidedm per cell
 //   spot    ETK_PORTAL_CELLS pairs: per cell of the scene's box, the continuations' values
+// A cell's block: the light records' part, then (with the continuation guide) the continuations'.
+//   COUNT    the light records
+//   M2       a pair: the light sample's second moment
+//   MOMENTS  ETK_PORTAL_CANDIDATES pairs: the light sample's second moment had it been drawn with
+//            candidate portal share b
+//   DCOUNT   the continuation records
+//   GCOUNT   the records in GUIDEDM
+//   CM2      a pair: the continuation's second moment
+//   SPOTM    ETK_PORTAL_CANDIDATES pairs: the guided continuation's second moment had it been
+//            drawn with secondary-source share q
+//   GUIDEDM  ETK_GUIDED_CANDIDATES pairs: the same per guided share c
 // (No total of the records: the per-cell counts hold it, without one word every thread adds to.)
 #ifndef ETK_VISIBILITY_RECORD_H
 #define ETK_VISIBILITY_RECORD_H
@@ -45,41 +49,43 @@
 
 ETK_BEGIN
 
-ETK_FN int etk_gsum_counts(int slots) {
+#define ETK_GSUM_COUNT 0
+#define ETK_GSUM_M2 1
+#define ETK_GSUM_MOMENTS 3
+#define ETK_GSUM_LIGHT_WORDS (ETK_GSUM_MOMENTS + 2 * ETK_PORTAL_CANDIDATES)
+#define ETK_GSUM_DCOUNT ETK_GSUM_LIGHT_WORDS
+#define ETK_GSUM_GCOUNT (ETK_GSUM_DCOUNT + 1)
+#define ETK_GSUM_CM2 (ETK_GSUM_GCOUNT + 1)
+#define ETK_GSUM_SPOTM (ETK_GSUM_CM2 + 2)
+#define ETK_GSUM_GUIDEDM (ETK_GSUM_SPOTM + 2 * ETK_PORTAL_CANDIDATES)
+#define ETK_GSUM_CELL_WORDS (ETK_GSUM_GUIDEDM + 2 * ETK_GUIDED_CANDIDATES)
+#if ETK_GSUM_LIGHT_WORDS > 16 || ETK_GSUM_CELL_WORDS > 32
+#error "a cell's statistics outgrow its block (etk_gsum_cell_words)"
+#endif
+
+// A cell's block: 16 or 32 words (one or two cache lines), with or without the continuations.
+ETK_FN int etk_gsum_cell_words(int continuation) {
+    return continuation ? 32 : 16;
+}
+ETK_FN int etk_gsum_cells(int slots) {
     return 2 * slots * ETK_GUIDE_REGIONS;
 }
-ETK_FN int etk_gsum_m2(int slots) {
-    return etk_gsum_counts(slots) + slots;
+// The block of cell s.
+ETK_FN int etk_gsum_cell(int slots, int continuation, int s) {
+    return etk_gsum_cells(slots) + s * etk_gsum_cell_words(continuation);
 }
-ETK_FN int etk_gsum_moments(int slots) {
-    return etk_gsum_m2(slots) + 2 * slots;
+ETK_FN int etk_gsum_portal(int slots, int continuation) {
+    return etk_gsum_cell(slots, continuation, slots);
 }
-ETK_FN int etk_gsum_portal(int slots) {
-    return etk_gsum_moments(slots) + 2 * slots * ETK_PORTAL_CANDIDATES;
-}
-ETK_FN int etk_gsum_dir(int slots) {
-    return etk_gsum_portal(slots) + 2 * ETK_PORTAL_CELLS;
-}
-ETK_FN int etk_gsum_dcounts(int slots) {
-    return etk_gsum_dir(slots) + 2 * slots * ETK_GUIDE_REGIONS;
-}
-ETK_FN int etk_gsum_cm2(int slots) {
-    return etk_gsum_dcounts(slots) + slots;
-}
-ETK_FN int etk_gsum_spotm(int slots) {
-    return etk_gsum_cm2(slots) + 2 * slots;
-}
-ETK_FN int etk_gsum_guidedm(int slots) {
-    return etk_gsum_spotm(slots) + 2 * slots * ETK_PORTAL_CANDIDATES;
-}
-ETK_FN int etk_gsum_gcounts(int slots) {
-    return etk_gsum_guidedm(slots) + 2 * slots * ETK_GUIDED_CANDIDATES;
+ETK_FN int etk_gsum_dir(int slots, int continuation) {
+    return etk_gsum_portal(slots, continuation) + 2 * ETK_PORTAL_CELLS;
 }
 ETK_FN int etk_gsum_spot(int slots) {
-    return etk_gsum_gcounts(slots) + slots;
+    return etk_gsum_dir(slots, 1) + 2 * slots * ETK_GUIDE_REGIONS;
 }
 ETK_FN int etk_gsum_words(int slots, int continuation) {
-    return continuation ? etk_gsum_spot(slots) + 2 * ETK_PORTAL_CELLS : etk_gsum_dir(slots);
+    return continuation ? etk_gsum_spot(slots) + 2 * ETK_PORTAL_CELLS
+                        : etk_gsum_dir(slots, continuation);
 }
 
 // A hint to load the line of the sums at w (the sums are volatile for the atomics; a prefetch
@@ -115,11 +121,11 @@ ETK_FN void etk_guide_prefetch_light(ETK_ATOMIC_PTR sums, EtkParams p, int key) 
     int slots = p.guide_slots;
     if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
         return;
-    int c = key / ETK_GUIDE_REGIONS;
+    ETK_ATOMIC_PTR cell =
+        sums + etk_gsum_cell(slots, p.guide_continuation, key / ETK_GUIDE_REGIONS);
     etk_prefetch_sum(sums + 2 * key);
-    etk_prefetch_sum(sums + etk_gsum_counts(slots) + c);
-    etk_prefetch_sum(sums + etk_gsum_m2(slots) + 2 * c);
-    etk_prefetch_sum(sums + etk_gsum_moments(slots) + 2 * c * ETK_PORTAL_CANDIDATES);
+    etk_prefetch_sum(cell);
+    etk_prefetch_sum(cell + ETK_GSUM_LIGHT_WORDS - 1);
 }
 
 // One shadow ray's record: its key (cell x regions + region of its direction; outside the table:
@@ -132,23 +138,24 @@ ETK_FN void etk_guide_record_light(ETK_ATOMIC_PTR sums, EtkParams p, ETK_GLOBAL 
     float v = etk_guide_record_value(p, value);
     ulong fv = etk_guide_fixed(v);
     if (exit >= 0 && exit < ETK_PORTAL_CELLS && fv != 0)
-        etk_add_wide(sums + etk_gsum_portal(slots) + 2 * exit, fv);
+        etk_add_wide(sums + etk_gsum_portal(slots, p.guide_continuation) + 2 * exit, fv);
     if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
         return;
     int s = key / ETK_GUIDE_REGIONS;
+    ETK_ATOMIC_PTR cell = sums + etk_gsum_cell(slots, p.guide_continuation, s);
     etk_add_wide(sums + 2 * key, fv);
-    ETK_ATOMIC_INC(sums + etk_gsum_counts(slots) + s);
+    ETK_ATOMIC_INC(cell + ETK_GSUM_COUNT);
     if (!(v > 0.0f) || !isfinite(parts.x) || !isfinite(parts.y))
         return;
     // A diffuse vertex's light sample estimates (albedo / pi) v: its second moment, in the unit
     // the light sample count shares with the continuation's (albedo^2 dropped).
     float e = v * (1.0f / ETK_PI);
-    etk_add_wide(sums + etk_gsum_m2(slots) + 2 * s, etk_guide_fixed(e * e));
+    etk_add_wide(cell + ETK_GSUM_M2, etk_guide_fixed(e * e));
     // v = g / p_rec (g = luminance(L) cos, unoccluded); the second moment of the light sample
     // with share b is E_rec[g^2 / (p_rec p_b)] = E_rec[v^2 p_rec / p_b].
     float b0 = box[ETK_PORTAL_SHARES + s];
     float prec = (1.0f - b0) * parts.x + b0 * parts.y;
-    ETK_ATOMIC_PTR m = sums + etk_gsum_moments(slots) + 2 * s * ETK_PORTAL_CANDIDATES;
+    ETK_ATOMIC_PTR m = cell + ETK_GSUM_MOMENTS;
     for (int j = 0; j < ETK_PORTAL_CANDIDATES; ++j) {
         float b = etk_portal_candidate(j);
         float pb = (1.0f - b) * parts.x + b * parts.y;
@@ -186,17 +193,18 @@ ETK_FN void etk_guide_record_continuation(ETK_ATOMIC_PTR sums, EtkParams p,
     // glossy vertex's record, drawn from its lobe alone (p_rec = its p_b, recovered here with the
     // cell's share c), weighs at most pi luminance(L_in) / (1 - c).
     ulong g = etk_guide_fixed(isfinite(pb) ? ETK_PI * pb * v : 0.0f);
-    etk_add_wide(sums + etk_gsum_dir(slots) + 2 * key, g);
-    ETK_ATOMIC_INC(sums + etk_gsum_dcounts(slots) + s);
+    ETK_ATOMIC_PTR cell = sums + etk_gsum_cell(slots, 1, s);
+    etk_add_wide(sums + etk_gsum_dir(slots, 1) + 2 * key, g);
+    ETK_ATOMIC_INC(cell + ETK_GSUM_DCOUNT);
     if (exit >= 0 && exit < ETK_PORTAL_CELLS && g != 0)
         etk_add_wide(sums + etk_gsum_spot(slots) + 2 * exit, g);
     if (!(v > 0.0f) || !(pb > 0.0f) || !isfinite(prec * ps * pg))
         return;
     // The continuation's estimate at a diffuse vertex, f cos L / p = albedo p_bsdf v: its second
     // moment in the light sample count's unit.
-    etk_add_wide(sums + etk_gsum_cm2(slots) + 2 * s, etk_guide_fixed(pb * v * pb * v));
+    etk_add_wide(cell + ETK_GSUM_CM2, etk_guide_fixed(pb * v * pb * v));
     float m2 = v * v * prec * pb * pb;
-    ETK_ATOMIC_PTR sm = sums + etk_gsum_spotm(slots) + 2 * s * ETK_PORTAL_CANDIDATES;
+    ETK_ATOMIC_PTR sm = cell + ETK_GSUM_SPOTM;
     for (int j = 0; j < ETK_PORTAL_CANDIDATES; ++j) {
         float pq = etk_cguide_mix(p.guide_continuation_share, etk_portal_candidate(j), pg, ps, pb);
         etk_add_wide(sm + 2 * j, etk_guide_fixed(pq > 0.0f ? m2 / pq : ETK_GUIDE_MAX_RECORD));
@@ -205,8 +213,8 @@ ETK_FN void etk_guide_record_continuation(ETK_ATOMIC_PTR sums, EtkParams p,
     // prior guide is uniform: its records would only tell that it is worse than the BSDF).
     if (!p.guide_ready)
         return;
-    ETK_ATOMIC_INC(sums + etk_gsum_gcounts(slots) + s);
-    ETK_ATOMIC_PTR gm = sums + etk_gsum_guidedm(slots) + 2 * s * ETK_GUIDED_CANDIDATES;
+    ETK_ATOMIC_INC(cell + ETK_GSUM_GCOUNT);
+    ETK_ATOMIC_PTR gm = cell + ETK_GSUM_GUIDEDM;
     for (int j = 0; j < ETK_GUIDED_CANDIDATES; ++j) {
         float pc = etk_cguide_mix(etk_guided_candidate(j), q, pg, ps, pb);
         etk_add_wide(gm + 2 * j, etk_guide_fixed(pc > 0.0f ? m2 / pc : ETK_GUIDE_MAX_RECORD));
@@ -246,14 +254,11 @@ ETK_FN void etk_guide_record_path(EtkScene S, EtkPaths P, ETK_ATOMIC_PTR sums, E
         if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
             continue;
         int c = key / ETK_GUIDE_REGIONS;
-        etk_prefetch_sum(sums + etk_gsum_dir(slots) + 2 * key);
+        etk_prefetch_sum(sums + etk_gsum_dir(slots, 1) + 2 * key);
         ETK_PREFETCH(S.guide_cells + etk_guide_dir_offset(slots, c) + key % ETK_GUIDE_REGIONS);
         ETK_PREFETCH(S.guide_cells + etk_guide_dir_offset(slots, c) + ETK_GUIDE_DIR_SHARE);
-        etk_prefetch_sum(sums + etk_gsum_dcounts(slots) + c);
-        etk_prefetch_sum(sums + etk_gsum_cm2(slots) + 2 * c);
-        etk_prefetch_sum(sums + etk_gsum_spotm(slots) + 2 * c * ETK_PORTAL_CANDIDATES);
-        etk_prefetch_sum(sums + etk_gsum_guidedm(slots) + 2 * c * ETK_GUIDED_CANDIDATES);
-        etk_prefetch_sum(sums + etk_gsum_gcounts(slots) + c);
+        etk_prefetch_sum(sums + etk_gsum_cell(slots, 1, c) + ETK_GSUM_DCOUNT);
+        etk_prefetch_sum(sums + etk_gsum_cell(slots, 1, c) + ETK_GSUM_CELL_WORDS - 1);
     }
     for (int k = 0; k < ETK_GUIDE_VERTICES; ++k) {
         if (!(noted & (1 << k)))

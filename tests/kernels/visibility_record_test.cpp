@@ -107,7 +107,7 @@ TEST(VisibilityRecord, DeviceSumsEqualTheHostsBitForBit) {
     for (int i = 0; i < n; ++i)
         etk::etk_guide_record_light(host.data(), p, box.data(), keys[i], values[i], exits[i],
                                     etk::make_float2(parts[2 * i], parts[2 * i + 1]));
-    EXPECT_GT(host[etk::etk_gsum_counts(slots) + 3], 0u);
+    EXPECT_GT(host[etk::etk_gsum_cell(slots, 0, 3) + ETK_GSUM_COUNT], 0u);
 
     const std::vector<uint32_t> device =
         device_sums("record_lights", p,
@@ -177,9 +177,10 @@ TEST(VisibilityRecord, DeviceContinuationSumsEqualTheHostsBitForBit) {
                                                etk::make_float3(r[0], r[1], r[2]),
                                                etk::make_float3(r[4], r[5], r[6]), r[3]);
         }
-        EXPECT_GT(host[etk::etk_gsum_dcounts(slots) + 3], 0u);
+        EXPECT_GT(host[etk::etk_gsum_cell(slots, 1, 3) + ETK_GSUM_DCOUNT], 0u);
         if (ready) {
-            EXPECT_GT(host[etk::etk_gsum_gcounts(slots) + 3], 0u) << "no guided-share moment";
+            EXPECT_GT(host[etk::etk_gsum_cell(slots, 1, 3) + ETK_GSUM_GCOUNT], 0u)
+                << "no guided-share moment";
         }
         const std::vector<uint32_t> device =
             device_sums("record_continuations", p,

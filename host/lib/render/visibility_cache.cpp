@@ -88,53 +88,54 @@ uint64_t wide(const uint32_t* w) {
     return uint64_t(w[0]) | uint64_t(w[1]) << 32;
 }
 
-// Adds the pairs w[2 k], w[2 k + 1] to to[k], k < to.size(), and zeroes them.
-void add_wide(std::vector<uint64_t>& to, uint32_t* w) {
-    for (size_t k = 0; k < to.size(); ++k)
+// Adds the pairs w[2 k], w[2 k + 1] to to[k], k < n, and zeroes them.
+void take_pairs(uint64_t* to, uint32_t* w, size_t n) {
+    for (size_t k = 0; k < n; ++k)
         to[k] += wide(w + 2 * k);
-    std::fill(w, w + 2 * to.size(), 0u);
+    std::fill(w, w + 2 * n, 0u);
 }
 
 } // namespace
 
-// The cells' records: per cell with any, its count, second moment and region sums.
-void VisibilityCache::absorb_cells(RegionSums& r, std::vector<uint64_t>& m2, uint32_t* sums,
-                                   uint32_t* counts, uint32_t* moments) {
-    for (int s = 0; s < opt_.slots; ++s) {
-        if (counts[s] == 0)
-            continue; // no record: nothing summed in the cell (most cells), all zero
-        r.counts[s] += counts[s];
-        r.records += counts[s];
-        counts[s] = 0;
-        m2[s] += wide(moments + 2 * s);
-        moments[2 * s] = moments[2 * s + 1] = 0u;
-        for (size_t k = size_t(s) * K; k < size_t(s + 1) * K; ++k)
-            r.sums[k] += wide(sums + 2 * k);
-        std::fill(sums + 2 * size_t(s) * K, sums + 2 * size_t(s + 1) * K, 0u);
-    }
+// One kind of records of cell s: its count, second moment and region sums (regions: the kind's
+// slots x K pairs), added to r and m2 and zeroed. A cell without records has nothing summed.
+void VisibilityCache::absorb_cell(RegionSums& r, uint64_t& m2, int s, uint32_t* regions,
+                                  uint32_t* count, uint32_t* moment) {
+    if (*count == 0)
+        return;
+    r.counts[s] += *count;
+    r.records += *count;
+    *count = 0;
+    take_pairs(&m2, moment, 1);
+    take_pairs(r.sums.data() + size_t(s) * K, regions + 2 * size_t(s) * K, K);
 }
 
 void VisibilityCache::absorb(std::vector<uint32_t>& words) {
-    const int S = opt_.slots;
-    const size_t expected = static_cast<size_t>(etk::etk_gsum_words(S, opt_.continuation));
+    const int S = opt_.slots, C = opt_.continuation ? 1 : 0;
+    const size_t expected = static_cast<size_t>(etk::etk_gsum_words(S, C));
     if (words.size() != expected)
         throw Error("visibility record sums of " + std::to_string(words.size()) +
                     " words, expected " + std::to_string(expected));
     uint32_t* w = words.data();
-    absorb_cells(light_, light_m2_, w, w + etk::etk_gsum_counts(S), w + etk::etk_gsum_m2(S));
-    add_wide(moments_, w + etk::etk_gsum_moments(S));
-    add_wide(portal_, w + etk::etk_gsum_portal(S));
-    if (!opt_.continuation)
-        return;
-    absorb_cells(dir_, cont_m2_, w + etk::etk_gsum_dir(S), w + etk::etk_gsum_dcounts(S),
-                 w + etk::etk_gsum_cm2(S));
-    add_wide(spot_moments_, w + etk::etk_gsum_spotm(S));
-    add_wide(guided_moments_, w + etk::etk_gsum_guidedm(S));
+    const size_t P = ETK_PORTAL_CANDIDATES, G = ETK_GUIDED_CANDIDATES;
     for (int s = 0; s < S; ++s) {
-        guided_records_[s] += w[etk::etk_gsum_gcounts(S) + s];
-        w[etk::etk_gsum_gcounts(S) + s] = 0u;
+        uint32_t* cell = w + etk::etk_gsum_cell(S, C, s);
+        if (cell[ETK_GSUM_COUNT] == 0 && (!C || cell[ETK_GSUM_DCOUNT] == 0))
+            continue; // no record: nothing summed in the cell (most cells)
+        absorb_cell(light_, light_m2_[s], s, w, cell + ETK_GSUM_COUNT, cell + ETK_GSUM_M2);
+        take_pairs(moments_.data() + s * P, cell + ETK_GSUM_MOMENTS, P);
+        if (!C)
+            continue;
+        absorb_cell(dir_, cont_m2_[s], s, w + etk::etk_gsum_dir(S, C), cell + ETK_GSUM_DCOUNT,
+                    cell + ETK_GSUM_CM2);
+        take_pairs(spot_moments_.data() + s * P, cell + ETK_GSUM_SPOTM, P);
+        take_pairs(guided_moments_.data() + s * G, cell + ETK_GSUM_GUIDEDM, G);
+        guided_records_[s] += cell[ETK_GSUM_GCOUNT];
+        cell[ETK_GSUM_GCOUNT] = 0u;
     }
-    add_wide(spot_, w + etk::etk_gsum_spot(S));
+    take_pairs(portal_.data(), w + etk::etk_gsum_portal(S, C), portal_.size());
+    if (C)
+        take_pairs(spot_.data(), w + etk::etk_gsum_spot(S), spot_.size());
 }
 
 double light_sample_count(double m_light, double m_cont, double cost, const double* counts,

@@ -151,10 +151,11 @@ class VisibilityCache {
     void choose_guided_shares();
     // The parameters the record functions take, and pending_ allocated.
     etk::EtkParams record_params();
-    // One kind of records' per-cell block of the device's sums: region sums (pairs), counts,
-    // second moments (pairs), added to r and m2.
-    void absorb_cells(RegionSums& r, std::vector<uint64_t>& m2, uint32_t* sums, uint32_t* counts,
-                      uint32_t* moments);
+    // One kind of records of cell s in the device's sums (kernels/visibility_record.h): its
+    // count, second moment (a pair) and region sums (regions: the kind's pairs), added to r and
+    // m2 and zeroed.
+    void absorb_cell(RegionSums& r, uint64_t& m2, int s, uint32_t* regions, uint32_t* count,
+                     uint32_t* moment);
     VisibilityOptions opt_;
     std::vector<float> mass_; // M_R
     std::array<float, 6> box_;
