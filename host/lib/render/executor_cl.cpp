@@ -193,6 +193,7 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
         // the prepared scene's memory.
         args_[etk::ETK_ARG_guide_cells] = upload(ctx, scene.guide_cells, false);
         guide_floats_ = std::max<size_t>(1, scene.guide_cells.size());
+        guide_in_place_ = lim.host_unified;
         args_[etk::ETK_ARG_guide_sums] =
             cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_uint) * guide_words_);
 #define ET_FILM(type, name)                                                                        \
@@ -351,11 +352,42 @@ void ClLane::read_fields(int n, const std::vector<FieldRead>& reads) {
 // Between passes (no lane is running): a blocking write, which every lane's later launches see.
 // Every float in one write: one transfer of tens of megabytes costs less than a write per
 // changed cell's table.
-void ClDevice::upload_guide(const std::vector<float>& cells, const std::vector<FloatSpan>&) {
+void ClDevice::with_mapped(int arg, size_t words, cl_map_flags flags,
+                           const std::function<void(void*)>& f) {
+    cl::CommandQueue& q = lanes_[0]->queue();
+    void* p = q.enqueueMapBuffer(args_[arg], CL_TRUE, flags, 0, sizeof(cl_uint) * words);
+    struct Unmap { // also when f throws
+        cl::CommandQueue& q;
+        cl::Buffer& b;
+        void* p;
+        ~Unmap() {
+            try {
+                q.enqueueUnmapMemObject(b, p);
+                q.finish();
+            } catch (const cl::Error&) {
+            }
+        }
+    } unmap{q, args_[arg], p};
+    f(p);
+}
+
+void ClDevice::upload_guide(const std::vector<float>& cells,
+                            const std::vector<FloatSpan>& changed) {
     if (cells.size() != guide_floats_)
         throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
                     std::to_string(guide_floats_));
     try {
+        if (guide_in_place_) { // the floats the update rewrote, no more
+            with_mapped(etk::ETK_ARG_guide_cells, guide_floats_, CL_MAP_WRITE, [&](void* p) {
+                float* to = static_cast<float*>(p);
+                for (const auto& [first, end] : changed) {
+                    if (first > end || end > cells.size())
+                        throw Error("visibility tables' span past their floats (a bug)");
+                    std::copy(cells.begin() + first, cells.begin() + end, to + first);
+                }
+            });
+            return;
+        }
         lanes_[0]->queue().enqueueWriteBuffer(args_[etk::ETK_ARG_guide_cells], CL_TRUE, 0,
                                               sizeof(cl_float) * cells.size(), cells.data());
     } catch (const cl::Error& e) {
@@ -379,7 +411,17 @@ void ClDevice::zero_guide_sums() {
 }
 
 // Between passes (no lane is running): the sums, then zeroes in their place.
-void ClDevice::absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb) {
+void ClDevice::absorb_guide_sums(const GuideSumsAbsorb& absorb) {
+    if (guide_in_place_) { // absorb leaves the words zero, as the passes to come need them
+        try {
+            with_mapped(etk::ETK_ARG_guide_sums, guide_words_, CL_MAP_READ | CL_MAP_WRITE,
+                        [&](void* p) { absorb(static_cast<uint32_t*>(p), guide_words_); });
+        } catch (const cl::Error& e) {
+            throw Error(std::string("cannot map the visibility records (") + e.what() +
+                        "): " + cl_error_name(e.err()));
+        }
+        return;
+    }
     guide_sums_copy_.resize(guide_words_);
     try {
         ClLane& l = *lanes_[0];
@@ -390,7 +432,7 @@ void ClDevice::absorb_guide_sums(const std::function<void(std::vector<uint32_t>&
         throw Error(std::string("cannot read the visibility records (") + e.what() +
                     "): " + cl_error_name(e.err()));
     }
-    absorb(guide_sums_copy_);
+    absorb(guide_sums_copy_.data(), guide_sums_copy_.size());
 }
 
 void ClLane::launch(int stage, int n, const etk::EtkParams& params) {

@@ -111,7 +111,7 @@ class ClDevice : public WavefrontDevice {
     bool prefers_light_batches() const override { return prefers_light_batches_on(rt_->limits()); }
     void upload_guide(const std::vector<float>& cells,
                       const std::vector<FloatSpan>& changed) override;
-    void absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb) override;
+    void absorb_guide_sums(const GuideSumsAbsorb& absorb) override;
     bool folds_film() const override { return fold_; }
     void fold_film() override;
     void take_film_sums(FilmSums& sums) override;
@@ -138,6 +138,12 @@ class ClDevice : public WavefrontDevice {
     size_t guide_floats_ = 1; // size of the visibility tables' buffer
     size_t guide_words_ = 1;  // size of the visibility records' sums (visibility_record.h)
     std::vector<uint32_t> guide_sums_copy_; // the host's copy of them, read at each update
+    // The device shares the host's memory: the tables and sums are mapped and updated in place
+    // (no copy of tens of megabytes each way per update), not transferred whole.
+    bool guide_in_place_ = false;
+    // Buffer `arg` of `words` 32-bit words mapped for the duration of f(its host pointer).
+    void with_mapped(int arg, size_t words, cl_map_flags flags,
+                     const std::function<void(void*)>& f);
 };
 
 } // namespace et

@@ -144,8 +144,9 @@ void CpuDevice::upload_guide(const std::vector<float>& cells,
     }
 }
 
-void CpuDevice::absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb) {
-    absorb(guide_sums_); // between passes: no lane adds; the lanes keep their pointers
+void CpuDevice::absorb_guide_sums(const GuideSumsAbsorb& absorb) {
+    // Between passes: no lane adds; the lanes keep their pointers.
+    absorb(guide_sums_.data(), guide_sums_.size());
 }
 
 CpuDevice::~CpuDevice() = default;

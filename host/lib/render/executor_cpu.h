@@ -30,7 +30,7 @@ class CpuDevice : public WavefrontDevice {
     std::vector<std::pair<std::string, double>> stage_seconds() override;
     void upload_guide(const std::vector<float>& cells,
                       const std::vector<FloatSpan>& changed) override;
-    void absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb) override;
+    void absorb_guide_sums(const GuideSumsAbsorb& absorb) override;
 
   private:
     std::vector<float> guide_cells_;   // the visibility strategy's tables, read by every lane

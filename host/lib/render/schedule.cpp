@@ -35,7 +35,7 @@ void WavefrontDevice::upload_guide(const std::vector<float>&, const std::vector<
     throw Error("this back end cannot take the visibility strategy's tables");
 }
 
-void WavefrontDevice::absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>&) {
+void WavefrontDevice::absorb_guide_sums(const GuideSumsAbsorb&) {
     throw Error("this back end keeps no visibility records");
 }
 

@@ -80,8 +80,10 @@ class WavefrontDevice {
     // Hands the visibility records' sums the stages added since the last call (DeviceScene::
     // guide_sum_words words, kernels/visibility_record.h) to `absorb`, between passes, which
     // leaves them zero for the passes to come: natively the device's own words (no copy, and no
-    // second buffer of tens of megabytes), from OpenCL a copy (the device zeroes its buffer).
-    virtual void absorb_guide_sums(const std::function<void(std::vector<uint32_t>&)>& absorb);
+    // second buffer of tens of megabytes), from an OpenCL device that shares the host's memory
+    // its buffer mapped in place, from any other a copy (the device then zeroes its buffer).
+    using GuideSumsAbsorb = std::function<void(uint32_t* words, size_t count)>;
+    virtual void absorb_guide_sums(const GuideSumsAbsorb& absorb);
     // Whether LightBatch::automatic draws light samples in batches here (a CPU: yes).
     virtual bool prefers_light_batches() const { return true; }
     // Whether the device keeps the film's exact sums itself (FilmSumsAt): then fold_film adds

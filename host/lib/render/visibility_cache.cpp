@@ -110,13 +110,13 @@ void VisibilityCache::absorb_cell(RegionSums& r, uint64_t& m2, int s, uint32_t* 
     take_pairs(r.sums.data() + size_t(s) * K, regions + 2 * size_t(s) * K, K);
 }
 
-void VisibilityCache::absorb(std::vector<uint32_t>& words) {
+void VisibilityCache::absorb(uint32_t* words, size_t count) {
     const int S = opt_.slots, C = opt_.continuation ? 1 : 0;
     const size_t expected = static_cast<size_t>(etk::etk_gsum_words(S, C));
-    if (words.size() != expected)
-        throw Error("visibility record sums of " + std::to_string(words.size()) +
-                    " words, expected " + std::to_string(expected));
-    uint32_t* w = words.data();
+    if (count != expected)
+        throw Error("visibility record sums of " + std::to_string(count) + " words, expected " +
+                    std::to_string(expected));
+    uint32_t* w = words;
     const size_t P = ETK_PORTAL_CANDIDATES, G = ETK_GUIDED_CANDIDATES;
     for (int s = 0; s < S; ++s) {
         uint32_t* cell = w + etk::etk_gsum_cell(S, C, s);

@@ -97,7 +97,7 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
 }
 
 void VisibilityLearning::take_records(WavefrontDevice& device) {
-    device.absorb_guide_sums([this](std::vector<uint32_t>& sums) { cache_->absorb(sums); });
+    device.absorb_guide_sums([this](uint32_t* sums, size_t n) { cache_->absorb(sums, n); });
     records_ = cache_->records();
     continuation_records_ = cache_->continuation_records();
 }
