@@ -128,7 +128,7 @@ class ClDevice : public WavefrontDevice {
     std::vector<size_t> local_;    // work-group size per kernel
     std::vector<cl::Buffer> args_; // the shared buffers, by ETK_ARG_*
     std::vector<std::unique_ptr<ClLane>> lanes_;
-    void zero_guide_sums(); // before the first pass and after each absorb_guide_sums
+    void zero_guide_sums(); // before the first pass, and after each copy absorb_guide_sums takes
     // The film's exact sums on the device (folds_film; kernels/film_fixed.h): a buffer of
     // FilmSums::Pixel, 28 words each, and the kernel that adds a pass to it.
     bool fold_ = false;
@@ -137,7 +137,7 @@ class ClDevice : public WavefrontDevice {
     size_t fold_local_ = 1;
     size_t guide_floats_ = 1; // size of the visibility tables' buffer
     size_t guide_words_ = 1;  // size of the visibility records' sums (visibility_record.h)
-    std::vector<uint32_t> guide_sums_copy_; // the host's copy of them, read at each update
+    std::vector<uint32_t> guide_sums_copy_; // their copy at each update (unless in place)
     // The device shares the host's memory: the tables and sums are mapped and updated in place
     // (no copy of tens of megabytes each way per update), not transferred whole.
     bool guide_in_place_ = false;
