@@ -290,6 +290,52 @@ TEST(VisibilityGuideTables, PriorIsTheMap) {
 
 // The sums are fixed point: any order of the same records gives the same tables, bit for bit
 // -- the light sample's and the continuation guide's (continuation_guide.h).
+// absorb() leaves every word of the device's sums zero -- the passes after an update add to
+// them in place (the native device, and OpenCL where it maps them): a word it missed would be
+// counted again at the next update.
+TEST(VisibilityGuideTables, AbsorbLeavesTheSumsZero) {
+    Fixture f;
+    make(f, 64, 32, 5u);
+    et::VisibilityOptions o;
+    o.slots = 64;
+    o.continuation = true;
+    const float lo[3] = {-1.0f, 0.0f, 2.0f}, hi[3] = {3.0f, 1.0f, 2.5f};
+    const std::array<float, 6> box = et::guide_portal_box(lo, hi);
+    et::VisibilityCache cache(o, f.regions, 3.0, box);
+    std::vector<uint32_t> sums(static_cast<size_t>(etk::etk_gsum_words(o.slots, 1)), 0u);
+    std::mt19937 rng(3u);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    for (int ready : {0, 1}) { // the guided share's moments count only once the tables learned
+        etk::EtkParams p{};
+        p.guide_slots = o.slots;
+        p.guide_inv_power = 0.5f;
+        p.guide_continuation = 1;
+        p.guide_continuation_share = 0.5f;
+        p.guide_ready = ready;
+        const std::vector<float>& cells = cache.tables();
+        const float* portal = cells.data() + etk::etk_portal_offset(o.slots, 1);
+        for (int i = 0; i < 4000; ++i) {
+            const int key = static_cast<int>(rng() % (o.slots * K));
+            etk::etk_guide_record_light(sums.data(), p, portal, key, 10.0f * U(rng),
+                                        int(rng() % ETK_PORTAL_CELLS),
+                                        etk::make_float2(0.1f + U(rng), U(rng)));
+            const etk::float3 d =
+                etk::normalize(etk::make_float3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f));
+            const int dkey = (key / K) * K + etk::etk_cguide_region(d);
+            etk::etk_guide_record_continuation(
+                sums.data(), p, cells.data(), dkey, 10.0f * U(rng),
+                etk::make_float3(lo[0] + 4.0f * U(rng), lo[1] + U(rng), lo[2] + 0.5f * U(rng)), d,
+                0.05f + U(rng));
+        }
+        ASSERT_GT(std::count_if(sums.begin(), sums.end(), [](uint32_t w) { return w != 0u; }), 0);
+        cache.absorb(sums);
+        for (size_t k = 0; k < sums.size(); ++k)
+            ASSERT_EQ(sums[k], 0u) << "ready " << ready << ", word " << k;
+    }
+    EXPECT_EQ(cache.records(), 8000u);
+    EXPECT_EQ(cache.continuation_records(), 8000u);
+}
+
 TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     Fixture f;
     make(f, 64, 32, 5u);

@@ -349,9 +349,6 @@ void ClLane::read_fields(int n, const std::vector<FieldRead>& reads) {
     queue_.finish(); // the reads above are non-blocking
 }
 
-// Between passes (no lane is running): a blocking write, which every lane's later launches see.
-// Every float in one write: one transfer of tens of megabytes costs less than a write per
-// changed cell's table.
 void ClDevice::with_mapped(int arg, size_t words, cl_map_flags flags,
                            const std::function<void(void*)>& f) {
     cl::CommandQueue& q = lanes_[0]->queue();
@@ -371,6 +368,10 @@ void ClDevice::with_mapped(int arg, size_t words, cl_map_flags flags,
     f(p);
 }
 
+// Between passes (no lane is running), waited for, so every lane's later launches see it. Where
+// the device shares the host's memory, the changed spans into the mapped buffer; elsewhere every
+// float in one write: one transfer of tens of megabytes costs less than a write per changed
+// cell's table.
 void ClDevice::upload_guide(const std::vector<float>& cells,
                             const std::vector<FloatSpan>& changed) {
     if (cells.size() != guide_floats_)
@@ -379,12 +380,7 @@ void ClDevice::upload_guide(const std::vector<float>& cells,
     try {
         if (guide_in_place_) { // the floats the update rewrote, no more
             with_mapped(etk::ETK_ARG_guide_cells, guide_floats_, CL_MAP_WRITE, [&](void* p) {
-                float* to = static_cast<float*>(p);
-                for (const auto& [first, end] : changed) {
-                    if (first > end || end > cells.size())
-                        throw Error("visibility tables' span past their floats (a bug)");
-                    std::copy(cells.begin() + first, cells.begin() + end, to + first);
-                }
+                copy_spans(cells.data(), cells.size(), changed, static_cast<float*>(p));
             });
             return;
         }

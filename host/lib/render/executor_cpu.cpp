@@ -135,13 +135,8 @@ void CpuDevice::upload_guide(const std::vector<float>& cells,
     if (cells.size() != guide_cells_.size())
         throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
                     std::to_string(guide_cells_.size()));
-    for (const auto& [first, end] : changed) { // between passes: no reader
-        if (first > end || end > cells.size())
-            throw Error("visibility tables' span " + std::to_string(first) + " .. " +
-                        std::to_string(end) + " past their " + std::to_string(cells.size()) +
-                        " floats (a bug)");
-        std::copy(cells.begin() + first, cells.begin() + end, guide_cells_.begin() + first);
-    }
+    // Between passes: no reader.
+    copy_spans(cells.data(), cells.size(), changed, guide_cells_.data());
 }
 
 void CpuDevice::absorb_guide_sums(const GuideSumsAbsorb& absorb) {

@@ -74,7 +74,8 @@ class WavefrontDevice {
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
     // A learning technique's tables (EtkScene.guide_cells) for the passes to come: `cells`, of
     // which only the spans `changed` (floats [first, second)) differ from the tables uploaded
-    // before -- natively only those are copied (a few of tens of megabytes); OpenCL writes all.
+    // before -- natively and on an OpenCL device sharing the host's memory only those are copied
+    // (a few of tens of megabytes); any other OpenCL device is written all.
     virtual void upload_guide(const std::vector<float>& cells,
                               const std::vector<FloatSpan>& changed);
     // Hands the visibility records' sums the stages added since the last call (DeviceScene::
