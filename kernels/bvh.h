@@ -320,6 +320,13 @@ ETK_FORCE_INLINE_FN float etk_bvh_reach(const EtkHit* hit) {
     return hit->t * 1.0000005f;
 }
 
+// The tmax of a ray without an end (to the map). A float3 made from a float4 keeps the float4's w
+// in its vector's fourth lane under clang (PoCL), and the direction's reciprocal below is one
+// vector division: a direction whose w held this (a shadow ray's length once did) divides it into
+// a denormal, whose microcode assist took a third of PoCL's shadow-ray traversal. Directions keep
+// w = 0 (the lane's reciprocal is then 1e20, etk_safe_inverse's clamp).
+#define ETK_RAY_UNBOUNDED 3.0e38f
+
 // Closest hit with t in (0, tmax), or any hit when any_hit != 0. Returns whether it hit.
 // A node's lanes are tested at once and its entered children taken from bit masks: first its
 // leaves, in lane order, each while its entry distance is still within the closest hit (the

@@ -33,8 +33,8 @@ ETK_FN float3 etk_dl_unshadowed(EtkSurface s, float3 wi_world, float3 E) {
 // Whether nothing blocks the direction wi_world from the surface (one any-hit ray).
 ETK_FN int etk_dl_visible(EtkScene S, EtkSurface s, float3 wi_world) {
     EtkHit h;
-    return !etk_bvh_traverse(S.nodes, S.packets, etk_surface_origin(s, wi_world), wi_world, 3.0e38f,
-                             1, &h);
+    return !etk_bvh_traverse(S.nodes, S.packets, etk_surface_origin(s, wi_world), wi_world,
+                             ETK_RAY_UNBOUNDED, 1, &h);
 }
 
 // A direction uniformly distributed (in solid angle) over the texels of one stratum of a

@@ -247,7 +247,8 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
     // last vertex's continuation is never guided, and teaches the guide nothing).
     if (p.guide_learn && p.guide_continuation && P.ray_pdf[slot] > 0.0f && !ends)
         etk_guide_note_vertex(P, slot, P.depth[slot] - 1);
-    if (!etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), 3.0e38f, ends, &h)) {
+    if (!etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), ETK_RAY_UNBOUNDED, ends,
+                          &h)) {
         etk_escaped(S, P, p, slot);
         return;
     }
@@ -431,7 +432,7 @@ ETK_CL_INLINE_FN void etk_shade_light(EtkScene S, EtkPaths P, EtkParams p, EtkVe
         return;
     int slot = v.slot;
     P.shadow_o[slot] = etk_f4(etk_surface_origin(v.s, r.dir), 0.0f);
-    P.shadow_d[slot] = etk_f4(r.dir, 3.0e38f);
+    P.shadow_d[slot] = etk_f4(r.dir, 0.0f);
     P.shadow_L[slot] = etk_f4(r.c, 0.0f);
     if (p.guide_learn) {
         P.shadow_key[slot] = r.key;
@@ -587,7 +588,8 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
     if (p.guide_learn)
         etk_guide_prefetch_light(Q.guide_sums, p, P.shadow_key[slot]);
     EtkHit h;
-    int visible = !etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), d.w, 1, &h);
+    int visible =
+        !etk_bvh_traverse(S.nodes, S.packets, etk_xyz(o), etk_xyz(d), ETK_RAY_UNBOUNDED, 1, &h);
     if (visible) {
         float4 r = P.radiance[slot];
         P.radiance[slot] = etk_f4(etk_xyz(r) + etk_xyz(P.shadow_L[slot]), r.w);

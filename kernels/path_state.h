@@ -46,7 +46,7 @@
                             throughput it weighs (integrator.h) */                                 \
     X(float4, hit)       /* t, triangle (int bits), b1, b2 */                                      \
     X(float4, shadow_o)  /* shadow ray origin */                                                   \
-    X(float4, shadow_d)  /* shadow ray direction; w: its length */                                 \
+    X(float4, shadow_d)  /* shadow ray direction (to the map: unbounded); w: 0 */                  \
     X(float4, shadow_L)  /* tentative contribution of the shadow ray */                            \
     X(int, shadow_key)   /* visibility learning: its cell x regions + region of its direction */   \
     X(float, shadow_val) /* visibility learning: its unweighted L cos / pdf */                     \

@@ -97,6 +97,12 @@ ETK_FN int etk_guide_regions_size(int h) {
     return etk_guide_split_table(h, h);
 }
 
+// The most slots a grid has (host: guide_slots): its keys, slot x ETK_GUIDE_REGIONS + region,
+// are then exact as float values (below 2^24), as a continuation record stores them.
+#define ETK_GUIDE_MAX_SLOTS (1 << 15)
+typedef char
+    etk_guide_keys_fit_a_float[ETK_GUIDE_MAX_SLOTS * ETK_GUIDE_REGIONS <= (1 << 24) ? 1 : -1];
+
 // Where slot `cell`'s continuation-guide table starts in guide_cells of `slots` slots.
 ETK_FN int etk_guide_dir_offset(int slots, int cell) {
     return slots * ETK_GUIDE_CELL_FLOATS + cell * ETK_GUIDE_DIR_FLOATS;

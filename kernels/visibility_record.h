@@ -225,6 +225,9 @@ ETK_FN void etk_guide_record_continuation(ETK_ATOMIC_PTR sums, EtkParams p,
 // the path ends: the continuation ray (origin, density; direction, key), the throughput after the
 // vertex and the radiance so far, in ETK_GUIDE_VERTEX_FLOAT4S float4s. Called where the ray is
 // traced (the next bounce's intersect stage), after the vertex's shadow ray added its light.
+// The key is stored as a float's value, not its bits: a small integer's bits are a denormal, and
+// clang (PoCL) computes with a float3's fourth lane, which holds the float4's w: the record's
+// box exit, o + d t, took a microcode assist per record (a fifth of PoCL's accumulate stage).
 ETK_FN void etk_guide_note_vertex(EtkPaths P, int slot, int k) {
     if (k >= ETK_GUIDE_VERTICES)
         return; // deeper vertices teach the guide nothing (their records are not kept)
@@ -232,7 +235,7 @@ ETK_FN void etk_guide_note_vertex(EtkPaths P, int slot, int k) {
     int key = P.ray_cell[slot] * ETK_GUIDE_REGIONS + etk_cguide_region(etk_xyz(d));
     ETK_GLOBAL float4* r = P.guide_vertices[slot].v + ETK_GUIDE_VERTEX_FLOAT4S * k;
     r[0] = etk_f4(etk_xyz(P.ray_o[slot]), P.ray_pdf[slot]);
-    r[1] = etk_f4(etk_xyz(d), as_float((uint)key));
+    r[1] = etk_f4(etk_xyz(d), (float)key); // exact (ETK_GUIDE_MAX_SLOTS)
     r[2] = P.beta[slot];
     r[3] = P.radiance[slot];
     P.guide_noted[slot] |= 1 << k;
@@ -250,7 +253,7 @@ ETK_FN void etk_guide_record_path(EtkScene S, EtkPaths P, ETK_ATOMIC_PTR sums, E
     for (int k = 0; k < ETK_GUIDE_VERTICES; ++k) {
         if (!(noted & (1 << k)))
             continue;
-        int key = (int)as_uint(P.guide_vertices[slot].v[ETK_GUIDE_VERTEX_FLOAT4S * k + 1].w);
+        int key = (int)P.guide_vertices[slot].v[ETK_GUIDE_VERTEX_FLOAT4S * k + 1].w;
         if (key < 0 || key >= slots * ETK_GUIDE_REGIONS)
             continue;
         int c = key / ETK_GUIDE_REGIONS;
@@ -269,8 +272,8 @@ ETK_FN void etk_guide_record_path(EtkScene S, EtkPaths P, ETK_ATOMIC_PTR sums, E
                                beta.y > 0.0f ? (end.y - before.y) / beta.y : 0.0f,
                                beta.z > 0.0f ? (end.z - before.z) / beta.z : 0.0f);
         float4 o = r[0], d = r[1];
-        etk_guide_record_continuation(sums, p, S.guide_cells, (int)as_uint(d.w),
-                                      etk_luma(L) * (1.0f / o.w), etk_xyz(o), etk_xyz(d), o.w);
+        etk_guide_record_continuation(sums, p, S.guide_cells, (int)d.w, etk_luma(L) * (1.0f / o.w),
+                                      etk_xyz(o), etk_xyz(d), o.w);
     }
 }
 

@@ -130,7 +130,7 @@ int guide_slots(const VisibilityOptions& options, int64_t pixels) {
     int64_t cap = 64;
     while (cap < pixels && cap < options.slots)
         cap *= 2;
-    return static_cast<int>(std::min<int64_t>(options.slots, cap));
+    return static_cast<int>(std::min<int64_t>({options.slots, cap, ETK_GUIDE_MAX_SLOTS}));
 }
 
 int guide_grid_slots(int slots, const float extent[3], float inv_cell) {
