@@ -288,19 +288,27 @@ TEST(VisibilityGuideTables, PriorIsTheMap) {
         }
 }
 
-// The sums are fixed point: any order of the same records gives the same tables, bit for bit
-// -- the light sample's and the continuation guide's (continuation_guide.h).
+// Options of 64 slots with continuation records, and a box of 4 x 1 x 0.5 for their portal
+// tables.
+et::VisibilityOptions sixty_four_slots() {
+    et::VisibilityOptions o;
+    o.slots = 64;
+    o.continuation = true;
+    return o;
+}
+const float kSlabLo[3] = {-1.0f, 0.0f, 2.0f}, kSlabHi[3] = {3.0f, 1.0f, 2.5f};
+std::array<float, 6> slab_box() {
+    return et::guide_portal_box(kSlabLo, kSlabHi);
+}
+
 // absorb() leaves every word of the device's sums zero -- the passes after an update add to
 // them in place (the native device, and OpenCL where it maps them): a word it missed would be
 // counted again at the next update.
 TEST(VisibilityGuideTables, AbsorbLeavesTheSumsZero) {
     Fixture f;
     make(f, 64, 32, 5u);
-    et::VisibilityOptions o;
-    o.slots = 64;
-    o.continuation = true;
-    const float lo[3] = {-1.0f, 0.0f, 2.0f}, hi[3] = {3.0f, 1.0f, 2.5f};
-    const std::array<float, 6> box = et::guide_portal_box(lo, hi);
+    const et::VisibilityOptions o = sixty_four_slots();
+    const std::array<float, 6> box = slab_box();
     et::VisibilityCache cache(o, f.regions, 3.0, box);
     std::vector<uint32_t> sums(static_cast<size_t>(etk::etk_gsum_words(o.slots, 1)), 0u);
     std::mt19937 rng(3u);
@@ -322,10 +330,11 @@ TEST(VisibilityGuideTables, AbsorbLeavesTheSumsZero) {
             const etk::float3 d =
                 etk::normalize(etk::make_float3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f));
             const int dkey = (key / K) * K + etk::etk_cguide_region(d);
-            etk::etk_guide_record_continuation(
-                sums.data(), p, cells.data(), dkey, 10.0f * U(rng),
-                etk::make_float3(lo[0] + 4.0f * U(rng), lo[1] + U(rng), lo[2] + 0.5f * U(rng)), d,
-                0.05f + U(rng));
+            etk::etk_guide_record_continuation(sums.data(), p, cells.data(), dkey, 10.0f * U(rng),
+                                               etk::make_float3(kSlabLo[0] + 4.0f * U(rng),
+                                                                kSlabLo[1] + U(rng),
+                                                                kSlabLo[2] + 0.5f * U(rng)),
+                                               d, 0.05f + U(rng));
         }
         ASSERT_GT(std::count_if(sums.begin(), sums.end(), [](uint32_t w) { return w != 0u; }), 0);
         cache.absorb(sums);
@@ -336,6 +345,8 @@ TEST(VisibilityGuideTables, AbsorbLeavesTheSumsZero) {
     EXPECT_EQ(cache.continuation_records(), 8000u);
 }
 
+// The sums are fixed point: any order of the same records gives the same tables, bit for bit
+// -- the light sample's and the continuation guide's (continuation_guide.h).
 TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
     Fixture f;
     make(f, 64, 32, 5u);
@@ -502,11 +513,8 @@ TEST(VisibilityGuideTables, IndependentOfRecordOrder) {
 TEST(VisibilityGuideTables, UpdatesNameWhatTheyRewrite) {
     Fixture f;
     make(f, 64, 32, 5u);
-    et::VisibilityOptions o;
-    o.slots = 64;
-    o.continuation = true;
-    const float lo[3] = {-1.0f, 0.0f, 2.0f}, hi[3] = {3.0f, 1.0f, 2.5f};
-    const std::array<float, 6> box = et::guide_portal_box(lo, hi);
+    const et::VisibilityOptions o = sixty_four_slots();
+    const std::array<float, 6> box = slab_box();
     et::VisibilityCache cache(o, f.regions, 3.0, box);
     std::vector<float> device = et::guide_prior_cells(f.regions, o.slots, true, box);
     std::mt19937 rng(21u);
@@ -524,7 +532,7 @@ TEST(VisibilityGuideTables, UpdatesNameWhatTheyRewrite) {
             parts[2 * i + 1] = std::ldexp(float(rng() % 1000 + 1), -int(rng() % 12));
             float* r = &rays[8 * i];
             for (int k = 0; k < 3; ++k)
-                r[k] = lo[k] + (hi[k] - lo[k]) * U(rng);
+                r[k] = kSlabLo[k] + (kSlabHi[k] - kSlabLo[k]) * U(rng);
             const etk::float3 d =
                 etk::normalize(etk::make_float3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f));
             r[4] = d.x;
