@@ -137,7 +137,7 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     const cl::Device& dev = rt.device().device;
     const DeviceLimits& lim = rt.limits();
     const int nl = std::max(1, lanes > 0 ? lanes : default_cl_lanes(rt));
-    const bool split = rt.can_split_for_lanes(nl);
+    const bool split = rt.can_split_for_lanes(nl); // each lane on cores of its own (below)
     // Every buffer with its size, checked against the device before anything is allocated. The
     // fixed ones (scene, film) first; the lanes' paths in flight get a share of what is left.
     std::vector<BufferRequest> buffers;

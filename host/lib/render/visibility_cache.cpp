@@ -116,26 +116,25 @@ void VisibilityCache::absorb(uint32_t* words, size_t count) {
     if (count != expected)
         throw Error("visibility record sums of " + std::to_string(count) + " words, expected " +
                     std::to_string(expected));
-    uint32_t* w = words;
     const size_t P = ETK_PORTAL_CANDIDATES, G = ETK_GUIDED_CANDIDATES;
     for (int s = 0; s < S; ++s) {
-        uint32_t* cell = w + etk::etk_gsum_cell(S, C, s);
+        uint32_t* cell = words + etk::etk_gsum_cell(S, C, s);
         if (cell[ETK_GSUM_COUNT] == 0 && (!C || cell[ETK_GSUM_DCOUNT] == 0))
             continue; // no record: nothing summed in the cell (most cells)
-        absorb_cell(light_, light_m2_[s], s, w, cell + ETK_GSUM_COUNT, cell + ETK_GSUM_M2);
+        absorb_cell(light_, light_m2_[s], s, words, cell + ETK_GSUM_COUNT, cell + ETK_GSUM_M2);
         take_pairs(moments_.data() + s * P, cell + ETK_GSUM_MOMENTS, P);
         if (!C)
             continue;
-        absorb_cell(dir_, cont_m2_[s], s, w + etk::etk_gsum_dir(S, C), cell + ETK_GSUM_DCOUNT,
+        absorb_cell(dir_, cont_m2_[s], s, words + etk::etk_gsum_dir(S, C), cell + ETK_GSUM_DCOUNT,
                     cell + ETK_GSUM_CM2);
         take_pairs(spot_moments_.data() + s * P, cell + ETK_GSUM_SPOTM, P);
         take_pairs(guided_moments_.data() + s * G, cell + ETK_GSUM_GUIDEDM, G);
         guided_records_[s] += cell[ETK_GSUM_GCOUNT];
         cell[ETK_GSUM_GCOUNT] = 0u;
     }
-    take_pairs(portal_.data(), w + etk::etk_gsum_portal(S, C), portal_.size());
+    take_pairs(portal_.data(), words + etk::etk_gsum_portal(S, C), portal_.size());
     if (C)
-        take_pairs(spot_.data(), w + etk::etk_gsum_spot(S), spot_.size());
+        take_pairs(spot_.data(), words + etk::etk_gsum_spot(S), spot_.size());
 }
 
 double light_sample_count(double m_light, double m_cont, double cost, const double* counts,
@@ -180,7 +179,7 @@ void VisibilityCache::choose_guided_shares() {
 const std::vector<float>& VisibilityCache::tables() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!pending_.empty()) // the records add() summed since the last update
-        absorb(pending_);
+        absorb(pending_.data(), pending_.size());
     const bool continuation = !dir_.sums.empty();
     // A slot's tables change only with records since the last update: its sums, counts, second
     // moments and shares move only with them (counted: the counts then).

@@ -103,7 +103,6 @@ class VisibilityCache {
     // The device's sums of records since the last call (WavefrontDevice::take_guide_sums),
     // added to the cache's and left zero (the device's next sums); between passes.
     void absorb(uint32_t* words, size_t count);
-    void absorb(std::vector<uint32_t>& words) { absorb(words.data(), words.size()); }
     // The cells' tables from everything recorded so far (guide_cells_size floats): the CDFs of Q,
     // then, with options.continuation, the continuation guide's CDFs and shares.
     // Each update also chooses the cells' portal shares and starts their measure afresh.
