@@ -169,8 +169,7 @@ std::vector<CLI::Option*> add_expert_options(CLI::App& cmd, RenderArgs& a) {
             ->default_str("on"),
         cmd.add_option("--paths", a.paths,
                        "Paths in flight per lane (0: the film over the lanes; on a CPU device "
-                       "waves of at most 16384, or 65536 where it cannot be split among the "
-                       "lanes; capped by memory)")
+                       "waves of at most 65536; capped by memory)")
             ->check(CLI::Range(0, 1 << 26))
             ->default_str("0"),
     };
