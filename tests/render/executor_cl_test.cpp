@@ -83,9 +83,8 @@ TEST(ClLanes, SameBitsWithAnyLaneCountAndWaveSize) {
     }
 }
 
-// The default: two lanes on a CPU device (PoCL, where the suite runs), each on a sub-device of
-// its own where the device can be split, with waves of at most 16,384 paths then (65,536 else),
-// as many per lane.
+// The default: two lanes on a CPU device (PoCL, where the suite runs), waves of at most 65,536
+// paths, as many per lane.
 TEST(ClLanes, TwoLanesOnACpuDevice) {
     et::ClRuntime rt(0);
     et::Scene s = lane_scene(et::Strategy::mis);
@@ -97,13 +96,12 @@ TEST(ClLanes, TwoLanesOnACpuDevice) {
         GTEST_SKIP() << "not a CPU device: " << rt.device().device_name;
     }
     EXPECT_EQ(et::default_cl_lanes(rt), 2);
-    const bool splits = rt.can_split_for_lanes(2);
-    s.width = 400; // 160,000 pixels: 10 waves of 16,000, five per lane (split; else 4 of 40,000)
+    s.width = 400; // 160,000 pixels: 4 waves of 40,000, two per lane
     s.height = 400;
     const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
     et::ClDevice d(std::make_unique<et::ClRuntime>(0), ds, 0);
     EXPECT_EQ(d.lanes(), 2);
-    EXPECT_EQ(d.wave_size(), splits ? 16000 : 40000);
+    EXPECT_EQ(d.wave_size(), 40000);
     // Paths in flight for the whole film: one wave, so one lane (a second would hold path state
     // and render nothing).
     et::ClDevice whole(std::make_unique<et::ClRuntime>(0), ds, 160000);
@@ -115,32 +113,6 @@ TEST(ClLanes, TwoLanesOnACpuDevice) {
     et::ClDevice one(std::make_unique<et::ClRuntime>(0), tiny, 0);
     EXPECT_EQ(one.lanes(), 1);
     EXPECT_EQ(one.wave_size(), 1);
-}
-
-// Splitting a CPU device for the lanes: each lane's queue on a sub-device of its own, made once;
-// a device that cannot be split (a GPU, Oclgrind) keeps one device for every lane.
-TEST(ClLanes, EachLaneOnASubDeviceOfItsOwn) {
-    et::ClRuntime rt(0);
-    if (!rt.can_split_for_lanes(2)) {
-        EXPECT_FALSE(rt.split_for_lanes(2));
-        EXPECT_EQ(rt.lane_device(1)(), rt.device().device());
-        GTEST_SKIP() << "the device cannot be split: " << rt.device().device_name;
-    }
-    EXPECT_FALSE(rt.can_split_for_lanes(1)) << "one lane needs no split";
-    ASSERT_TRUE(rt.split_for_lanes(2));
-    EXPECT_NE(rt.lane_device(0)(), rt.lane_device(1)());
-    EXPECT_NE(rt.lane_device(0)(), rt.device().device());
-    cl_device_id parent = nullptr;
-    ASSERT_EQ(clGetDeviceInfo(rt.lane_device(0)(), CL_DEVICE_PARENT_DEVICE, sizeof parent, &parent,
-                              nullptr),
-              CL_SUCCESS);
-    EXPECT_EQ(parent, rt.device().device());
-    EXPECT_FALSE(rt.split_for_lanes(2)) << "split once";
-    // Programs run on the sub-devices: a kernel's work-group size can be asked there.
-    const cl::Program program = rt.build("wavefront.cl");
-    EXPECT_GT(cl::Kernel(program, "intersect")
-                  .getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.lane_device(1)),
-              0u);
 }
 
 } // namespace

@@ -242,55 +242,6 @@ std::string ClRuntime::cache_dir() {
     return (fs::temp_directory_path() / "envtrace-cache").string();
 }
 
-bool ClRuntime::can_split_for_lanes(int lanes) const {
-    if (!limits_.cpu || lanes < 2 || !lane_devices_.empty() || is_oclgrind())
-        return false;
-    try {
-        const auto types = entry_.device.getInfo<CL_DEVICE_PARTITION_PROPERTIES>();
-        const cl_uint units = entry_.device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
-        return std::find(types.begin(), types.end(), CL_DEVICE_PARTITION_EQUALLY) != types.end() &&
-               units >= static_cast<cl_uint>(lanes);
-    } catch (const cl::Error&) {
-        return false;
-    }
-}
-
-bool ClRuntime::split_for_lanes(int lanes) {
-    if (!can_split_for_lanes(lanes))
-        return false;
-    try {
-        const cl_uint units = entry_.device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
-        const cl_device_partition_property props[] = {
-            CL_DEVICE_PARTITION_EQUALLY, static_cast<cl_device_partition_property>(units / lanes),
-            0};
-        std::vector<cl::Device> subs;
-        entry_.device.createSubDevices(props, &subs);
-        if (subs.size() < static_cast<size_t>(lanes))
-            return false;
-        subs.resize(lanes);
-        std::vector<cl::Device> all{entry_.device};
-        all.insert(all.end(), subs.begin(), subs.end());
-        cl::Context context(all);
-        queue_ = cl::CommandQueue(context, entry_.device);
-        context_ = context;
-        lane_devices_ = subs;
-        return true;
-    } catch (const cl::Error&) {
-        return false; // an implementation that lists a partition it then refuses
-    }
-}
-
-std::vector<cl::Device> ClRuntime::program_devices() const {
-    std::vector<cl::Device> all{entry_.device};
-    all.insert(all.end(), lane_devices_.begin(), lane_devices_.end());
-    return all;
-}
-
-const cl::Device& ClRuntime::lane_device(int lane) const {
-    return lane_devices_.empty() ? entry_.device
-                                 : lane_devices_[static_cast<size_t>(lane) % lane_devices_.size()];
-}
-
 bool ClRuntime::is_oclgrind() const {
     return lower(entry_.platform_name).find("oclgrind") != std::string::npos;
 }
@@ -327,10 +278,8 @@ cl::Program ClRuntime::build_source(const std::string& file, const std::string& 
         std::vector<unsigned char> bin((std::istreambuf_iterator<char>(in)),
                                        std::istreambuf_iterator<char>());
         try {
-            // The sub-devices run the device's own code: the same binary for each.
-            const std::vector<cl::Device> devices = program_devices();
-            cl::Program program(context_, devices, cl::Program::Binaries(devices.size(), bin));
-            program.build(devices, full_options.c_str());
+            cl::Program program(context_, {entry_.device}, cl::Program::Binaries{bin});
+            program.build({entry_.device}, full_options.c_str());
             bi.from_cache = true;
             bi.seconds = timer.seconds();
             return program;
@@ -341,7 +290,7 @@ cl::Program ClRuntime::build_source(const std::string& file, const std::string& 
 
     cl::Program program(context_, source);
     try {
-        program.build(program_devices(), full_options.c_str());
+        program.build({entry_.device}, full_options.c_str());
     } catch (const cl::Error& e) {
         throw Error("OpenCL program kernels/" + file + " failed to build on '" +
                     entry_.device_name + "' (" + cl_error_name(e.err()) + "):\n" +

@@ -81,18 +81,6 @@ class ClRuntime {
     const DeviceLimits& limits() const { return limits_; }
     cl::Context& context() { return context_; }
     cl::CommandQueue& queue() { return queue_; }
-    // Splits a CPU device into `lanes` sub-devices of equal compute units, one for each lane's
-    // queue (lane_device), so that a lane's kernels run on cores of its own, as a native lane is
-    // a thread of its own: a path's fields then stay in the cache of the core that wrote them.
-    // PoCL, 2 lanes (envtrace bench, OpenCL / native, 13 scenes at depth 1 and 5): median 0.95
-    // -> 0.98, `auto` on bunny_esplanade at depth 5 0.78 -> 0.93 (docs/history/bench-journal.md).
-    // Call before anything is made on the context (it is made again); where the device cannot
-    // be split, nothing changes. Returns whether it split.
-    bool split_for_lanes(int lanes);
-    // Whether split_for_lanes(lanes) would split.
-    bool can_split_for_lanes(int lanes) const;
-    // The device lane `lane`'s queue runs on: its sub-device, else the device.
-    const cl::Device& lane_device(int lane) const;
     // Oclgrind's simulator: its interpreter has quirks of its own (one kernel at a time, no
     // llvm.experimental.noalias.scope.decl) that the renderer works around.
     bool is_oclgrind() const;
@@ -114,9 +102,6 @@ class ClRuntime {
     DeviceLimits limits_;
     cl::Context context_;
     cl::CommandQueue queue_;
-    std::vector<cl::Device> lane_devices_; // split_for_lanes' sub-devices (empty: not split)
-    // The devices programs are built for: the device and its sub-devices.
-    std::vector<cl::Device> program_devices() const;
 };
 
 // "CL_INVALID_VALUE (-30)" for an OpenCL error code.

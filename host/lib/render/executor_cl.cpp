@@ -73,10 +73,6 @@ std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt) {
 // 1.00 at 65,536 and 32,768; matpreview 1.00 / 1.02 / 1.01 and textures 0.98 / 0.97 / 0.96 at
 // 65,536 / 32,768 / 16,384 (more launches); docs/history/bench-journal.md.
 constexpr int kCpuWave = 65536;
-// The same where each lane has cores of its own (ClRuntime::split_for_lanes): lanes take waves as
-// they finish them, and a lane left without one leaves its cores idle, so more and smaller
-// waves (ogre depth 5, PoCL: 0.78 with two waves a lane, 0.90 with 16,384 paths a wave).
-constexpr int kSplitCpuWave = 16384;
 
 int default_cl_lanes(const ClRuntime& rt) {
     // Oclgrind interprets one kernel at a time (two queues' kernels trip an assertion of its own).
@@ -102,9 +98,9 @@ bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& lim
 }
 
 ClLane::ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
-               size_t zero_local, const std::vector<cl::Buffer>& shared, int paths, int lane)
+               size_t zero_local, const std::vector<cl::Buffer>& shared, int paths)
     : local_(local), zero_local_(zero_local), args_(shared) {
-    const cl::Device& dev = rt.lane_device(lane);
+    const cl::Device& dev = rt.device().device;
     auto& ctx = rt.context();
     const uint64_t n = static_cast<uint64_t>(paths);
     queue_ = cl::CommandQueue(ctx, dev, CL_QUEUE_PROFILING_ENABLE);
@@ -137,7 +133,6 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     const cl::Device& dev = rt.device().device;
     const DeviceLimits& lim = rt.limits();
     const int nl = std::max(1, lanes > 0 ? lanes : default_cl_lanes(rt));
-    const bool split = rt.can_split_for_lanes(nl); // each lane on cores of its own (below)
     // Every buffer with its size, checked against the device before anything is allocated. The
     // fixed ones (scene, film) first; the lanes' paths in flight get a share of what is left.
     std::vector<BufferRequest> buffers;
@@ -163,15 +158,12 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
          std::min(free_mem, lim.global_mem / 4) / (kBytesPerPath * uint64_t(nl))}));
     // The film shared out among the lanes in waves of equal size, as many per lane; on a CPU
     // device waves of at most kCpuWave paths (their path state stays in cache).
-    const int cpu_wave = split ? kSplitCpuWave : kCpuWave;
-    const int waves_per_lane = lim.cpu ? std::max(1, ceil_div(ceil_div(pixels_, cpu_wave), nl)) : 1;
+    const int waves_per_lane = lim.cpu ? std::max(1, ceil_div(ceil_div(pixels_, kCpuWave), nl)) : 1;
     const int share = ceil_div(pixels_, waves_per_lane * nl);
     paths_ = std::max(1, std::min(paths > 0 ? paths : share, std::min(cap, pixels_)));
     // No lane without a wave of its own (a film of fewer pixels than lanes, a --paths of half
     // the film or more).
     const int lanes_used = std::max(1, std::min(nl, ceil_div(pixels_, paths_)));
-    if (split)
-        rt.split_for_lanes(lanes_used); // before anything is made on the context
     const uint64_t n = static_cast<uint64_t>(paths_), px = static_cast<uint64_t>(pixels_);
     for (int l = 0; l < lanes_used; ++l) {
         const std::string lane = lanes_used > 1 ? " (lane " + std::to_string(l) + ")" : "";
@@ -219,7 +211,7 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
         }
         for (int l = 0; l < lanes_used; ++l)
             lanes_.push_back(
-                std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_, l));
+                std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_));
         uint64_t widest = etk::ETK_Q_COUNT; // zero_words: the counters, the film's fields
 #define ET_FILM_WORDS(type, name) widest = std::max<uint64_t>(widest, sizeof(type) / 4 * px);
         ETK_FILM_FIELDS(ET_FILM_WORDS)

@@ -51,10 +51,9 @@ bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& lim
 class ClLane : public StageExecutor {
   public:
     // shared: every kernel argument that is not the lane's own (by ETK_ARG_*; the lane's own
-    // entries are ignored); local: the work-group size per stage; lane: its index, which picks
-    // the device its queue runs on (ClRuntime::lane_device).
+    // entries are ignored); local: the work-group size per stage.
     ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
-           size_t zero_local, const std::vector<cl::Buffer>& shared, int paths, int lane);
+           size_t zero_local, const std::vector<cl::Buffer>& shared, int paths);
 
     void bind_queues(bool swapped) override;
     void reset_counters() override;
