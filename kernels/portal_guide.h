@@ -24,9 +24,12 @@
 // stage for the BSDF sample's MIS weight, from the continuation's origin: the light sample's
 // direction is aimed from that same point (the surface's origin on the direction's side).
 //
-// Table (ETK_PORTAL_FLOATS, after the cells' tables in guide_cells): the box's low and high
-// corners, the share b, one unused float, then the CDF over the 6 N^2 cells (face f = 2 axis +
-// (outward along +axis), then i along axis + 1, j along axis + 2, modulo 3).
+// Table (etk_portal_size floats, after the cells' tables in guide_cells): the box's low and high
+// corners, whether it is on, one unused float, then the CDF over the 6 N^2 cells (face f = 2 axis
+// + (outward along +axis), then i along axis + 1, j along axis + 2, modulo 3), its guide table
+// (piecewise_constant.h's cutpoints: a sample's cell in one or two reads of the CDF, where the
+// binary search over 6,144 cells took 13 dependent ones and two thirds of the portal sample's
+// time), then each hash-grid slot's share b.
 #ifndef ETK_PORTAL_GUIDE_H
 #define ETK_PORTAL_GUIDE_H
 #include "compat.h"
@@ -41,7 +44,9 @@
 #define ETK_PORTAL_CELLS (6 * ETK_PORTAL_N * ETK_PORTAL_N)
 #define ETK_PORTAL_ON 6 // 1 once the table holds something learned
 #define ETK_PORTAL_CDF 8
-#define ETK_PORTAL_SHARES (ETK_PORTAL_CDF + ETK_PORTAL_CELLS + 1)
+#define ETK_PORTAL_GUIDE (ETK_PORTAL_CDF + ETK_PORTAL_CELLS + 1)
+#define ETK_PORTAL_GUIDE_CELLS 2048 // etk_guide_cells(ETK_PORTAL_CELLS)
+#define ETK_PORTAL_SHARES (ETK_PORTAL_GUIDE + ETK_PORTAL_GUIDE_CELLS + 1)
 // The shares b a hash-grid cell chooses among, by the least second moment of its light sample
 // on its records (host/lib/render/visibility_cache.h): 0, 1/4, 1/2, 3/4.
 #define ETK_PORTAL_CANDIDATES 4
@@ -125,7 +130,7 @@ ETK_FN float etk_portal_pdf(ETK_GLOBAL const float* box, float3 o, float3 d) {
 // then uniformly inside it (u.x rescaled across the cell's i, u.y across its j).
 ETK_FN float3 etk_portal_point(ETK_GLOBAL const float* box, float2 u) {
     ETK_GLOBAL const float* cdf = box + ETK_PORTAL_CDF;
-    int k = etk_find_interval(cdf, ETK_PORTAL_CELLS, u.x);
+    int k = etk_find_interval_guided(cdf, ETK_PORTAL_CELLS, box + ETK_PORTAL_GUIDE, u.x);
     float fi = etk_guide_rescale(u.x, cdf[k], cdf[k + 1]);
     int face = k / (ETK_PORTAL_N * ETK_PORTAL_N), rest = k % (ETK_PORTAL_N * ETK_PORTAL_N);
     int i = rest / ETK_PORTAL_N, j = rest % ETK_PORTAL_N;

@@ -7,6 +7,7 @@
 // secondary-source table's points (a box around the vertex, its own density written out here).
 #include "chi2.h"
 #include "kernels/continuation_guide.h"
+#include "load/env_distribution.h"
 
 #include <gtest/gtest.h>
 
@@ -86,6 +87,7 @@ void make_spots(Cell& c, uint32_t seed, float q) {
         t[ETK_PORTAL_CDF + k + 1] = static_cast<float>(run / total);
     }
     t[ETK_PORTAL_CDF + ETK_PORTAL_CELLS] = 1.0f;
+    et::build_cdf_guide(t + ETK_PORTAL_CDF, ETK_PORTAL_CELLS, t + ETK_PORTAL_GUIDE);
     for (int k = 0; k < ETK_PORTAL_CELLS; ++k)
         c.spot[k] = double(t[ETK_PORTAL_CDF + k + 1]) - double(t[ETK_PORTAL_CDF + k]);
     t[ETK_PORTAL_SHARES] = q;

@@ -6,10 +6,12 @@
 // density.
 #include "chi2.h"
 #include "kernels/portal_guide.h"
+#include "prepare/visibility_tables.h"
 #include "render/visibility_cache.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -22,27 +24,38 @@ constexpr int kTests = 3; // chi-square tests in this file, family-wise alpha 0.
 // one face empty, every third cell empty, a few cells `bright` times brighter (windows).
 std::vector<float> make_table(uint32_t seed, double bright) {
     const float lo[3] = {-1.0f, 0.0f, 2.0f}, hi[3] = {5.0f, 3.0f, 3.5f};
-    const std::array<float, 6> box = et::guide_portal_box(lo, hi);
-    std::vector<float> t(etk::etk_portal_size(1), 0.0f);
-    std::copy(box.begin(), box.end(), t.begin());
-    t[ETK_PORTAL_ON] = 1.0f;
-    t[ETK_PORTAL_SHARES] = 0.5f;
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> U(0.0, 1.0);
     std::vector<double> w(ETK_PORTAL_CELLS);
     const int per_face = ETK_PORTAL_N * ETK_PORTAL_N;
     for (int k = 0; k < ETK_PORTAL_CELLS; ++k)
         w[k] = (k / per_face == 3 || k % 3 == 0) ? 0.0 : (U(rng) < 0.01 ? bright : U(rng));
-    double total = 0.0;
-    for (double x : w)
-        total += x;
-    double run = 0.0;
-    for (int k = 0; k < ETK_PORTAL_CELLS; ++k) {
-        run += w[k];
-        t[ETK_PORTAL_CDF + k + 1] = static_cast<float>(run / total);
-    }
-    t[ETK_PORTAL_CDF + ETK_PORTAL_CELLS] = 1.0f;
+    std::vector<float> t(etk::etk_portal_size(1), 0.0f);
+    et::write_portal_table(et::guide_portal_box(lo, hi), {0.5f}, w, t.data());
     return t;
+}
+
+// The guide finds the cell the plain search over the CDF finds, for every u (the same points,
+// so the same images as before the guide), including u on and next to the CDF's entries.
+TEST(PortalTable, GuidedCellIsThePlainSearchs) {
+    EXPECT_EQ(etk::etk_guide_cells(ETK_PORTAL_CELLS), ETK_PORTAL_GUIDE_CELLS);
+    for (double bright : {1.0, 200.0, 1e6}) {
+        const std::vector<float> t = make_table(13u, bright);
+        const float* cdf = t.data() + ETK_PORTAL_CDF;
+        std::vector<float> us;
+        std::mt19937 rng(5u);
+        std::uniform_real_distribution<float> U(0.0f, 1.0f);
+        for (int i = 0; i < 100000; ++i)
+            us.push_back(std::min(U(rng), 0.99999994f));
+        for (int k = 0; k < ETK_PORTAL_CELLS; k += 7)
+            for (float u : {cdf[k], std::nextafter(cdf[k], 0.0f), std::nextafter(cdf[k], 1.0f)})
+                us.push_back(std::min(u, 0.99999994f));
+        for (float u : us)
+            ASSERT_EQ(etk::etk_find_interval_guided(cdf, ETK_PORTAL_CELLS,
+                                                    t.data() + ETK_PORTAL_GUIDE, u),
+                      etk::etk_find_interval(cdf, ETK_PORTAL_CELLS, u))
+                << "u = " << u << ", bright " << bright;
+    }
 }
 
 // Points inside the box: the middle, 0.25 from a face, 0.007 from three faces (a corner).

@@ -131,6 +131,7 @@ TEST_P(VisibilityGuide, PortalMixtureIsUnbiased) {
         run += wt[k] / 50.0;
         t[ETK_PORTAL_CDF + k + 1] = static_cast<float>(run);
     }
+    et::build_cdf_guide(t + ETK_PORTAL_CDF, ETK_PORTAL_CELLS, t + ETK_PORTAL_GUIDE);
     f.S.guide_cells = f.cells.data();
     etk::EtkSurface s{};
     s.ng = etk::make_float3(0.0f, 1.0f, 0.0f);

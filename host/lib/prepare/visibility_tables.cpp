@@ -166,7 +166,7 @@ std::array<float, 6> guide_portal_box(const float lo[3], const float hi[3]) {
 }
 
 // The portal table: box, whether it is on, CDF over the cells from sums (uniform if all are
-// zero: then it is off), the slots' shares.
+// zero: then it is off) and its guide, the slots' shares.
 void write_portal_table(const std::array<float, 6>& box, const std::vector<float>& shares,
                         const std::vector<double>& sums, float* out) {
     std::fill(out, out + ETK_PORTAL_SHARES, 0.0f);
@@ -183,6 +183,7 @@ void write_portal_table(const std::array<float, 6>& box, const std::vector<float
         cdf[k + 1] = static_cast<float>(run / (total > 0.0 ? total : double(ETK_PORTAL_CELLS)));
     }
     cdf[ETK_PORTAL_CELLS] = 1.0f;
+    build_cdf_guide(cdf, ETK_PORTAL_CELLS, out + ETK_PORTAL_GUIDE);
 }
 
 std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slots,

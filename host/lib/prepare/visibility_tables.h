@@ -170,7 +170,7 @@ std::vector<float> guide_prior_cells(const std::vector<float>& regions, int slot
 void write_guide_cdf(const std::vector<double>& prob, float* cdf);
 
 // A portal-layout table (kernels/portal_guide.h): box, whether it is on, the CDF over the box's
-// cells from sums (uniform if all are zero: then it is off), the slots' shares.
+// cells from sums (uniform if all are zero: then it is off) and its guide, the slots' shares.
 void write_portal_table(const std::array<float, 6>& box, const std::vector<float>& shares,
                         const std::vector<double>& sums, float* out);
 
