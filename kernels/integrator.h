@@ -642,6 +642,39 @@ ETK_FN void etk_accumulate(ETK_STAGE_PARAMS) {
         etk_guide_record_path(S, P, Q.guide_sums, p, i);
 }
 
+// A wave counted on the device (host/lib/render/schedule.cpp) enqueues every bounce's stages
+// without reading the queues' sizes back: each stage is launched for the most work-items its
+// queue could hold, and those past the size its counter holds return at once. Between two
+// bounces etk_next_bounce (one work-item) makes the continuation rays queued by the last one
+// this one's input (first_rays >= 0: the wave's camera rays, the first bounce) and moves the
+// last bounce's counts into the sums the host reads at the end of the wave.
+ETK_FN void etk_next_bounce(ETK_COUNTER_PTR c, int first_rays) {
+    uint in = first_rays >= 0 ? (uint)first_rays : c[ETK_Q_RAY_OUT];
+    if (first_rays < 0)
+        c[ETK_Q_SUM_RAYS_IN] += in;
+    c[ETK_Q_SUM_SHADE] += c[ETK_Q_SHADE];
+    c[ETK_Q_SUM_SHADOW] += c[ETK_Q_SHADOW] + c[ETK_Q_LIGHT_RAYS];
+    c[ETK_Q_RAY_IN] = in;
+    c[ETK_Q_RAY_OUT] = 0u;
+    c[ETK_Q_SHADOW] = 0u;
+    c[ETK_Q_SHADE] = 0u;
+    c[ETK_Q_LIGHT_RAYS] = 0u;
+}
+// The work-items of `stage` in a wave counted on the device: the size of the queue it reads (in
+// light-sample batches for sample_lights); -1 for the stages the host sizes (generate,
+// accumulate: one work-item per path of the wave).
+ETK_FN int etk_counted_items(ETK_COUNTER_PTR c, int stage) {
+    if (stage == ETK_STAGE_intersect)
+        return (int)c[ETK_Q_RAY_IN];
+    if (stage == ETK_STAGE_sample_lights)
+        return (int)((c[ETK_Q_SHADE] + (uint)(ETK_LIGHT_BATCH - 1)) / (uint)ETK_LIGHT_BATCH);
+    if (stage == ETK_STAGE_shade_hits || stage == ETK_STAGE_shade_lights)
+        return (int)c[ETK_Q_SHADE];
+    if (stage == ETK_STAGE_trace_shadows)
+        return (int)c[ETK_Q_SHADOW];
+    return -1;
+}
+
 ETK_END
 
 #endif

@@ -79,7 +79,12 @@
     X(SHADOW)     /* shadow rays pushed */                                                         \
     X(SHADE)      /* rays that hit a surface to shade */                                           \
     X(LIGHT_RAYS) /* shadow rays traced inline by shade_lights */                                  \
-    X(NONFINITE)  /* samples dropped by the film: should stay 0 */
+    X(NONFINITE)  /* samples dropped by the film: should stay 0 */                                 \
+    /* A wave counted on the device (etk_next_bounce): */                                          \
+    X(RAY_IN)      /* the rays this bounce intersects */                                           \
+    X(SUM_RAYS_IN) /* continuation rays of the bounces before it */                                \
+    X(SUM_SHADE)   /* their surface hits shaded */                                                 \
+    X(SUM_SHADOW)  /* their shadow rays, traced by trace_shadows or inline */
 
 // The stages, in schedule order: X(kernel name, stage function, pushes). integrator.h defines the
 // functions, all with one signature; the schedule (host/lib/render/schedule.cpp) runs them.

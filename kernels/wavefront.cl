@@ -2,7 +2,8 @@
 // path_state.h; integrator.h holds the stages, shared with the native back end). Every kernel
 // takes the same argument list, expanded from the same declarations, so the host sets it once;
 // each runs over exactly the live entries of its queue (global size rounded up to the
-// work-group size, the tail returning at once).
+// work-group size, the tail returning at once): n of them, or, where n < 0 (a wave counted on
+// the device), as many as the queue's counter holds (etk_counted_items).
 #include "film_fixed.h"
 #include "integrator.h"
 
@@ -57,7 +58,10 @@ static inline __attribute__((always_inline)) void etk_push_group(EtkQueues Q, Et
         __local int push_slots[ETK_PUSH_QUEUES * ETK_STAGE_LOCAL_MAX];                             \
         EtkPushes out = etk_no_pushes();                                                           \
         int i = get_global_id(0);                                                                  \
-        if (i < n)                                                                                 \
+        int items = n >= 0 ? n : etk_counted_items(counters, ETK_STAGE_##name);                    \
+        if ((int)(get_group_id(0) * get_local_size(0)) >= items)                                   \
+            return; /* the whole group past the queue (so none of it reaches the barrier) */       \
+        if (i < items)                                                                             \
             fn(S, P, Q, F, params, i, &out);                                                       \
         if (pushes) /* the others skip the group's barriers */                                     \
             etk_push_group(Q, out, push_slots);                                                    \
@@ -74,6 +78,12 @@ __kernel void zero_words(__global uint* words, int n) {
     int i = get_global_id(0);
     if (i < n)
         words[i] = 0u;
+}
+
+// Between two bounces of a wave counted on the device (etk_next_bounce): one work-item.
+__kernel void next_bounce(volatile __global uint* counters, int first_rays) {
+    if (get_global_id(0) == 0)
+        etk_next_bounce(counters, first_rays);
 }
 
 // Adds the pass's film (one sample per pixel, or none) to the render's exact sums on the device

@@ -161,6 +161,11 @@ std::vector<CLI::Option*> add_expert_options(CLI::App& cmd, RenderArgs& a) {
                        "GPUs, host otherwise) | host | device (OpenCL only); the same image")
             ->check(CLI::IsMember(film_sums_names()))
             ->default_str("auto"),
+        cmd.add_option("--queue-counts", a.queue_counts,
+                       "Where each bounce's queue sizes are read: auto (device on GPUs, host "
+                       "otherwise) | host | device (OpenCL only); the same image")
+            ->check(CLI::IsMember(queue_counts_names()))
+            ->default_str("auto"),
         cmd.add_option("--guide-verdict", a.guide_verdict,
                        "Visibility strategy: after learning, measure its tables against MIS on "
                        "the image and keep the one cheaper per error (on) | off (the tables "
@@ -223,6 +228,8 @@ void apply_overrides(const RenderArgs& a, const Globals& g, RenderSettings& st) 
         st.light_batch = parse_light_batch(a.light_batch, cli);
     if (!a.film_sums.empty())
         st.film_sums = parse_film_sums(a.film_sums, cli);
+    if (!a.queue_counts.empty())
+        st.queue_counts = parse_queue_counts(a.queue_counts, cli);
     if (!a.guide_verdict.empty())
         st.guide_verdict = a.guide_verdict == "on";
     if (a.light_samples_given)
@@ -261,6 +268,9 @@ void warn_idle_options(const RenderArgs& a, const RenderSettings& st) {
     else if (st.film_sums == FilmSumsAt::device && st.aovs)
         warn("--film-sums device: a render with AOVs (--aovs, --denoise) adds its passes on the "
              "host");
+    if (st.backend == Backend::cpu && st.queue_counts == QueueCounts::device)
+        warn("--queue-counts device applies to the OpenCL back end: ignored with --backend cpu "
+             "(its threads read their own counters)");
 }
 
 } // namespace

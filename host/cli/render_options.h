@@ -16,6 +16,7 @@ struct RenderArgs {
     std::string bsdf_sampling;
     std::string light_batch;   // --light-batch: auto, on, off
     std::string film_sums;     // --film-sums: auto, host, device
+    std::string queue_counts;  // --queue-counts: auto, host, device
     std::string guide_verdict; // --guide-verdict: on, off
     std::string lights;        // --lights: render with this directional light set
     int sis_samples = 64;

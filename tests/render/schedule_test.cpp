@@ -4,6 +4,7 @@
 #include "render/executor_cl.h"
 #include "render/executor_cpu.h"
 #include "render/film.h"
+#include "render/renderer.h"
 #include "render/schedule.h"
 #include "render_util.h"
 
@@ -76,6 +77,89 @@ TEST(Schedule, AStridedPassIsTheSameOnOpenCl) {
     const et::Film cl = strided_pass(ds, 3, 7, true);
     for (size_t i = 0; i < native.pixels(); ++i)
         EXPECT_TRUE(same_pixel(cl, native, i)) << "pixel " << i;
+}
+
+// One pass of sample 2 on OpenCL in waves of `wave` paths, the queue sizes read by the host or
+// kept on the device (RenderSettings::queue_counts): its film and ray counts.
+struct ClPass {
+    et::Film film;
+    et::RayCounts counts;
+};
+ClPass cl_pass(const et::DeviceScene& ds, int wave) {
+    et::ClDevice device(std::make_unique<et::ClRuntime>(0), ds, wave);
+    EXPECT_EQ(device.counts_on_device(), ds.settings.queue_counts == et::QueueCounts::device);
+    ClPass out{et::Film(ds.params.width, ds.params.height), {}};
+    device.clear_film(false);
+    etk::EtkParams p = ds.params;
+    p.sample_index = 2;
+    out.counts = et::run_pass(device, p);
+    device.download_film(out.film, false);
+    return out;
+}
+
+// A wave whose queue sizes stay on the device enqueues its bounces without reading them back:
+// the same film bits and ray counts as the host's reads, whatever the waves' size. At depth 40
+// without Russian roulette, paths outlive the bounces the device counts alone and the host takes
+// the wave on: in a closed room every path takes all 40 bounces.
+TEST(Schedule, QueueCountsOnTheDeviceGiveTheSamePasses) {
+    et::Scene open = ett::side_lit_room(12, 9);
+    et::Scene closed = open;
+    ett::add_square(closed.triangles, glm::vec3(0, 1, -1), glm::vec3(0, 0, 1), 1.0f, 0);
+    for (const et::Scene* s : {&open, &closed}) {
+        const bool shut = s == &closed;
+        for (int depth : {3, 40}) {
+            et::RenderSettings st = s->settings;
+            st.max_depth = depth;
+            st.rr_depth = depth;
+            st.strategy = et::Strategy::mis;
+            ClPass pass[2];
+            for (int wave : {17, 108}) {
+                SCOPED_TRACE(testing::Message() << (shut ? "closed" : "open") << " room, depth "
+                                                << depth << ", wave " << wave);
+                for (int k = 0; k < 2; ++k) {
+                    st.queue_counts = k ? et::QueueCounts::device : et::QueueCounts::host;
+                    pass[k] = cl_pass(et::prepare_device_scene(*s, st), wave);
+                }
+                const et::RayCounts &h = pass[0].counts, &d = pass[1].counts;
+                EXPECT_EQ(d.camera, h.camera);
+                EXPECT_EQ(d.continuation, h.continuation);
+                EXPECT_EQ(d.shadow, h.shadow);
+                EXPECT_EQ(d.shaded, h.shaded);
+                EXPECT_EQ(d.nonfinite, 0u);
+                if (shut) { // nothing leaves: every path to the last bounce
+                    EXPECT_EQ(h.continuation, uint64_t(depth) * h.camera);
+                }
+                double lit = 0.0;
+                for (size_t i = 0; i < h.camera; ++i) {
+                    EXPECT_TRUE(same_pixel(pass[1].film, pass[0].film, i)) << "pixel " << i;
+                    lit += pass[0].film.film_sum[i].x;
+                }
+                EXPECT_EQ(lit > 0.0, !shut);
+            }
+        }
+    }
+}
+
+// The same through the renderer, with the visibility strategy's learning (records summed on the
+// device, table updates, the verdict's strided passes): the same film bits either way.
+TEST(Schedule, QueueCountsOnTheDeviceKeepALearningRendersBits) {
+    const et::Scene s = ett::side_lit_room(12, 9);
+    std::vector<float> films[2];
+    for (int k = 0; k < 2; ++k) {
+        et::RenderSettings st = s.settings;
+        st.max_depth = 3;
+        st.strategy = et::Strategy::automatic;
+        st.backend = et::Backend::opencl;
+        st.queue_counts = k ? et::QueueCounts::device : et::QueueCounts::host;
+        const et::DeviceScene ds = et::prepare_device_scene(s, st);
+        auto r = et::make_renderer(ds);
+        EXPECT_EQ(r->queue_counts_on_device(), k == 1);
+        for (uint32_t i = 0; i < 6; ++i)
+            r->render_sample(i);
+        films[k] = r->sums().mean();
+    }
+    ASSERT_EQ(films[0].size(), films[1].size());
+    EXPECT_EQ(0, std::memcmp(films[0].data(), films[1].data(), films[0].size() * sizeof(float)));
 }
 
 } // namespace

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Throughput on a GPU (docs/devices.md): rays a second end to end (camera, continuation and shadow
 # rays over the render's seconds) on a 1.1M-triangle bunny at 2048x2048 (and 4096x4096) at depth
-# 1 and 5, the paths in flight, the film's sums on the device against the host's fold (the films
-# compared bit for bit), and the native back end on the machine's CPU threads for the ratio.
+# 1 and 5, the paths in flight, the film's sums on the device against the host's fold and the
+# queue sizes kept on the device against the host's reads (the films compared bit for bit), and
+# the native back end on the machine's CPU threads for the ratio.
 #
 #   tools/gpu/throughput.sh ENVTRACE OUT_DIR [PLATFORM]
 #
@@ -34,7 +35,7 @@ render() { # name backend args...: one render, its line in the summary
     shift 2
     ENVTRACE_CL_PLATFORM=$platform "$exe" render "$scene" --backend "$b" "$@" -o "$out/$n.pfm" \
         --stats "$out/stats/$n.json" >"$out/$n.log" 2>&1 || { say "FAILED $n: $(tail -1 "$out/$n.log")"; return; }
-    say "$n: $(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); t=sum(d['rays'].values()); s=sum(d['stage_seconds'].values()); print('%.1f Mrays/s, render %.3f s, stage time %.3f s, film sums on the device: %s' % (t / d['render_seconds'] / 1e6, d['render_seconds'], s, d.get('film_sums_on_device')))" "$out/stats/$n.json")"
+    say "$n: $(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); t=sum(d['rays'].values()); s=sum(d['stage_seconds'].values()); print('%.1f Mrays/s, render %.3f s, stage time %.3f s, film sums on the device: %s, queue counts on the device: %s' % (t / d['render_seconds'] / 1e6, d['render_seconds'], s, d.get('film_sums_on_device'), d.get('queue_counts_on_device')))" "$out/stats/$n.json")"
 }
 same() { cmp -s "$out/$1.pfm" "$out/$2.pfm" && say "  $1 = $2, bit for bit" || say "  $1 and $2 DIFFER"; }
 say "== $(nvidia-smi --query-gpu=name,driver_version --format=csv,noheader 2>/dev/null); $(nproc) CPU threads"
@@ -43,6 +44,8 @@ for d in 1 5; do
     for k in 1 2 3; do render "d${d}_$k" opencl --spp 16 --max-depth $d; done
     for m in host device; do render "d${d}_sums_$m" opencl --spp 8 --max-depth $d --film-sums $m; done
     same "d${d}_sums_host" "d${d}_sums_device"
+    for m in host device; do render "d${d}_counts_$m" opencl --spp 8 --max-depth $d --queue-counts $m; done
+    same "d${d}_counts_host" "d${d}_counts_device"
     render "d${d}_native" cpu --spp 2 --max-depth $d
 done
 for p in 1048576 2097152; do render "d5_paths_$p" opencl --spp 16 --max-depth 5 --paths $p; done

@@ -33,6 +33,8 @@ constexpr Named<LightBatch> kLightBatches[] = {
     {LightBatch::automatic, "auto"}, {LightBatch::on, "on"}, {LightBatch::off, "off"}};
 constexpr Named<FilmSumsAt> kFilmSums[] = {
     {FilmSumsAt::automatic, "auto"}, {FilmSumsAt::host, "host"}, {FilmSumsAt::device, "device"}};
+constexpr Named<QueueCounts> kQueueCounts[] = {
+    {QueueCounts::automatic, "auto"}, {QueueCounts::host, "host"}, {QueueCounts::device, "device"}};
 constexpr Named<Backend> kBackends[] = {{Backend::opencl, "opencl"}, {Backend::cpu, "cpu"}};
 
 template <typename E, size_t N> const char* name_in(const Named<E> (&table)[N], E v) {
@@ -118,6 +120,15 @@ FilmSumsAt parse_film_sums(const std::string& s, const std::string& what) {
 }
 std::vector<std::string> film_sums_names() {
     return names_in(kFilmSums);
+}
+const char* name_of(QueueCounts v) {
+    return name_in(kQueueCounts, v);
+}
+QueueCounts parse_queue_counts(const std::string& s, const std::string& what) {
+    return parse_in(kQueueCounts, s, what, "queue counts setting");
+}
+std::vector<std::string> queue_counts_names() {
+    return names_in(kQueueCounts);
 }
 namespace {
 // The MIS strategies beyond the paper's estimator: what `auto` gives them, it never gives `mis`.

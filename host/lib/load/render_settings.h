@@ -55,6 +55,12 @@ enum class LightBatch : int { automatic, on, off };
 // the sums are asked for. automatic: on the device on a GPU, where the read-back and the host's
 // fold took two thirds of a 2048x2048 pass. The same sums either way, bit for bit.
 enum class FilmSumsAt : int { automatic, host, device };
+// Where a wave's queue sizes are read (render/schedule.cpp, run_wave): by the host, after each
+// bounce's intersect and shade launches, or on the device (OpenCL only: a bounce's launches are
+// all enqueued at once, and each kernel reads its queue's size from the counters). automatic: on
+// the device on a GPU, which otherwise idles at each read until the host launches again. The
+// same image either way, bit for bit.
+enum class QueueCounts : int { automatic, host, device };
 
 const char* name_of(Strategy v);
 const char* name_of(MisHeuristic v);
@@ -63,6 +69,7 @@ const char* name_of(Backend v);
 const char* name_of(BsdfSampling v);
 const char* name_of(LightBatch v);
 const char* name_of(FilmSumsAt v);
+const char* name_of(QueueCounts v);
 
 // Throws et::Error "`what`: unknown strategy 'x' (use light, bsdf, ...)".
 Strategy parse_strategy(const std::string& s, const std::string& what);
@@ -72,6 +79,7 @@ Backend parse_backend(const std::string& s, const std::string& what);
 BsdfSampling parse_bsdf_sampling(const std::string& s, const std::string& what);
 LightBatch parse_light_batch(const std::string& s, const std::string& what);
 FilmSumsAt parse_film_sums(const std::string& s, const std::string& what);
+QueueCounts parse_queue_counts(const std::string& s, const std::string& what);
 
 // A split count ("`what`: must be a power of two from 1 to 64" otherwise).
 int check_split_count(int n, const std::string& what);
@@ -84,6 +92,7 @@ std::vector<std::string> backend_names();
 std::vector<std::string> bsdf_sampling_names();
 std::vector<std::string> light_batch_names();
 std::vector<std::string> film_sums_names();
+std::vector<std::string> queue_counts_names();
 
 struct RenderSettings;
 // bsdf_sampling with automatic resolved for the strategy.
@@ -133,6 +142,7 @@ struct RenderSettings {
     // batches (kernels/integrator.h); off, the shade stage draws each: the same image.
     LightBatch light_batch = LightBatch::automatic;
     FilmSumsAt film_sums = FilmSumsAt::automatic;
+    QueueCounts queue_counts = QueueCounts::automatic;
     // The visibility strategy's verdict (render/guide_verdict.h): after learning, measure its
     // tables against the paper's MIS on this image and keep the cheaper-per-error one.
     bool guide_verdict = true;

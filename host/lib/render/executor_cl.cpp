@@ -97,9 +97,21 @@ bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& lim
     return !lim.cpu && countable && bytes <= lim.max_alloc && bytes <= lim.global_mem / 4;
 }
 
+bool wants_queue_counts_on_device(const RenderSettings& st, const DeviceLimits& lim) {
+    switch (st.queue_counts) {
+    case QueueCounts::host:
+        return false;
+    case QueueCounts::device:
+        return true;
+    case QueueCounts::automatic:
+        break;
+    }
+    return !lim.cpu;
+}
+
 ClLane::ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
-               size_t zero_local, const std::vector<cl::Buffer>& shared, int paths)
-    : local_(local), zero_local_(zero_local), args_(shared) {
+               size_t zero_local, const std::vector<cl::Buffer>& shared, int paths, bool counted)
+    : local_(local), zero_local_(zero_local), counted_(counted), args_(shared) {
     const cl::Device& dev = rt.device().device;
     auto& ctx = rt.context();
     const uint64_t n = static_cast<uint64_t>(paths);
@@ -107,6 +119,7 @@ ClLane::ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size
     for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s)
         kernels_.emplace_back(program, stage_name(s));
     zero_ = cl::Kernel(program, "zero_words");
+    next_bounce_ = cl::Kernel(program, "next_bounce");
     seconds_.assign(etk::ETK_STAGE_COUNT, 0.0);
 #define ET_ALLOC(type, name)                                                                       \
     args_[etk::ETK_ARG_##name] = cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(type) * n);
@@ -124,6 +137,7 @@ ClLane::ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size
         for (int a = 0; a < etk::ETK_ARG_params; ++a)
             if (a != etk::ETK_ARG_ray_in && a != etk::ETK_ARG_ray_out)
                 k.setArg(a, args_[a]);
+    next_bounce_.setArg(0, args_[etk::ETK_ARG_counters]);
 }
 
 ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, int paths,
@@ -147,6 +161,7 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     buffers.push_back({"guide_sums", uint64_t(sizeof(cl_uint)) * guide_words_});
     const uint64_t fixed_bytes = uint64_t(sizeof(FilmSums::Pixel)) * pixels_;
     fold_ = wants_film_sums_on_device(scene.settings, lim, fixed_bytes);
+    counted_ = wants_queue_counts_on_device(scene.settings, lim);
     if (fold_)
         buffers.push_back({"film sums (--film-sums device)", fixed_bytes});
     uint64_t fixed = 0;
@@ -210,8 +225,8 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
             fold_kernel_.setArg(3, static_cast<cl_int>(pixels_));
         }
         for (int l = 0; l < lanes_used; ++l)
-            lanes_.push_back(
-                std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_));
+            lanes_.push_back(std::make_unique<ClLane>(rt, program_, local_, zero_local, args_,
+                                                      paths_, counted_));
         uint64_t widest = etk::ETK_Q_COUNT; // zero_words: the counters, the film's fields
 #define ET_FILM_WORDS(type, name) widest = std::max<uint64_t>(widest, sizeof(type) / 4 * px);
         ETK_FILM_FIELDS(ET_FILM_WORDS)
@@ -431,17 +446,34 @@ void ClDevice::absorb_guide_sums(const GuideSumsAbsorb& absorb) {
     absorb(guide_sums_copy_.data(), guide_sums_copy_.size());
 }
 
-void ClLane::launch(int stage, int n, const etk::EtkParams& params) {
-    if (n <= 0)
-        return;
+// `items` work-items (rounded up to whole work-groups) of a stage whose kernel argument n is
+// `n` (< 0: the queue's counter says how many work).
+void ClLane::enqueue_stage(int stage, int n, int items, const etk::EtkParams& params) {
     cl::Kernel& k = kernels_[stage];
     k.setArg(etk::ETK_ARG_params, sizeof(params), &params);
     k.setArg(etk::ETK_ARG_n, n);
     const size_t local = local_[stage];
     cl::Event ev;
-    queue_.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + local - 1) / local * local),
+    queue_.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((items + local - 1) / local * local),
                                 cl::NDRange(local), nullptr, &ev);
     pending_.emplace_back(stage, ev);
+}
+
+void ClLane::launch(int stage, int n, const etk::EtkParams& params) {
+    if (n > 0)
+        enqueue_stage(stage, n, n, params);
+}
+
+// One work-item; not timed (a stage's share would hide it).
+void ClLane::next_bounce(int first_rays) {
+    next_bounce_.setArg(1, static_cast<cl_int>(first_rays));
+    queue_.enqueueNDRangeKernel(next_bounce_, cl::NullRange, cl::NDRange(1), cl::NDRange(1));
+}
+
+// Every work-item past the queue's size returns at once (wavefront.cl, n < 0).
+void ClLane::launch_counted(int stage, int most, const etk::EtkParams& params) {
+    if (most > 0)
+        enqueue_stage(stage, -1, most, params);
 }
 
 // Zeroed on the device rather than uploaded from the host's zeroed film: a 512x512 film is 16 MB

@@ -45,6 +45,12 @@ inline bool prefers_light_batches_on(const DeviceLimits& limits) {
 bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& limits,
                                uint64_t bytes);
 
+// Whether a render's waves keep their queue sizes on this device (RenderSettings::queue_counts):
+// automatic on a GPU, where each of the host's reads leaves the device idle until its next
+// launch; on a CPU device the host's reads cost microseconds, and the launches sized for a
+// whole wave would cost more.
+bool wants_queue_counts_on_device(const RenderSettings& st, const DeviceLimits& limits);
+
 // One lane of the OpenCL back end: a command queue with path state, queues and counters of its
 // own (kernels/path_state.h), running waves one after another; the scene, the film and the
 // visibility tables are the device's, shared by every lane.
@@ -52,14 +58,18 @@ class ClLane : public StageExecutor {
   public:
     // shared: every kernel argument that is not the lane's own (by ETK_ARG_*; the lane's own
     // entries are ignored); local: the work-group size per stage.
+    // counted: whether its waves keep their queue sizes on the device (counts_on_device).
     ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
-           size_t zero_local, const std::vector<cl::Buffer>& shared, int paths);
+           size_t zero_local, const std::vector<cl::Buffer>& shared, int paths, bool counted);
 
     void bind_queues(bool swapped) override;
     void reset_counters() override;
     void read_counters(uint32_t* counters) override;
     void read_fields(int n, const std::vector<FieldRead>& reads) override;
     void launch(int stage, int n, const etk::EtkParams& params) override;
+    bool counts_on_device() const override { return counted_; }
+    void next_bounce(int first_rays) override;
+    void launch_counted(int stage, int most, const etk::EtkParams& params) override;
 
     void zero_words(const cl::Buffer& buffer, uint64_t words);
     // Launches every kernel once, doing nothing, over the widest range it will ever be given:
@@ -72,12 +82,15 @@ class ClLane : public StageExecutor {
 
   private:
     void collect_events();
+    void enqueue_stage(int stage, int n, int items, const etk::EtkParams& params);
 
     cl::CommandQueue queue_;
     std::vector<cl::Kernel> kernels_; // by ETK_STAGE_*: a lane's own (arguments are per kernel)
     std::vector<size_t> local_;       // work-group size per kernel
     cl::Kernel zero_;                 // zero_words
     size_t zero_local_;
+    cl::Kernel next_bounce_; // next_bounce (a wave counted on the device)
+    bool counted_;
     std::vector<cl::Buffer> args_; // by ETK_ARG_* (buffers only)
     cl::Buffer queue_a_, queue_b_; // bound to ray_in / ray_out
     std::vector<double> seconds_;  // per stage: finished launches
@@ -113,6 +126,7 @@ class ClDevice : public WavefrontDevice {
                       const std::vector<FloatSpan>& changed) override;
     void absorb_guide_sums(const GuideSumsAbsorb& absorb) override;
     bool folds_film() const override { return fold_; }
+    bool counts_on_device() const override { return counted_; }
     void fold_film() override;
     void take_film_sums(FilmSums& sums) override;
 
@@ -132,6 +146,7 @@ class ClDevice : public WavefrontDevice {
     // The film's exact sums on the device (folds_film; kernels/film_fixed.h): a buffer of
     // FilmSums::Pixel, 28 words each, and the kernel that adds a pass to it.
     bool fold_ = false;
+    bool counted_ = false; // wants_queue_counts_on_device
     cl::Buffer film_fixed_;
     cl::Kernel fold_kernel_;
     size_t fold_local_ = 1;

@@ -57,41 +57,109 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
     return *this;
 }
 
-bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
-              const StopRequest& stop) {
-    p.first_pixel = first;
-    p.pixel_stride = std::max(1, p.pixel_stride);
-    // A light set sums all its lights at a hit; every other technique takes one light sample.
-    const int shade =
-        technique_uses_light_set(p) ? etk::ETK_STAGE_shade_lights : etk::ETK_STAGE_shade_hits;
-    uint32_t c[etk::ETK_Q_COUNT];
-    ex.bind_queues(true); // generate fills queue A
-    ex.launch(etk::ETK_STAGE_generate, n, p);
-    counts.camera += n;
-    int rays = n;
+void StageExecutor::next_bounce(int) {
+    throw Error("this executor keeps its queue sizes on the host (a bug)");
+}
+
+void StageExecutor::launch_counted(int, int, const etk::EtkParams&) {
+    throw Error("this executor keeps its queue sizes on the host (a bug)");
+}
+
+namespace {
+
+// Where a wave stands between two bounces: the next bounce, which queue buffer holds its rays,
+// and how many there are.
+struct WaveAt {
+    int bounce = 0;
     bool swapped = false;
-    for (int bounce = 0; rays > 0; ++bounce) {
-        if (bounce > 0)
-            counts.continuation += rays;
-        ex.bind_queues(swapped);
+    int rays = 0;
+};
+
+// The shade stage of the pass's technique: a light set sums all its lights at a hit; every other
+// technique takes one light sample.
+int shade_stage(const etk::EtkParams& p) {
+    return technique_uses_light_set(p) ? etk::ETK_STAGE_shade_lights : etk::ETK_STAGE_shade_hits;
+}
+
+// The most bounces a wave counted on the device enqueues before the host reads the counters: a
+// path of max_depth surfaces takes max_depth + 1 (its last ray only intersects), so at the usual
+// depths the wave's first read is its last; past this many, the host counts the rest.
+constexpr int kDeviceBounces = 16;
+
+// Bounces of a wave of n paths with the queue sizes on the device (StageExecutor::
+// counts_on_device): each bounce's stages enqueued without waiting, launched for the most entries
+// their queue could hold (n; the light batches of n), then one read of the counters. Leaves the
+// wave where the host's bounces take it on, if any ray is left.
+void device_bounces(StageExecutor& ex, const etk::EtkParams& p, int n, RayCounts& counts,
+                    WaveAt& at) {
+    const int bounces = std::min(kDeviceBounces, std::max(1, p.max_depth + 1));
+    ex.reset_counters();
+    for (; at.bounce < bounces; ++at.bounce) {
+        ex.bind_queues(at.swapped);
+        ex.next_bounce(at.bounce == 0 ? n : -1);
+        ex.launch_counted(etk::ETK_STAGE_intersect, n, p);
+        if (p.light_batch)
+            ex.launch_counted(etk::ETK_STAGE_sample_lights,
+                              (n + ETK_LIGHT_BATCH - 1) / ETK_LIGHT_BATCH, p);
+        ex.launch_counted(shade_stage(p), n, p);
+        ex.launch_counted(etk::ETK_STAGE_trace_shadows, n, p);
+        at.swapped = !at.swapped;
+    }
+    uint32_t c[etk::ETK_Q_COUNT];
+    ex.read_counters(c); // the last bounce's counts are not in the sums yet
+    counts.continuation += c[etk::ETK_Q_SUM_RAYS_IN];
+    counts.shaded += uint64_t(c[etk::ETK_Q_SUM_SHADE]) + c[etk::ETK_Q_SHADE];
+    counts.shadow +=
+        uint64_t(c[etk::ETK_Q_SUM_SHADOW]) + c[etk::ETK_Q_SHADOW] + c[etk::ETK_Q_LIGHT_RAYS];
+    at.rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
+}
+
+// Bounces with the queue sizes read by the host, from `at` until no ray is left: false where a
+// stop request ended the wave.
+bool host_bounces(StageExecutor& ex, const etk::EtkParams& p, RayCounts& counts, WaveAt& at,
+                  const StopRequest& stop) {
+    uint32_t c[etk::ETK_Q_COUNT];
+    for (; at.rays > 0; ++at.bounce) {
+        if (at.bounce > 0)
+            counts.continuation += at.rays;
+        ex.bind_queues(at.swapped);
         ex.reset_counters();
-        ex.launch(etk::ETK_STAGE_intersect, rays, p); // lights the escaped rays itself
+        ex.launch(etk::ETK_STAGE_intersect, at.rays, p); // lights the escaped rays itself
         ex.read_counters(c);
         if (p.light_batch) // the shade queue's light samples, ETK_LIGHT_BATCH per work-item
             ex.launch(
                 etk::ETK_STAGE_sample_lights,
                 static_cast<int>((c[etk::ETK_Q_SHADE] + ETK_LIGHT_BATCH - 1) / ETK_LIGHT_BATCH), p);
-        ex.launch(shade, static_cast<int>(c[etk::ETK_Q_SHADE]), p);
+        ex.launch(shade_stage(p), static_cast<int>(c[etk::ETK_Q_SHADE]), p);
         counts.shaded += c[etk::ETK_Q_SHADE];
         ex.read_counters(c);
         ex.launch(etk::ETK_STAGE_trace_shadows, static_cast<int>(c[etk::ETK_Q_SHADOW]), p);
         counts.shadow += c[etk::ETK_Q_SHADOW] + c[etk::ETK_Q_LIGHT_RAYS];
-        rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
-        swapped = !swapped;
-        if (rays > 0 && stop && stop())
+        at.rays = static_cast<int>(c[etk::ETK_Q_RAY_OUT]);
+        at.swapped = !at.swapped;
+        if (at.rays > 0 && stop && stop())
             return false; // the path state is left as it is: the next wave starts afresh
     }
+    return true;
+}
+
+} // namespace
+
+bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& counts,
+              const StopRequest& stop) {
+    p.first_pixel = first;
+    p.pixel_stride = std::max(1, p.pixel_stride);
+    ex.bind_queues(true); // generate fills queue A
+    ex.launch(etk::ETK_STAGE_generate, n, p);
+    counts.camera += n;
+    WaveAt at;
+    at.rays = n;
+    if (ex.counts_on_device())
+        device_bounces(ex, p, n, counts, at);
+    if (!host_bounces(ex, p, counts, at, stop))
+        return false;
     ex.launch(etk::ETK_STAGE_accumulate, n, p);
+    uint32_t c[etk::ETK_Q_COUNT];
     ex.read_counters(c); // the last bounce reset them: this is the film's count
     counts.nonfinite += c[etk::ETK_Q_NONFINITE];
     return true;

@@ -38,6 +38,13 @@ class StageExecutor {
     virtual void read_counters(uint32_t counters[etk::ETK_Q_COUNT]) = 0;
     // Runs `stage` over entries 0 .. n-1 of its queue (nothing when n <= 0).
     virtual void launch(int stage, int n, const etk::EtkParams& params) = 0;
+    // A wave counted on the device (run_wave): whether this executor counts so, the counters'
+    // step between two bounces (kernels/integrator.h, etk_next_bounce; first_rays >= 0: before
+    // the first), and a launch of `stage` over as many entries of its queue as its counter
+    // holds, at most `most` (the host's launch size).
+    virtual bool counts_on_device() const { return false; }
+    virtual void next_bounce(int first_rays);
+    virtual void launch_counted(int stage, int most, const etk::EtkParams& params);
     // The first n elements of path fields (ETK_FIELD_*), each into its `to` (elements of the
     // field's type, path_field_bytes apiece): what a learning technique reads between launches.
     virtual void read_fields(int n, const std::vector<FieldRead>& reads) = 0;
@@ -92,6 +99,8 @@ class WavefrontDevice {
     // the film is read back only where someone reads it), and take_film_sums adds them, exactly,
     // to `sums` and starts them again from zero.
     virtual bool folds_film() const { return false; }
+    // Whether its lanes count their waves on the device (StageExecutor::counts_on_device).
+    virtual bool counts_on_device() const { return false; }
     virtual void fold_film();
     virtual void take_film_sums(FilmSums& sums);
 };

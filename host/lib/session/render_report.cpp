@@ -50,6 +50,8 @@ void add_settings_facts(RenderReport& r, const ReportInputs& in) {
         {"/bsdf_sampling", "envtrace:bsdf_sampling", name_of(resolved_bsdf_sampling(st)), ""});
     r.push_back({"/light_batch", "", in.session.renderer().batches_light_samples(), ""});
     r.push_back({"/film_sums_on_device", "", in.session.renderer().sums_on_device(), ""});
+    r.push_back(
+        {"/queue_counts_on_device", "", in.session.renderer().queue_counts_on_device(), ""});
     // Per vertex (mis splitting; 1: the paper's).
     r.push_back({"/light_samples", "envtrace:light_samples", st.light_samples, ""});
     r.push_back({"/bsdf_samples", "envtrace:bsdf_samples", st.bsdf_samples, ""});
