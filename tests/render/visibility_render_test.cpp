@@ -148,6 +148,10 @@ TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
     const uint64_t learned = render(s, 2, 0, 24).records; // through the verdict's passes
     EXPECT_GT(learned, render(s, 2, 0, 16).records) << "the verdict's passes did not learn";
     EXPECT_EQ(render(s, 2, 0, 40).records, learned) << "the learning went on past the verdict";
+    // and its figures say so: 24 passes learnt (16, then the verdict's 8), not the film's 64.
+    EXPECT_EQ(
+        ett::learning_count(ett::render_samples(s, 2, 0, 40).renderer->stats(), "learning_passes"),
+        24u);
     for (int at : {20, 30}) {
         s.settings.strategy = et::Strategy::visibility;
         const et::FilmSums part = ett::render_samples(s, 2, 0, at).renderer->sums();

@@ -164,7 +164,11 @@ nlohmann::json VisibilityLearning::stats() const {
     nlohmann::json counts = nlohmann::json::object();
     for (const auto& [n, cells] : light_counts_)
         counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
-    return {{"learning_passes", learn_until_},
+    // The learning's length: where its plan ends it, or, after a verdict for the fallback, at the
+    // verdict's last pass (the passes after it learn nothing).
+    const int learnt =
+        dropped_ ? std::min(learn_until_, verdict_start() + options_.verdict_passes) : learn_until_;
+    return {{"learning_passes", learnt},
             {"learning_seconds", learning_seconds_},
             {"update_seconds", update_seconds_},
             {"records", records_},
