@@ -291,29 +291,28 @@ TEST(Oclgrind, LightSetAndSisRenderEqualPocl) {
     }
 }
 
-// A paths-in-flight count smaller than the film: several waves per pass, queues reused.
-TEST(Oclgrind, SeveralWavesPerPassEqualPocl) {
+// A paths-in-flight count smaller than the film: several waves per pass, queues reused; the
+// queue sizes read by the host or kept on the device.
+void expect_several_waves_equal_pocl(et::QueueCounts counts) {
     et::Scene s;
     prepare(std::string(ENVTRACE_SOURCE_DIR) + "/scenes/default.json", 9, 7, &s);
     et::RenderSettings st = s.settings;
     st.backend = et::Backend::opencl;
     st.paths = 20;
+    st.queue_counts = counts;
     const et::DeviceScene ds = et::prepare_device_scene(s, st);
     expect_same_films(ds, 1);
 }
 
-// The same with the queue sizes kept on the device (a GPU's default): every stage launched for
-// the whole wave and its surplus work-items returning, the counters stepped between bounces by
-// one work-item (no races, no reads past a queue).
+TEST(Oclgrind, SeveralWavesPerPassEqualPocl) {
+    expect_several_waves_equal_pocl(et::QueueCounts::host);
+}
+
+// With the queue sizes kept on the device (a GPU's default): every stage launched for the whole
+// wave and its surplus work-items returning, the counters stepped between bounces by one
+// work-item (no races, no reads past a queue).
 TEST(Oclgrind, SeveralWavesCountedOnTheDeviceEqualPocl) {
-    et::Scene s;
-    prepare(std::string(ENVTRACE_SOURCE_DIR) + "/scenes/default.json", 9, 7, &s);
-    et::RenderSettings st = s.settings;
-    st.backend = et::Backend::opencl;
-    st.paths = 20;
-    st.queue_counts = et::QueueCounts::device;
-    const et::DeviceScene ds = et::prepare_device_scene(s, st);
-    expect_same_films(ds, 1);
+    expect_several_waves_equal_pocl(et::QueueCounts::device);
 }
 
 } // namespace
