@@ -268,6 +268,12 @@ ETK_FN int etk_hit_cosine_cell(EtkScene S, EtkPaths P, int slot) {
     return etk_cosine_cell(etk_material_load(S.materials, S.tri_material[prim]), ns);
 }
 
+// The sample_lights stage's work-items for a shade queue of `shade` entries: one per batch of
+// ETK_LIGHT_BATCH, the last one partly past the queue's end.
+ETK_FN int etk_light_batch_items(uint shade) {
+    return (int)((shade + (uint)(ETK_LIGHT_BATCH - 1)) / (uint)ETK_LIGHT_BATCH);
+}
+
 // Stage 2': the shade queue's light samples, drawn ahead of the shade stage ETK_LIGHT_BATCH at a
 // time (etk_env_light_batch, etk_cosine_light_batch: the cache misses of a batch overlap, where
 // one sample per shade call leaves them in series), where the techniques allow it
@@ -667,7 +673,7 @@ ETK_FN int etk_counted_items(ETK_COUNTER_PTR c, int stage) {
     if (stage == ETK_STAGE_intersect)
         return (int)c[ETK_Q_RAY_IN];
     if (stage == ETK_STAGE_sample_lights)
-        return (int)((c[ETK_Q_SHADE] + (uint)(ETK_LIGHT_BATCH - 1)) / (uint)ETK_LIGHT_BATCH);
+        return etk_light_batch_items(c[ETK_Q_SHADE]);
     if (stage == ETK_STAGE_shade_hits || stage == ETK_STAGE_shade_lights)
         return (int)c[ETK_Q_SHADE];
     if (stage == ETK_STAGE_trace_shadows)

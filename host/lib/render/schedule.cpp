@@ -1,5 +1,7 @@
 #include "render/schedule.h"
 
+#include "kernels/integrator.h"
+
 #include "prepare/technique.h"
 #include "render/learning_policy.h"
 #include "util/error.h"
@@ -100,7 +102,7 @@ void device_bounces(StageExecutor& ex, const etk::EtkParams& p, int n, RayCounts
         ex.launch_counted(etk::ETK_STAGE_intersect, n, p);
         if (p.light_batch)
             ex.launch_counted(etk::ETK_STAGE_sample_lights,
-                              (n + ETK_LIGHT_BATCH - 1) / ETK_LIGHT_BATCH, p);
+                              etk::etk_light_batch_items(static_cast<uint32_t>(n)), p);
         ex.launch_counted(shade_stage(p), n, p);
         ex.launch_counted(etk::ETK_STAGE_trace_shadows, n, p);
         at.swapped = !at.swapped;
@@ -127,9 +129,8 @@ bool host_bounces(StageExecutor& ex, const etk::EtkParams& p, RayCounts& counts,
         ex.launch(etk::ETK_STAGE_intersect, at.rays, p); // lights the escaped rays itself
         ex.read_counters(c);
         if (p.light_batch) // the shade queue's light samples, ETK_LIGHT_BATCH per work-item
-            ex.launch(
-                etk::ETK_STAGE_sample_lights,
-                static_cast<int>((c[etk::ETK_Q_SHADE] + ETK_LIGHT_BATCH - 1) / ETK_LIGHT_BATCH), p);
+            ex.launch(etk::ETK_STAGE_sample_lights, etk::etk_light_batch_items(c[etk::ETK_Q_SHADE]),
+                      p);
         ex.launch(shade_stage(p), static_cast<int>(c[etk::ETK_Q_SHADE]), p);
         counts.shaded += c[etk::ETK_Q_SHADE];
         ex.read_counters(c);
