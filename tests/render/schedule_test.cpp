@@ -87,7 +87,8 @@ struct ClPass {
 };
 ClPass cl_pass(const et::DeviceScene& ds, int wave) {
     et::ClDevice device(std::make_unique<et::ClRuntime>(0), ds, wave);
-    EXPECT_EQ(device.counts_on_device(), ds.settings.queue_counts == et::QueueCounts::device);
+    EXPECT_EQ(device.lane(0).counts_on_device(),
+              ds.settings.queue_counts == et::QueueCounts::device);
     ClPass out{et::Film(ds.params.width, ds.params.height), {}};
     device.clear_film(false);
     etk::EtkParams p = ds.params;

@@ -161,7 +161,7 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     buffers.push_back({"guide_sums", uint64_t(sizeof(cl_uint)) * guide_words_});
     const uint64_t fixed_bytes = uint64_t(sizeof(FilmSums::Pixel)) * pixels_;
     fold_ = wants_film_sums_on_device(scene.settings, lim, fixed_bytes);
-    counted_ = wants_queue_counts_on_device(scene.settings, lim);
+    const bool counted = wants_queue_counts_on_device(scene.settings, lim);
     if (fold_)
         buffers.push_back({"film sums (--film-sums device)", fixed_bytes});
     uint64_t fixed = 0;
@@ -225,8 +225,8 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
             fold_kernel_.setArg(3, static_cast<cl_int>(pixels_));
         }
         for (int l = 0; l < lanes_used; ++l)
-            lanes_.push_back(std::make_unique<ClLane>(rt, program_, local_, zero_local, args_,
-                                                      paths_, counted_));
+            lanes_.push_back(
+                std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_, counted));
         uint64_t widest = etk::ETK_Q_COUNT; // zero_words: the counters, the film's fields
 #define ET_FILM_WORDS(type, name) widest = std::max<uint64_t>(widest, sizeof(type) / 4 * px);
         ETK_FILM_FIELDS(ET_FILM_WORDS)

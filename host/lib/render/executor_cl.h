@@ -126,7 +126,6 @@ class ClDevice : public WavefrontDevice {
                       const std::vector<FloatSpan>& changed) override;
     void absorb_guide_sums(const GuideSumsAbsorb& absorb) override;
     bool folds_film() const override { return fold_; }
-    bool counts_on_device() const override { return counted_; }
     void fold_film() override;
     void take_film_sums(FilmSums& sums) override;
 
@@ -146,7 +145,6 @@ class ClDevice : public WavefrontDevice {
     // The film's exact sums on the device (folds_film; kernels/film_fixed.h): a buffer of
     // FilmSums::Pixel, 28 words each, and the kernel that adds a pass to it.
     bool fold_ = false;
-    bool counted_ = false; // wants_queue_counts_on_device
     cl::Buffer film_fixed_;
     cl::Kernel fold_kernel_;
     size_t fold_local_ = 1;

@@ -74,7 +74,7 @@ class Renderer {
     // passes (set_hold: MPI ranks) are added on the host.
     bool sums_on_device() const { return device_->folds_film() && !hold_; }
     // Whether its waves keep their queue sizes on the device (RenderSettings::queue_counts).
-    bool queue_counts_on_device() const { return device_->counts_on_device(); }
+    bool queue_counts_on_device() const { return device_->lane(0).counts_on_device(); }
     // Whether the sample_lights stage draws the light samples (RenderSettings::light_batch).
     bool batches_light_samples() const { return light_batch_; }
     // Continues from sums of the same size (an earlier, interrupted render, or another rank's).

@@ -99,8 +99,6 @@ class WavefrontDevice {
     // the film is read back only where someone reads it), and take_film_sums adds them, exactly,
     // to `sums` and starts them again from zero.
     virtual bool folds_film() const { return false; }
-    // Whether its lanes count their waves on the device (StageExecutor::counts_on_device).
-    virtual bool counts_on_device() const { return false; }
     virtual void fold_film();
     virtual void take_film_sums(FilmSums& sums);
 };
