@@ -604,8 +604,9 @@ ETK_FN void etk_shadow(ETK_STAGE_PARAMS) {
         ETK_GLOBAL const float* box = etk_portal_table(S, p);
         float t; // where an unoccluded ray leaves the scene's box: the portal table's record
         int exit = visible ? etk_portal_exit(box, etk_xyz(o), etk_xyz(d), &t) : -1;
-        etk_guide_record_light(Q.guide_sums, p, box, P.shadow_key[slot],
-                               visible ? P.shadow_val[slot] : 0.0f, exit, P.guide_parts[slot]);
+        float value = P.shadow_val[slot];
+        etk_guide_record_light(Q.guide_sums, p, box, P.shadow_key[slot], visible ? value : 0.0f,
+                               value, exit, P.guide_parts[slot]);
     }
 }
 

@@ -27,6 +27,8 @@
 //   M2       a pair: the light sample's second moment
 //   MOMENTS  ETK_PORTAL_CANDIDATES pairs: the light sample's second moment had it been drawn with
 //            candidate portal share b
+//   REACH    a pair: the records' values had nothing blocked their rays (the regions' sums hold
+//            those of the rays nothing blocked): the share of the light the scene lets through
 //   DCOUNT   the continuation records
 //   GCOUNT   the records in GUIDEDM
 //   CM2      a pair: the continuation's second moment
@@ -52,7 +54,8 @@ ETK_BEGIN
 #define ETK_GSUM_COUNT 0
 #define ETK_GSUM_M2 1
 #define ETK_GSUM_MOMENTS 3
-#define ETK_GSUM_LIGHT_WORDS (ETK_GSUM_MOMENTS + 2 * ETK_PORTAL_CANDIDATES)
+#define ETK_GSUM_REACH (ETK_GSUM_MOMENTS + 2 * ETK_PORTAL_CANDIDATES)
+#define ETK_GSUM_LIGHT_WORDS (ETK_GSUM_REACH + 2)
 #define ETK_GSUM_DCOUNT ETK_GSUM_LIGHT_WORDS
 #define ETK_GSUM_GCOUNT (ETK_GSUM_DCOUNT + 1)
 #define ETK_GSUM_CM2 (ETK_GSUM_GCOUNT + 1)
@@ -129,11 +132,11 @@ ETK_FN void etk_guide_prefetch_light(ETK_ATOMIC_PTR sums, EtkParams p, int key) 
 }
 
 // One shadow ray's record: its key (cell x regions + region of its direction; outside the table:
-// no cell), its value (luminance(L) cos / pdf if nothing blocked it, else 0), the box cell it
-// leaves by (-1: blocked) and the densities p_vis, p_portal of its direction. box: the portal
-// table the ray was drawn with (its cells' shares).
+// no cell), its value (luminance(L) cos / pdf if nothing blocked it, else 0), the value it would
+// have had unblocked (reach), the box cell it leaves by (-1: blocked) and the densities p_vis,
+// p_portal of its direction. box: the portal table the ray was drawn with (its cells' shares).
 ETK_FN void etk_guide_record_light(ETK_ATOMIC_PTR sums, EtkParams p, ETK_GLOBAL const float* box,
-                                   int key, float value, int exit, float2 parts) {
+                                   int key, float value, float reach, int exit, float2 parts) {
     int slots = p.guide_slots;
     float v = etk_guide_record_value(p, value);
     ulong fv = etk_guide_fixed(v);
@@ -145,6 +148,9 @@ ETK_FN void etk_guide_record_light(ETK_ATOMIC_PTR sums, EtkParams p, ETK_GLOBAL 
     ETK_ATOMIC_PTR cell = sums + etk_gsum_cell(slots, p.guide_continuation, s);
     etk_add_wide(sums + 2 * key, fv);
     ETK_ATOMIC_INC(cell + ETK_GSUM_COUNT);
+    ulong fr = etk_guide_fixed(etk_guide_record_value(p, reach));
+    if (fr != 0)
+        etk_add_wide(cell + ETK_GSUM_REACH, fr);
     if (!(v > 0.0f) || !isfinite(parts.x) || !isfinite(parts.y))
         return;
     // A diffuse vertex's light sample estimates (albedo / pi) v: its second moment, in the unit

@@ -328,7 +328,8 @@ TEST(VisibilityGuideTables, AbsorbLeavesTheSumsZero) {
         const float* portal = cells.data() + etk::etk_portal_offset(o.slots, 1);
         for (int i = 0; i < 4000; ++i) {
             const int key = static_cast<int>(rng() % (o.slots * K));
-            etk::etk_guide_record_light(sums.data(), p, portal, key, 10.0f * U(rng),
+            const float value = 10.0f * U(rng);
+            etk::etk_guide_record_light(sums.data(), p, portal, key, value, value,
                                         int(rng() % ETK_PORTAL_CELLS),
                                         etk::make_float2(0.1f + U(rng), U(rng)));
             const etk::float3 d =
@@ -347,6 +348,37 @@ TEST(VisibilityGuideTables, AbsorbLeavesTheSumsZero) {
     }
     EXPECT_EQ(cache->records(), 8000u);
     EXPECT_EQ(cache->continuation_records(), 8000u);
+}
+
+// The share of the light the shadow rays found unblocked (the verdict's screen): the records'
+// values over what they would have brought unblocked, however the rays were drawn; records
+// outside the table carry nothing to it, and a cache that saw no light says so (-1).
+TEST(VisibilityGuideTables, SeenShareIsTheUnblockedLightsShare) {
+    Fixture f;
+    const auto cache = slab_cache(f);
+    EXPECT_EQ(cache->light_seen_share(), -1.0);
+    const et::VisibilityOptions o = sixty_four_slots();
+    std::mt19937 rng(4u);
+    std::vector<int> keys, exits;
+    std::vector<float> values, reaches, parts;
+    double seen = 0.0, reach = 0.0;
+    for (int i = 0; i < 3000; ++i) {
+        const bool outside = i % 50 == 0, blocked = rng() % 4 == 0;
+        const float v = std::ldexp(float(rng() % 1000 + 1), -10); // exact in the fixed point
+        keys.push_back(outside ? -1 : static_cast<int>(rng() % (o.slots * K)));
+        values.push_back(blocked ? 0.0f : v);
+        reaches.push_back(v);
+        exits.push_back(-1);
+        parts.insert(parts.end(), {std::ldexp(float(rng() % 100 + 1), -6), 0.0f});
+        seen += outside || blocked ? 0.0 : v;
+        reach += outside ? 0.0 : v;
+    }
+    cache->add(keys.data(), values.data(), exits.data(), parts.data(), int(keys.size()),
+               reaches.data());
+    cache->tables();
+    EXPECT_NEAR(cache->light_seen_share(), seen / reach, 1e-6); // (fixed point, relative to 3)
+    EXPECT_GT(seen / reach, 0.7);
+    EXPECT_LT(seen / reach, 0.8);
 }
 
 // The sums are fixed point: any order of the same records gives the same tables, bit for bit

@@ -90,7 +90,7 @@ TEST(VisibilityRecord, DeviceSumsEqualTheHostsBitForBit) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     std::vector<int> keys(n), exits(n);
-    std::vector<float> values(n), parts(2 * n);
+    std::vector<float> values(n), reaches(n), parts(2 * n);
     const float odd[] = {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(),
                          std::numeric_limits<float>::infinity(), 1.0e9f};
     for (int i = 0; i < n; ++i) {
@@ -99,19 +99,24 @@ TEST(VisibilityRecord, DeviceSumsEqualTheHostsBitForBit) {
                                              : int(rng() % (slots * ETK_GUIDE_REGIONS)));
         exits[i] = i % 5 == 0 ? -1 : int(rng() % 12); // a window's few cells
         values[i] = i % 13 == 0 ? odd[(i / 13) % 5] : 50.0f * u(rng) * u(rng);
+        // A blocked ray's value is 0 and its reach what it would have brought.
+        reaches[i] = values[i] + (exits[i] < 0 ? 10.0f * u(rng) : 0.0f);
+        values[i] = exits[i] < 0 ? 0.0f : values[i];
         parts[2 * i] = i % 31 == 0 ? 0.0f : u(rng);
         parts[2 * i + 1] = i % 37 == 0 ? std::numeric_limits<float>::quiet_NaN() : 3.0f * u(rng);
     }
     const size_t words = static_cast<size_t>(etk::etk_gsum_words(slots, 0));
     std::vector<uint32_t> host(words, 0u);
     for (int i = 0; i < n; ++i)
-        etk::etk_guide_record_light(host.data(), p, box.data(), keys[i], values[i], exits[i],
-                                    etk::make_float2(parts[2 * i], parts[2 * i + 1]));
+        etk::etk_guide_record_light(host.data(), p, box.data(), keys[i], values[i], reaches[i],
+                                    exits[i], etk::make_float2(parts[2 * i], parts[2 * i + 1]));
     EXPECT_GT(host[etk::etk_gsum_cell(slots, 0, 3) + ETK_GSUM_COUNT], 0u);
+    EXPECT_GT(host[etk::etk_gsum_cell(slots, 0, 3) + ETK_GSUM_REACH + 1], 0u);
 
-    const std::vector<uint32_t> device =
-        device_sums("record_lights", p,
-                    {input(box), input(keys), input(values), input(exits), input(parts)}, n, words);
+    const std::vector<uint32_t> device = device_sums(
+        "record_lights", p,
+        {input(box), input(keys), input(values), input(reaches), input(exits), input(parts)}, n,
+        words);
     for (size_t k = 0; k < words; ++k)
         ASSERT_EQ(device[k], host[k]) << "word " << k;
 }

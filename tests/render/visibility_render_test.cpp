@@ -123,13 +123,11 @@ TEST(VisibilityRender, VerdictKeepsTheTablesInARoomLitThroughAnOpening) {
     EXPECT_FALSE(vis == samples(s, et::Strategy::mis, 72, 76)) << "the tables rendered MIS";
 }
 
-TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
-    // A diffuse floor under a constant sky, seen from above: nothing blocks the map, the tables
-    // learn the map itself and cost more for nothing, so MIS wins the verdict; the passes after
-    // it are MIS's own (the strategy's balance heuristic), bit for bit, batched map samples and
-    // all.
-    et::Scene s =
-        ett::base_scene(32, 24, et::make_envmap("sky", ett::constant_image(32, 16, 1.0f), {}));
+// A diffuse floor under a constant sky, seen from above: nothing blocks the map, the tables
+// learn the map itself and cost more for nothing.
+et::Scene open_floor(int width, int height) {
+    et::Scene s = ett::base_scene(width, height,
+                                  et::make_envmap("sky", ett::constant_image(32, 16, 1.0f), {}));
     s.materials.push_back(ett::diffuse(0.5f));
     ett::add_square(s.triangles, glm::vec3(0, 0, 0), glm::vec3(0, 1, 0), 4.0f, 0);
     s.camera.eye = {0.0f, 3.0f, 0.1f};
@@ -138,6 +136,13 @@ TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
     s.settings.backend = et::Backend::cpu;
     s.settings.max_depth = 1;
     s.settings.seed = 3;
+    return s;
+}
+
+TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
+    // MIS wins the verdict on the open floor; the passes after it are MIS's own (the strategy's
+    // balance heuristic), bit for bit, batched map samples and all.
+    et::Scene s = open_floor(32, 24);
     int verdict = -1;
     const std::vector<float> vis = samples(s, et::Strategy::visibility, 72, 80, &verdict);
     EXPECT_EQ(verdict, 0) << "the tables stayed under an open sky";
@@ -167,6 +172,43 @@ TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
     s.settings.heuristic = et::MisHeuristic::automatic;
     EXPECT_FALSE(samples(s, et::Strategy::visibility, 72, 80, &verdict) == vis);
     EXPECT_EQ(verdict, -1);
+}
+
+// auto's screen: on the open floor at depth 2 its first passes' shadow rays find all the light
+// they carry, so the verdict is compensated's at the first update with records enough, without
+// measuring; the passes after it are compensated's, bit for bit, and a render resumed past it
+// continues exactly. At depth 1 (no screen) and in the side-lit room, whose rays find little of
+// the light, the verdict is measured.
+TEST(VisibilityRender, AutoScreensOutASceneThatBlocksNoLight) {
+    et::Scene s = open_floor(96, 64); // 6,144 paths a pass: the screen's records in two
+    s.settings.strategy = et::Strategy::automatic;
+    {
+        const ett::SampleRun direct = ett::render_samples(s, 2, 0, 24);
+        EXPECT_EQ(ett::learning_verdict_by(direct.renderer->stats()), "measure");
+    }
+    s.settings.max_depth = 2;
+    const ett::SampleRun run = ett::render_samples(s, 2, 0, 12);
+    const et::RenderStats& st = run.renderer->stats();
+    EXPECT_EQ(ett::learning_verdict(st), 0);
+    EXPECT_EQ(ett::learning_verdict_by(st), "screen");
+    EXPECT_EQ(ett::learning_count(st, "learning_passes"), 2u) << "not where the records sufficed";
+    EXPECT_GT(st.learning["verdict_screen_share"].get<double>(), 0.999);
+    const std::vector<float> whole = run.renderer->sums().mean();
+    const std::vector<float> after = samples(s, et::Strategy::automatic, 4, 12);
+    EXPECT_TRUE(after == samples(s, et::Strategy::compensated, 4, 12))
+        << "the passes after the screen are not compensated's";
+    const et::FilmSums part = ett::render_samples(s, 2, 0, 3).renderer->sums();
+    s.settings.strategy = et::Strategy::automatic;
+    EXPECT_TRUE(render(s, 2, 3, 12, &part).mean == whole) << "resumed past the screen";
+
+    et::Scene r = room();
+    r.settings.strategy = et::Strategy::automatic;
+    r.width = 96;
+    r.height = 64;
+    const ett::SampleRun room_run = ett::render_samples(r, 2, 0, 24);
+    const et::RenderStats& rs = room_run.renderer->stats();
+    EXPECT_EQ(ett::learning_verdict_by(rs), "measure");
+    EXPECT_LT(rs.learning["verdict_screen_share"].get<double>(), 0.5);
 }
 
 } // namespace

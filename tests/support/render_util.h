@@ -115,12 +115,19 @@ inline uint64_t learning_count(const et::RenderStats& st, const char* key) {
     return st.learning.is_object() && st.learning.contains(key) ? st.learning[key].get<uint64_t>()
                                                                 : 0;
 }
-// The visibility strategy's verdict: 1 the tables stay, 0 MIS from then on, -1 not (yet) given.
+// The visibility strategy's verdict: 1 the tables stay, 0 the fallback (MIS, or compensated for
+// auto) from then on, -1 not (yet) given.
 inline int learning_verdict(const et::RenderStats& st) {
     if (!st.learning.is_object() || !st.learning.contains("verdict"))
         return -1;
     const std::string v = st.learning["verdict"].get<std::string>();
-    return v == "tables" ? 1 : v == "mis" ? 0 : -1;
+    return v == "tables" ? 1 : v == "none" ? -1 : 0;
+}
+// How it was given: "screen", "measure" or "none".
+inline std::string learning_verdict_by(const et::RenderStats& st) {
+    return st.learning.is_object() && st.learning.contains("verdict_by")
+               ? st.learning["verdict_by"].get<std::string>()
+               : "none";
 }
 // Its learned cells that take fewer light samples, per count.
 inline std::map<float, uint64_t> learning_light_counts(const et::RenderStats& st) {

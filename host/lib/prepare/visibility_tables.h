@@ -101,6 +101,13 @@ struct VisibilityOptions {
     int verdict_stride = 1;
     double verdict_cost = 1.25;
     double verdict_cost_guided = 1.4;
+    // The verdict's screen (VisibilityLearning), where continuations are guided (depth > 1): at
+    // the first update whose records number at least screen_records, if the shadow rays found
+    // unblocked a share of the light they carried of at least 1 / the verdict's cost, the
+    // verdict is for the fallback at once, without its measuring passes; otherwise the verdict
+    // is measured as above.
+    bool screen = false;
+    int screen_records = 4096;
     // What the verdict weighs the tables against, and what renders after a verdict against them:
     // the paper's MIS for the visibility strategy, compensated for auto (auto_visibility_options).
     Strategy fallback = Strategy::mis;

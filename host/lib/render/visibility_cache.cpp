@@ -61,11 +61,12 @@ etk::EtkParams VisibilityCache::record_params() {
 }
 
 void VisibilityCache::add(const int* keys, const float* values, const int* exits,
-                          const float* parts, int n) {
+                          const float* parts, int n, const float* reaches) {
     const etk::EtkParams p = record_params();
     const float* box = last_.data() + etk::etk_portal_offset(opt_.slots, opt_.continuation);
     for (int i = 0; i < n; ++i)
-        etk::etk_guide_record_light(pending_.data(), p, box, keys[i], values[i], exits[i],
+        etk::etk_guide_record_light(pending_.data(), p, box, keys[i], values[i],
+                                    reaches ? reaches[i] : values[i], exits[i],
                                     etk::make_float2(parts[2 * i], parts[2 * i + 1]));
 }
 
@@ -120,7 +121,15 @@ void VisibilityCache::absorb(uint32_t* words, size_t count) {
     for (int s = 0; s < S; ++s) {
         uint32_t* cell = words + etk::etk_gsum_cell(S, C, s);
         if (cell[ETK_GSUM_COUNT] == 0 && (!C || cell[ETK_GSUM_DCOUNT] == 0))
-            continue; // no record: nothing summed in the cell (most cells)
+            continue;                    // no record: nothing summed in the cell (most cells)
+        if (cell[ETK_GSUM_COUNT] != 0) { // the light the cell's rays found, and would have
+            const uint32_t* regions = words + 2 * size_t(s) * K;
+            for (size_t k = 0; k < K; ++k)
+                light_seen_ += double(wide(regions + 2 * k));
+            uint64_t reach = 0;
+            take_pairs(&reach, cell + ETK_GSUM_REACH, 1);
+            light_reach_ += double(reach);
+        }
         absorb_cell(light_, light_m2_[s], s, words, cell + ETK_GSUM_COUNT, cell + ETK_GSUM_M2);
         take_pairs(moments_.data() + s * P, cell + ETK_GSUM_MOMENTS, P);
         if (!C)

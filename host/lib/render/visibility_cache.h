@@ -92,9 +92,11 @@ class VisibilityCache {
                     double scale, const std::array<float, 6>& box);
     // Shadow-ray records made on the host (thread-safe; a render's are summed on the device and
     // absorbed): cell x K + region, value, the portal cell the ray left the box by (-1: blocked)
-    // and the densities p_vis, p_portal of its direction (2 n floats). The same function sums
-    // them as the device's shadow stage (kernels/visibility_record.h), for the next tables().
-    void add(const int* keys, const float* values, const int* exits, const float* parts, int n);
+    // and the densities p_vis, p_portal of its direction (2 n floats), and the values the rays
+    // would have had unblocked (reaches; null: the values). The same function sums them as the
+    // device's shadow stage (kernels/visibility_record.h), for the next tables().
+    void add(const int* keys, const float* values, const int* exits, const float* parts, int n,
+             const float* reaches = nullptr);
     // Continuation records made on the host (thread-safe; a render's are summed on the device,
     // as add()'s): cell x K + region (the direction's, etk_cguide_region: its guide density is
     // the region's), value luminance(L_in) / p, and per record 8 floats: the ray's origin, 0, its
@@ -122,6 +124,13 @@ class VisibilityCache {
     // The cells of the last tables() that take fewer than one light sample, per count.
     const std::map<float, uint64_t>& fewer_light_samples() const { return fewer_; }
     uint64_t records() const { return light_.records; } // shadow-ray records
+    // The share of the light sample's light that its shadow rays found unblocked, over every
+    // record absorbed (each record's value is an unbiased estimate of its cell's integral of
+    // L cos, with or without the visibility: the share does not depend on the density the
+    // rays were drawn with); -1 where they carried none.
+    double light_seen_share() const {
+        return light_reach_ > 0.0 ? light_seen_ / light_reach_ : -1.0;
+    }
     uint64_t continuation_records() const { return dir_.records; }
     // Whether the table should be rebuilt after learning pass `pass` (0-based): 1, 2, 4, ...
     static bool update_after(int pass, int learning_passes);
@@ -185,6 +194,7 @@ class VisibilityCache {
     std::array<double, ETK_GUIDED_CANDIDATES> guided_candidates_; // etk_guided_candidate
     std::vector<uint32_t> pending_; // add()'s sums (visibility_record.h's layout) until tables()
     RegionSums light_, dir_;        // the light sample's (shadow rays), the continuation guide's
+    double light_seen_ = 0.0, light_reach_ = 0.0; // light_seen_share's sums (fixed point)
     mutable std::mutex mutex_;
 };
 

@@ -40,7 +40,7 @@ int VisibilityLearning::learning_passes() const {
     // learning.
     const int verdict_end =
         options_.verdict_passes > 0 ? verdict_start() + options_.verdict_passes : 0;
-    return dropped_ ? verdict_end : std::max(learn_until_, verdict_end);
+    return dropped_ ? fallback_from_ : std::max(learn_until_, verdict_end);
 }
 
 bool VisibilityLearning::fallback_pass(uint32_t sample_index) const {
@@ -88,12 +88,37 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
         return;
     const Timer t;
     take_records(device);
+    if (screen_out(pass)) {
+        update_seconds_ += t.seconds();
+        return;
+    }
     const std::vector<float>& tables = cache_->tables();
     device.upload_guide(tables, cache_->changed());
     ready_ = true;
     light_counts_ = cache_->fewer_light_samples();
     learn_until_ = learning_end_at(pass + 1);
     update_seconds_ += t.seconds();
+}
+
+bool VisibilityLearning::screen_out(int pass) {
+    if (!options_.screen || !options_.continuation || screened_ || chosen_ >= 0 ||
+        options_.verdict_passes <= 0 ||
+        pass + 1 > verdict_start() ||
+        cache_->records() < static_cast<uint64_t>(options_.screen_records))
+        return false;
+    screened_ = true;
+    screen_share_ = cache_->light_seen_share();
+    const double cost = verdict_cost_for(options_, scene_.params.guide_continuation != 0);
+    if (!(screen_share_ * cost >= 1.0))
+        return false; // (no light carried: -1, no evidence)
+    drop_tables(pass + 1);
+    return true;
+}
+
+void VisibilityLearning::drop_tables(int from) {
+    dropped_ = true;
+    chosen_ = 0;
+    fallback_from_ = from;
 }
 
 void VisibilityLearning::take_records(WavefrontDevice& device) {
@@ -104,6 +129,8 @@ void VisibilityLearning::take_records(WavefrontDevice& device) {
 
 // The verdict's passes of the tables are measured on their films.
 bool VisibilityLearning::reads_film(uint32_t sample_index) const {
+    if (dropped_)
+        return false;
     const int64_t verdict_pass = int64_t(sample_index) - verdict_start();
     return verdict_pass >= 0 && verdict_pass < options_.verdict_passes;
 }
@@ -115,8 +142,8 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film*
         const Timer t;
         update_tables(pass, device);
         learning_seconds_ += seconds + t.seconds();
-        if (pass + 1 >= learn_until_)
-            cache_.reset(); // learned: the sums are no longer needed
+        if (pass + 1 >= learn_until_ || dropped_)
+            cache_.reset(); // learned, or screened out: the sums are no longer needed
     }
     if (!reads_film(sample_index))
         return true;
@@ -152,8 +179,10 @@ bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
             return false;
         verdict_->add(0, k, &film->film_sum[0].x);
     }
-    dropped_ = !verdict_->tables_win();
-    chosen_ = dropped_ ? 0 : 1;
+    if (verdict_->tables_win())
+        chosen_ = 1;
+    else
+        drop_tables(verdict_start() + options_.verdict_passes);
     verdict_fallback_error_ = verdict_->fallback_error();
     verdict_tables_error_ = verdict_->tables_error();
     verdict_.reset();
@@ -166,8 +195,7 @@ nlohmann::json VisibilityLearning::stats() const {
         counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
     // The learning's length: where its plan ends it, or, after a verdict for the fallback, at the
     // verdict's last pass (the passes after it learn nothing).
-    const int learnt =
-        dropped_ ? std::min(learn_until_, verdict_start() + options_.verdict_passes) : learn_until_;
+    const int learnt = dropped_ ? std::min(learn_until_, fallback_from_) : learn_until_;
     return {{"learning_passes", learnt},
             {"learning_seconds", learning_seconds_},
             {"update_seconds", update_seconds_},
@@ -179,6 +207,10 @@ nlohmann::json VisibilityLearning::stats() const {
             {"verdict", chosen_ < 0 ? "none"
                         : chosen_   ? "tables"
                                     : name_of(options_.fallback)},
+            {"verdict_by", chosen_ < 0                                               ? "none"
+                           : fallback_from_ > 0 && fallback_from_ <= verdict_start() ? "screen"
+                                                                                     : "measure"},
+            {"verdict_screen_share", screen_share_},
             {"verdict_passes", options_.verdict_passes},
             {"verdict_stride", options_.verdict_stride},
             {"verdict_cost", verdict_cost_for(options_, scene_.params.guide_continuation != 0)},

@@ -5,7 +5,10 @@
 // (visibility_cache.h) takes the sums and the cells' tables are rebuilt and uploaded; after the
 // verdict's passes of the tables, as many passes of the fallback (the paper's MIS for the
 // visibility strategy, compensated for auto: VisibilityOptions::fallback) measure it
-// (guide_verdict.h), and the cheaper one per error renders the rest of the image. How long the
+// (guide_verdict.h), and the cheaper one per error renders the rest of the image. For auto a
+// screen comes first (VisibilityOptions::screen): where the first updates' shadow rays found
+// nearly all the light they carried unblocked (an open sky), the verdict is the fallback's at
+// once, saving the 20 passes of the tables a measured verdict costs there. How long the
 // learning goes on is decided at each update from the samples the render will take (plan): it
 // ends at an update whose successor no planned sample would use (a learning pass costs about
 // 1.25 steady ones, and a 64-sample render at 128 x 96 paid it on passes 33-64 for tables after
@@ -47,6 +50,11 @@ class VisibilityLearning : public LearningPolicy {
     // The tables after learning pass `pass`, where the schedule rebuilds them, and where the
     // learning ends (learning_end_at).
     void update_tables(int pass, WavefrontDevice& device);
+    // The verdict's screen (VisibilityOptions::screen), at the update after learning pass
+    // `pass`: true where it chose the fallback from the next pass on.
+    bool screen_out(int pass);
+    // A verdict for the fallback: passes `from` and later render it, and the learning ends.
+    void drop_tables(int from);
     // The device's record sums since the last call, into the cache (and the figures).
     void take_records(WavefrontDevice& device);
     // The verdict's passes of the fallback, then the choice. False where one was abandoned.
@@ -57,6 +65,9 @@ class VisibilityLearning : public LearningPolicy {
     bool fallback_light_batch_; // the sample_lights stage for the fallback's passes
     bool ready_ = false;        // the cells' tables hold something learned
     bool dropped_ = false;      // the verdict chose the fallback: the passes after it render it
+    int fallback_from_ = 0;     // where dropped_: the first pass of the fallback
+    bool screened_ = false;     // the screen was applied (at most once)
+    double screen_share_ = -1;  // the light share the screen saw (-1: none)
     // Passes 0 .. learn_until_ - 1 record: options_.learning_passes, fewer or more as the plan
     // decides at the updates from the render's plan.
     int learn_until_ = 0;

@@ -4,11 +4,12 @@
 
 __kernel void record_lights(volatile __global uint* sums, EtkParams p, __global const float* box,
                             __global const int* keys, __global const float* values,
-                            __global const int* exits, __global const float2* parts, int n) {
+                            __global const float* reaches, __global const int* exits,
+                            __global const float2* parts, int n) {
     int i = get_global_id(0);
     if (i >= n)
         return;
-    etk_guide_record_light(sums, p, box, keys[i], values[i], exits[i], parts[i]);
+    etk_guide_record_light(sums, p, box, keys[i], values[i], reaches[i], exits[i], parts[i]);
 }
 
 // The accumulate stage's continuation records (etk_guide_record_continuation) of a batch: ray i
