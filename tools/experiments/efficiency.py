@@ -121,9 +121,31 @@ def scene_json(map_file, depth, width, height):
     }
 
 
-def file_scene(path, cache, size):
+def scene_names(paths):
+    """A name per scene file: its base name, or, where two files share one (the same layout name
+    in two generated sets), its folder's name and base name for every file, so that no two scenes
+    share a cached scene file, a reference or a row of the tables."""
+    base = [os.path.splitext(os.path.basename(p))[0] for p in paths]
+    if len(set(base)) == len(base):
+        return base
+    full = [f"{os.path.basename(os.path.dirname(os.path.abspath(p)))}-{b}"
+            for p, b in zip(paths, base)]
+    if len(set(full)) != len(full):
+        sys.exit("experiments: scene files share a name and their folders' names: "
+                 + " ".join(paths))
+    return full
+
+
+def check_scene_names():
+    """--tiny: scenes of one name in two folders get their folders' names, others their own."""
+    assert scene_names(["a/x.json", "b/x.json", "b/y.json"]) == ["a-x", "b-x", "b-y"]
+    assert scene_names(["a/x.json", "a/y.json"]) == ["x", "y"]
+
+
+def file_scene(path, cache, size, name=None):
     """A scene file copied into the cache with its relative files made absolute (so it renders
-    from there) and, with `size`, its film resized. Returns (name, path)."""
+    from there) and, with `size`, its film resized; name: what the cache calls it (scene_names;
+    default its base name). Returns (name, path)."""
     path = os.path.abspath(path)
     with open(path) as f:
         s = json.load(f)
@@ -137,7 +159,7 @@ def file_scene(path, cache, size):
     if size:
         s.setdefault("film", {})["width"], s["film"]["height"] = size
     s.pop("output", None)
-    name = os.path.splitext(os.path.basename(path))[0]
+    name = name or os.path.splitext(os.path.basename(path))[0]
     w, h = s.get("film", {}).get("width", 0), s.get("film", {}).get("height", 0)
     out = os.path.join(cache, f"{name}-{w}x{h}.json")
     with open(out, "w") as f:
@@ -303,6 +325,7 @@ def main():
     if a.tiny:
         check_regions(work)
         check_intervals()
+        check_scene_names()
     extra = []  # common.render: the native back end
     if a.size is None and not a.scenes:
         a.size = [320, 72]
@@ -313,7 +336,8 @@ def main():
     rows = []  # one per render
     if a.scenes:
         region_names = []
-        cases = [file_scene(f, cache, a.size) + (None, None) for f in a.scenes]
+        cases = [file_scene(f, cache, a.size, n) + (None, None)
+                 for f, n in zip(a.scenes, scene_names(a.scenes))]
     else:
         cases = []
         for map_key in a.maps:

@@ -23,7 +23,7 @@ import statistics
 import tempfile
 
 import common
-from efficiency import file_scene
+from efficiency import file_scene, scene_names
 
 SAMPLES = (64, 136, 200)
 
@@ -63,8 +63,8 @@ def main():
     seeds = 1 if args.tiny else args.seeds
     rows, share, in_run = [], {}, {}
     with tempfile.TemporaryDirectory() as tmp:
-        for path in scenes:
-            name, scene = file_scene(path, tmp, size)
+        for path, name in zip(scenes, scene_names(scenes)):
+            name, scene = file_scene(path, tmp, size, name)
             for seed in range(1, seeds + 1):
                 st = {(e, n): render_stats(exes[e], scene, n, seed, args.strategy, tmp)
                       for n in SAMPLES for e in range(len(exes))}
