@@ -121,9 +121,9 @@ VisibilityOptions auto_visibility_options() {
     // rooms and window_room 0.013-0.085, open scenes 0.64-0.98; the 20 passes of the tables a
     // measured verdict took there were 0.14-0.24 of a 64-sample render. Past the first vertex
     // only: at depth 1 the light sample is the whole estimate, and the tables' light x cosine
-    // per cell paid without any blocking in 2 of 7 open scenes (a low sun, a museum's
-    // skylights: 1.25x compensated at 4 s), while at depth 5 the measured verdict chose the
-    // tables in none of 9 open scenes and the screen gained 4-10% at 4 s in all 7 measured
+    // per cell paid without any blocking in 1 of 7 open scenes (a museum's skylights over
+    // plastic statues: 1.25x compensated at 4 s), while at depth 5 the measured verdict chose
+    // the tables in none of 9 open scenes and the screen gained 1-9% at 4 s in all 7 measured
     // (docs/estimators.md).
     o.screen = true;
     return o;
