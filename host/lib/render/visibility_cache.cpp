@@ -121,8 +121,9 @@ void VisibilityCache::absorb(uint32_t* words, size_t count) {
     for (int s = 0; s < S; ++s) {
         uint32_t* cell = words + etk::etk_gsum_cell(S, C, s);
         if (cell[ETK_GSUM_COUNT] == 0 && (!C || cell[ETK_GSUM_DCOUNT] == 0))
-            continue;                    // no record: nothing summed in the cell (most cells)
-        if (cell[ETK_GSUM_COUNT] != 0) { // the light the cell's rays found, and would have
+            continue; // no record: nothing summed in the cell (most cells)
+        // The light the cell's shadow rays found, and what they would have found unblocked.
+        if (cell[ETK_GSUM_COUNT] != 0) {
             const uint32_t* regions = words + 2 * size_t(s) * K;
             for (size_t k = 0; k < K; ++k)
                 light_seen_ += double(wide(regions + 2 * k));

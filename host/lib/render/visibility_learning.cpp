@@ -102,8 +102,7 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
 
 bool VisibilityLearning::screen_out(int pass) {
     if (!options_.screen || !options_.continuation || screened_ || chosen_ >= 0 ||
-        options_.verdict_passes <= 0 ||
-        pass + 1 > verdict_start() ||
+        options_.verdict_passes <= 0 || pass + 1 > verdict_start() ||
         cache_->records() < static_cast<uint64_t>(options_.screen_records))
         return false;
     screened_ = true;
@@ -112,6 +111,7 @@ bool VisibilityLearning::screen_out(int pass) {
     if (!(screen_share_ * cost >= 1.0))
         return false; // (no light carried: -1, no evidence)
     drop_tables(pass + 1);
+    verdict_by_ = "screen";
     return true;
 }
 
@@ -183,6 +183,7 @@ bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
         chosen_ = 1;
     else
         drop_tables(verdict_start() + options_.verdict_passes);
+    verdict_by_ = "measure";
     verdict_fallback_error_ = verdict_->fallback_error();
     verdict_tables_error_ = verdict_->tables_error();
     verdict_.reset();
@@ -193,8 +194,8 @@ nlohmann::json VisibilityLearning::stats() const {
     nlohmann::json counts = nlohmann::json::object();
     for (const auto& [n, cells] : light_counts_)
         counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
-    // The learning's length: where its plan ends it, or, after a verdict for the fallback, at the
-    // verdict's last pass (the passes after it learn nothing).
+    // The learning's length: where its plan ends it, or, after a verdict for the fallback, where
+    // the fallback begins (the passes from there learn nothing).
     const int learnt = dropped_ ? std::min(learn_until_, fallback_from_) : learn_until_;
     return {{"learning_passes", learnt},
             {"learning_seconds", learning_seconds_},
@@ -207,9 +208,7 @@ nlohmann::json VisibilityLearning::stats() const {
             {"verdict", chosen_ < 0 ? "none"
                         : chosen_   ? "tables"
                                     : name_of(options_.fallback)},
-            {"verdict_by", chosen_ < 0                                               ? "none"
-                           : fallback_from_ > 0 && fallback_from_ <= verdict_start() ? "screen"
-                                                                                     : "measure"},
+            {"verdict_by", verdict_by_},
             {"verdict_screen_share", screen_share_},
             {"verdict_passes", options_.verdict_passes},
             {"verdict_stride", options_.verdict_stride},

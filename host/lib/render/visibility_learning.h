@@ -68,6 +68,7 @@ class VisibilityLearning : public LearningPolicy {
     int fallback_from_ = 0;     // where dropped_: the first pass of the fallback
     bool screened_ = false;     // the screen was applied (at most once)
     double screen_share_ = -1;  // the light share the screen saw (-1: none)
+    const char* verdict_by_ = "none"; // how the verdict was given: "screen" or "measure"
     // Passes 0 .. learn_until_ - 1 record: options_.learning_passes, fewer or more as the plan
     // decides at the updates from the render's plan.
     int learn_until_ = 0;
