@@ -89,11 +89,16 @@ uint64_t wide(const uint32_t* w) {
     return uint64_t(w[0]) | uint64_t(w[1]) << 32;
 }
 
-// Adds the pairs w[2 k], w[2 k + 1] to to[k], k < n, and zeroes them.
-void take_pairs(uint64_t* to, uint32_t* w, size_t n) {
-    for (size_t k = 0; k < n; ++k)
-        to[k] += wide(w + 2 * k);
+// Adds the pairs w[2 k], w[2 k + 1] to to[k], k < n, and zeroes them; returns their sum.
+double take_pairs(uint64_t* to, uint32_t* w, size_t n) {
+    double taken = 0.0;
+    for (size_t k = 0; k < n; ++k) {
+        const uint64_t v = wide(w + 2 * k);
+        to[k] += v;
+        taken += double(v);
+    }
     std::fill(w, w + 2 * n, 0u);
+    return taken;
 }
 
 } // namespace
@@ -108,7 +113,7 @@ void VisibilityCache::absorb_cell(RegionSums& r, uint64_t& m2, int s, uint32_t* 
     r.records += *count;
     *count = 0;
     take_pairs(&m2, moment, 1);
-    take_pairs(r.sums.data() + size_t(s) * K, regions + 2 * size_t(s) * K, K);
+    r.total += take_pairs(r.sums.data() + size_t(s) * K, regions + 2 * size_t(s) * K, K);
 }
 
 void VisibilityCache::absorb(uint32_t* words, size_t count) {
@@ -121,16 +126,9 @@ void VisibilityCache::absorb(uint32_t* words, size_t count) {
     for (int s = 0; s < S; ++s) {
         uint32_t* cell = words + etk::etk_gsum_cell(S, C, s);
         if (cell[ETK_GSUM_COUNT] == 0 && (!C || cell[ETK_GSUM_DCOUNT] == 0))
-            continue; // no record: nothing summed in the cell (most cells)
-        // The light the cell's shadow rays found, and what they would have found unblocked.
-        if (cell[ETK_GSUM_COUNT] != 0) {
-            const uint32_t* regions = words + 2 * size_t(s) * K;
-            for (size_t k = 0; k < K; ++k)
-                light_seen_ += double(wide(regions + 2 * k));
-            uint64_t reach = 0;
-            take_pairs(&reach, cell + ETK_GSUM_REACH, 1);
-            light_reach_ += double(reach);
-        }
+            continue;       // no record: nothing summed in the cell (most cells)
+        uint64_t reach = 0; // what the cell's shadow rays would have found unblocked
+        light_reach_ += take_pairs(&reach, cell + ETK_GSUM_REACH, 1);
         absorb_cell(light_, light_m2_[s], s, words, cell + ETK_GSUM_COUNT, cell + ETK_GSUM_M2);
         take_pairs(moments_.data() + s * P, cell + ETK_GSUM_MOMENTS, P);
         if (!C)

@@ -129,7 +129,7 @@ class VisibilityCache {
     // L cos, with or without the visibility: the share does not depend on the density the
     // rays were drawn with); -1 where they carried none.
     double light_seen_share() const {
-        return light_reach_ > 0.0 ? light_seen_ / light_reach_ : -1.0;
+        return light_reach_ > 0.0 ? light_.total / light_reach_ : -1.0;
     }
     uint64_t continuation_records() const { return dir_.records; }
     // Whether the table should be rebuilt after learning pass `pass` (0-based): 1, 2, 4, ...
@@ -142,6 +142,7 @@ class VisibilityCache {
         std::vector<uint32_t> counts;  // records per slot
         std::vector<uint32_t> counted; // counts at the last update: the records since are the rest
         uint64_t records = 0;
+        double total = 0.0; // the sum of sums, every slot and region (fixed point)
         uint64_t bytes() const {
             return sums.size() * sizeof(uint64_t) + (counts.size() + counted.size()) * 4;
         }
@@ -194,7 +195,7 @@ class VisibilityCache {
     std::array<double, ETK_GUIDED_CANDIDATES> guided_candidates_; // etk_guided_candidate
     std::vector<uint32_t> pending_; // add()'s sums (visibility_record.h's layout) until tables()
     RegionSums light_, dir_;        // the light sample's (shadow rays), the continuation guide's
-    double light_seen_ = 0.0, light_reach_ = 0.0; // light_seen_share's sums (fixed point)
+    double light_reach_ = 0.0; // the light records' values had nothing blocked them (fixed point)
     mutable std::mutex mutex_;
 };
 
