@@ -73,14 +73,22 @@ typedef float4 etk_lanes;
 #endif
 // The lowest set bit's index (bvh.h: a node's entered children as a bit mask).
 #define etk_lowest_bit(b) (31 - (int)clz((b) & (0u - (b))))
-// Eight lanes (bvh.h's 8-wide nodes): row r of eight floats at p, read by vload8, which needs
-// only a float's alignment (a buffer over a host vector of float4, CL_MEM_USE_HOST_PTR, is
-// 16-byte aligned, and a float8 load from there faults on PoCL); a mask's lanes as bits 0-7 (s0
+// Eight lanes (bvh.h's 8-wide nodes): row r of eight floats at p, read with only a float's
+// alignment (a buffer over a host vector of float4, CL_MEM_USE_HOST_PTR, is 16-byte aligned,
+// and an aligned float8 load from there faults on PoCL); a mask's lanes as bits 0-7 (s0
 // is bit 0), a float8's sign bits, and lane i. Clang for x86-64 with AVX (PoCL's CPU device):
 // vmovmskps, or kmov straight from the mask's compare; lane by lane, clang makes it a masked
 // move and an OR over the lanes, instructions between a node's box test and the branch on its
 // children.
+#if defined(__clang__) && defined(__x86_64__)
+// As one unaligned 32-byte load: PoCL's vload8 is two vload4, each at an offset of its own, and
+// the traversal's twelve offsets (six rows chosen per ray) were reloaded from the stack at every
+// node, with a lane insert per row.
+typedef float etk_float8_unaligned __attribute__((ext_vector_type(8), aligned(4)));
+#define etk_row8(p, r) (*(__global const etk_float8_unaligned*)((p) + 8 * (r)))
+#else
 #define etk_row8(p, r) vload8((r), (p))
+#endif
 #define etk_splat8(s) ((float8)(s))
 #if defined(__clang__) && defined(__x86_64__) && defined(__AVX__)
 #define etk_sign_bits8(v) ((uint)__builtin_ia32_movmskps256(as_float8(v)))
