@@ -15,10 +15,10 @@
 
 ETK_BEGIN
 
-// The bin of a vertex with shading normal ns; -1 at a dielectric, lit from both sides, which
-// takes the full map instead (etk_light_source).
-ETK_FN int etk_cosine_cell(EtkMaterial m, float3 ns) {
-    return etk_bsdf_is_dielectric(m) ? -1 : etk_normal_bin(ns);
+// The table of a vertex with shading normal ns, its bin's; -1 at a dielectric, lit from both
+// sides, which takes the full map instead (etk_light_source).
+ETK_FN int etk_cosine_cell(EtkParams p, EtkMaterial m, float3 ns) {
+    return etk_bsdf_is_dielectric(m) ? -1 : p.bin_cell_base + etk_normal_bin(ns);
 }
 
 ETK_FN float etk_cosine_light_pdf(EtkScene S, EtkParams p, int cell, float2 uv) {

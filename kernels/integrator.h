@@ -260,12 +260,12 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
 
 // The cell (etk_light_cell) of the binned technique's vertex in `slot`, from the hit alone (the
 // shade stage finds the same from its surface): sample_lights draws before the surface is made.
-ETK_FN int etk_hit_cosine_cell(EtkScene S, EtkPaths P, int slot) {
+ETK_FN int etk_hit_cosine_cell(EtkScene S, EtkPaths P, EtkParams p, int slot) {
     float4 h = P.hit[slot];
     int prim = (int)as_uint(h.y), front;
     float3 ng;
     float3 ns = etk_shading_normal(S, prim, h.z, h.w, etk_xyz(P.ray_d[slot]), &ng, &front);
-    return etk_cosine_cell(etk_material_load(S.materials, S.tri_material[prim]), ns);
+    return etk_cosine_cell(p, etk_material_load(S.materials, S.tri_material[prim]), ns);
 }
 
 // The sample_lights stage's work-items for a shade queue of `shade` entries: one per batch of
@@ -298,7 +298,7 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
         int cell[ETK_LIGHT_BATCH];
         int m = min(ETK_LIGHT_BATCH, n - first);
         for (int k = 0; k < m; ++k)
-            cell[k] = p.guide_ready ? etk_hit_cosine_cell(S, P, Q.shade[first + k]) : -1;
+            cell[k] = p.guide_ready ? etk_hit_cosine_cell(S, P, p, Q.shade[first + k]) : -1;
         etk_cosine_light_batch(S, P, p, Q.shade + first, cell, xu, xv, m);
         return;
     }

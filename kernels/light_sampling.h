@@ -47,7 +47,7 @@ ETK_FN EtkLightSource etk_light_source(EtkParams p, int depth, int cell) {
 // The cell of surface s (material m) for the technique `kind`; 0 where it has none.
 ETK_FN int etk_light_cell(EtkParams p, int kind, EtkSurface s, EtkMaterial m) {
     return kind == ETK_LIGHT_LEARNED  ? etk_guide_cell(p, s.origin, s.ng)
-           : kind == ETK_LIGHT_BINNED ? etk_cosine_cell(m, s.ns)
+           : kind == ETK_LIGHT_BINNED ? etk_cosine_cell(p, m, s.ns)
                                       : 0;
 }
 

@@ -68,6 +68,10 @@ typedef struct {
     int guide_continuation;
     float guide_inv_power; // 1 / the map's power: the unit of the records (visibility_record.h)
     float guide_continuation_share; // a well-learned cell's guided share (VisibilityOptions)
+    // The binned technique's first table in guide_cells (cosine_light.h), in tables of
+    // ETK_GUIDE_CELL_FLOATS: 0 for the cosine strategy; after the learned tables where auto's
+    // verdict measures the binned technique beside them (VisibilityOptions::alternative).
+    int bin_cell_base;
     // Splitting (the mis strategy): light and BSDF samples per non-delta vertex, powers of two;
     // 1 and 1 are the paper's estimator (etk_split_samples in integrator.h).
     int light_samples, bsdf_samples;

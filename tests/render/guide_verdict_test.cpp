@@ -58,6 +58,44 @@ TEST(GuideVerdict, TablesStayWhereMisErrsByMoreThanTheirCost) {
     EXPECT_NEAR(room.fallback_error() / room.tables_error(), 25.0, 0.25);
 }
 
+// The same with a third technique, the alternative (t = 2), at noise `alternative`.
+et::GuideVerdict measure3(double fallback, double tables, double alternative, double cost,
+                          double alternative_cost) {
+    et::GuideVerdict v(kW, kH, kPasses, cost, alternative_cost);
+    for (int t : {1, 0, 2}) // the renderer's order: the tables' passes, then the measured ones
+        for (int k = 0; k < kPasses; ++k) {
+            const double amplitude = t == 1 ? tables : t == 0 ? fallback : alternative;
+            const std::vector<float> f = film(static_cast<uint32_t>(k), amplitude);
+            v.add(t, k, f.data());
+        }
+    return v;
+}
+
+TEST(GuideVerdict, AnAlternativeWinsWhereItsErrorPaysForItsCost) {
+    // Errors 1.44 : 1.21 : 1 (fallback : tables : alternative). At a cost of 1.25 the tables lose
+    // to the fallback alone (1.51 > 1.44), and so to the alternative at a cost of 1.2 (1.2 <
+    // 1.44); at 1.5 the alternative costs more than the fallback's error.
+    const et::GuideVerdict cheap = measure3(0.12, 0.11, 0.1, 1.25, 1.2);
+    EXPECT_NEAR(cheap.fallback_error() / cheap.alternative_error(), 1.44, 0.015);
+    EXPECT_FALSE(cheap.tables_win());
+    EXPECT_TRUE(cheap.alternative_wins());
+    const et::GuideVerdict dear = measure3(0.12, 0.11, 0.1, 1.25, 1.5);
+    EXPECT_FALSE(dear.tables_win());
+    EXPECT_FALSE(dear.alternative_wins());
+    // Tables at 0.81 beat the alternative's 1.2 x 1 at their cost of 1.25 (1.01 < 1.2).
+    const et::GuideVerdict tables = measure3(0.12, 0.09, 0.1, 1.25, 1.2);
+    EXPECT_TRUE(tables.tables_win());
+    EXPECT_FALSE(tables.alternative_wins());
+    // But not where the alternative's cost per error is below theirs: 1.25 x 0.81 > 1.0 x 0.64.
+    const et::GuideVerdict alt = measure3(0.12, 0.09, 0.08, 1.25, 1.0);
+    EXPECT_FALSE(alt.tables_win());
+    EXPECT_TRUE(alt.alternative_wins());
+    // Without an alternative, no third technique's passes are taken.
+    et::GuideVerdict two(kW, kH, kPasses, 1.25);
+    const std::vector<float> f = film(1, 0.1);
+    EXPECT_THROW(two.add(2, 0, f.data()), et::Error);
+}
+
 TEST(GuideVerdict, AFireflyDoesNotDecide) {
     // Equal noise, and one pixel of one of MIS's passes 1000x its mean: the tables would win at a
     // cost of 1.25 if that pixel counted in full (it alone would add ~750x a pixel's mean error).

@@ -211,4 +211,42 @@ TEST(VisibilityRender, AutoScreensOutASceneThatBlocksNoLight) {
     EXPECT_LT(rs.learning["verdict_screen_share"].get<double>(), 0.5);
 }
 
+// auto at depth 1 measures the binned light samples (the cosine strategy's) beside compensated:
+// on the open floor under a uniform sky, whose light times the cosine the floor's one bin holds
+// exactly, they win, and the passes after the verdict are the cosine strategy's, bit for bit
+// (their tables sit after the learned ones: EtkParams::bin_cell_base); a render resumed past the
+// verdict continues exactly. In the side-lit room the tables stay; past depth 1 nothing but
+// compensated is measured.
+TEST(VisibilityRender, AutoAtDepthOneMeasuresTheBinnedLightSamplesToo) {
+    et::Scene s = open_floor(32, 24);
+    s.settings.strategy = et::Strategy::automatic;
+    const ett::SampleRun run = ett::render_samples(s, 2, 0, 40); // the verdict after pass 19
+    const et::RenderStats& st = run.renderer->stats();
+    EXPECT_EQ(st.learning["verdict"].get<std::string>(), "cosine");
+    EXPECT_EQ(st.learning["verdict_alternative"].get<std::string>(), "cosine");
+    EXPECT_LT(st.learning["verdict_alternative_error"].get<double>(),
+              st.learning["verdict_fallback_error"].get<double>());
+    EXPECT_TRUE(samples(s, et::Strategy::automatic, 24, 40) ==
+                samples(s, et::Strategy::cosine, 24, 40))
+        << "the passes after a verdict for the binned samples are not the cosine strategy's";
+    const et::FilmSums part = ett::render_samples(s, 2, 0, 30).renderer->sums();
+    s.settings.strategy = et::Strategy::automatic;
+    EXPECT_TRUE(render(s, 2, 30, 40, &part).mean == run.renderer->sums().mean())
+        << "resumed past the verdict";
+
+    et::Scene r = room();
+    r.settings.strategy = et::Strategy::automatic;
+    r.settings.max_depth = 1;
+    r.width = 96; // 768 pixels measured (every 8th)
+    r.height = 64;
+    const ett::SampleRun room_run = ett::render_samples(r, 2, 0, 24);
+    const et::RenderStats& rs = room_run.renderer->stats();
+    EXPECT_EQ(rs.learning["verdict"].get<std::string>(), "tables");
+    EXPECT_GT(rs.learning["verdict_alternative_error"].get<double>(), 0.0);
+    r.settings.max_depth = 2;
+    const ett::SampleRun deep_run = ett::render_samples(r, 2, 0, 24);
+    EXPECT_EQ(deep_run.renderer->stats().learning["verdict_alternative"].get<std::string>(),
+              "none");
+}
+
 } // namespace

@@ -239,6 +239,15 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
                                       guide_portal_box(&lo[0], &hi[0]));
     d.guide_map_power = guide_map_power(d.env_texels, p.env.tex_w, p.env.tex_h);
     p.guide_inv_power = guide_inv_power(d.guide_map_power);
+    if (verdict_measures_alternative(d.guide_options, p.guide_continuation != 0)) {
+        // The binned technique's tables after the learned ones, from a table boundary.
+        const size_t cell = ETK_GUIDE_CELL_FLOATS;
+        d.guide_cells.resize((d.guide_cells.size() + cell - 1) / cell * cell, 0.0f);
+        p.bin_cell_base = static_cast<int>(d.guide_cells.size() / cell);
+        const std::vector<float> bins =
+            cosine_bin_tables(d.env_dist, d.guide_regions, p.env, kCosineAlpha);
+        d.guide_cells.insert(d.guide_cells.end(), bins.begin(), bins.end());
+    }
 }
 
 } // namespace

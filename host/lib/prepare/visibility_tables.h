@@ -108,6 +108,14 @@ struct VisibilityOptions {
     // is measured as above.
     bool screen = false;
     int screen_records = 4096;
+    // A second technique the verdict measures beside the fallback where continuations are not
+    // guided (depth 1), as the fallback is measured (its passes on the same pixels and sample
+    // indices, not kept), weighed by alternative_cost, its time per sample over the fallback's;
+    // the cheapest per error of the three renders the rest of the image. Only the cosine
+    // strategy's binned technique serves (its tables sit after the learned ones in guide_cells:
+    // EtkParams::bin_cell_base); Strategy::mis: none.
+    Strategy alternative = Strategy::mis;
+    double alternative_cost = 1.0;
     // What the verdict weighs the tables against, and what renders after a verdict against them:
     // the paper's MIS for the visibility strategy, compensated for auto (auto_visibility_options).
     Strategy fallback = Strategy::mis;
@@ -122,6 +130,12 @@ VisibilityOptions auto_visibility_options();
 // its continuations as well (EtkParams::guide_continuation), verdict_cost otherwise.
 inline double verdict_cost_for(const VisibilityOptions& o, bool continuation_guided) {
     return continuation_guided ? o.verdict_cost_guided : o.verdict_cost;
+}
+
+// Whether the verdict measures options.alternative beside the fallback: only where continuations
+// are not guided (depth 1), and only the binned technique (the cosine strategy's).
+inline bool verdict_measures_alternative(const VisibilityOptions& o, bool continuation_guided) {
+    return !continuation_guided && o.verdict_passes > 0 && o.alternative == Strategy::cosine;
 }
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).

@@ -389,8 +389,9 @@ void ClDevice::with_mapped(int arg, size_t words, cl_map_flags flags,
 // cell's table.
 void ClDevice::upload_guide(const std::vector<float>& cells,
                             const std::vector<FloatSpan>& changed) {
-    if (cells.size() != guide_floats_)
-        throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
+    // The learned tables are the buffer's first floats (the binned technique's may follow).
+    if (cells.size() > guide_floats_)
+        throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, more than " +
                     std::to_string(guide_floats_));
     try {
         if (guide_in_place_) { // the floats the update rewrote, no more

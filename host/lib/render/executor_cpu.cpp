@@ -132,8 +132,9 @@ void CpuDevice::clear_film(bool aovs) {
 
 void CpuDevice::upload_guide(const std::vector<float>& cells,
                              const std::vector<FloatSpan>& changed) {
-    if (cells.size() != guide_cells_.size())
-        throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, expected " +
+    // The learned tables are the buffer's first floats (the binned technique's may follow).
+    if (cells.size() > guide_cells_.size())
+        throw Error("visibility tables of " + std::to_string(cells.size()) + " floats, more than " +
                     std::to_string(guide_cells_.size()));
     // Between passes: no reader.
     copy_spans(cells.data(), cells.size(), changed, guide_cells_.data());

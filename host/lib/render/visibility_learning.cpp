@@ -15,10 +15,9 @@
 namespace et {
 
 VisibilityLearning::VisibilityLearning(const DeviceScene& scene, bool batches)
-    : scene_(scene), options_(scene.guide_options), learn_until_(options_.learning_passes) {
-    etk::EtkParams fallback = scene.params;
-    set_technique(fallback, options_.fallback);
-    fallback_light_batch_ = technique_batches_light_samples(fallback) && batches;
+    : scene_(scene), options_(scene.guide_options), batches_(batches),
+      alternative_(verdict_measures_alternative(options_, scene.params.guide_continuation != 0)),
+      fallback_(options_.fallback), learn_until_(options_.learning_passes) {
     options_.continuation = scene.params.guide_continuation != 0;
     std::array<float, 6> box;
     const float* table = scene.guide_cells.data() +
@@ -47,6 +46,12 @@ bool VisibilityLearning::fallback_pass(uint32_t sample_index) const {
     return sample_index >= kVerdictFallbackBase || dropped_;
 }
 
+Strategy VisibilityLearning::fallback_technique(uint32_t sample_index) const {
+    return sample_index >= kVerdictAlternativeBase ? options_.alternative
+           : sample_index >= kVerdictFallbackBase  ? options_.fallback
+                                                   : fallback_;
+}
+
 bool VisibilityLearning::learns_tables(uint32_t sample_index) const {
     return !fallback_pass(sample_index) && sample_index < uint32_t(learn_until_);
 }
@@ -71,11 +76,13 @@ int VisibilityLearning::learning_end_at(int done) const {
 void VisibilityLearning::configure(etk::EtkParams& p, uint32_t sample_index, bool learn) const {
     p.guide_ready = ready_ ? 1 : 0;
     // The verdict's measuring passes and, after a verdict for it, every pass: the fallback
-    // estimator, with the strategy's MIS heuristic and GGX sampling.
+    // estimator (or the alternative), with the strategy's MIS heuristic and GGX sampling. The
+    // binned technique's tables are prepared, never learned: ready from the start.
     if (fallback_pass(sample_index)) {
-        set_technique(p, options_.fallback);
-        p.light_batch = fallback_light_batch_ ? 1 : 0;
-        p.guide_ready = 0;
+        const Strategy s = fallback_technique(sample_index);
+        set_technique(p, s);
+        p.light_batch = batches_ && technique_batches_light_samples(p) ? 1 : 0;
+        p.guide_ready = s == Strategy::cosine ? 1 : 0;
     }
     p.guide_learn = learn && learns_tables(sample_index) ? 1 : 0;
     p.guide_continuation_share = static_cast<float>(options_.continuation_share);
@@ -154,7 +161,8 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film*
     if (!verdict_)
         verdict_ = std::make_unique<GuideVerdict>(
             film->width(), film->height(), options_.verdict_passes,
-            verdict_cost_for(options_, scene_.params.guide_continuation != 0));
+            verdict_cost_for(options_, scene_.params.guide_continuation != 0),
+            alternative_ ? options_.alternative_cost : 0.0);
     verdict_->add(1, static_cast<int>(verdict_pass), &film->film_sum[0].x);
     if (verdict_pass + 1 < options_.verdict_passes)
         return true;
@@ -169,23 +177,29 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film*
 }
 
 bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
-    for (int k = 0; k < options_.verdict_passes; ++k) {
-        etk::EtkParams p = scene_.params;
-        p.sample_index = kVerdictFallbackBase + static_cast<uint32_t>(k);
-        p.pixel_stride = options_.verdict_stride;
-        configure(p, p.sample_index, false);
-        const Film* film = measure(p);
-        if (!film)
-            return false;
-        verdict_->add(0, k, &film->film_sum[0].x);
-    }
-    if (verdict_->tables_win())
+    for (int t = 0; t < (alternative_ ? 2 : 1); ++t)
+        for (int k = 0; k < options_.verdict_passes; ++k) {
+            etk::EtkParams p = scene_.params;
+            p.sample_index = (t == 0 ? kVerdictFallbackBase : kVerdictAlternativeBase) +
+                             static_cast<uint32_t>(k);
+            p.pixel_stride = options_.verdict_stride;
+            configure(p, p.sample_index, false);
+            const Film* film = measure(p);
+            if (!film)
+                return false;
+            verdict_->add(t == 0 ? 0 : 2, k, &film->film_sum[0].x);
+        }
+    if (verdict_->tables_win()) {
         chosen_ = 1;
-    else
+    } else {
+        if (verdict_->alternative_wins())
+            fallback_ = options_.alternative;
         drop_tables(verdict_start() + options_.verdict_passes);
+    }
     verdict_by_ = "measure";
     verdict_fallback_error_ = verdict_->fallback_error();
     verdict_tables_error_ = verdict_->tables_error();
+    verdict_alternative_error_ = verdict_->alternative_error();
     verdict_.reset();
     return true;
 }
@@ -207,7 +221,7 @@ nlohmann::json VisibilityLearning::stats() const {
             {"cells_with_fewer_light_samples", counts},
             {"verdict", chosen_ < 0 ? "none"
                         : chosen_   ? "tables"
-                                    : name_of(options_.fallback)},
+                                    : name_of(fallback_)},
             {"verdict_by", verdict_by_},
             {"verdict_screen_share", screen_share_},
             {"verdict_passes", options_.verdict_passes},
@@ -215,7 +229,9 @@ nlohmann::json VisibilityLearning::stats() const {
             {"verdict_cost", verdict_cost_for(options_, scene_.params.guide_continuation != 0)},
             {"verdict_seconds", verdict_seconds_},
             {"verdict_fallback_error", verdict_fallback_error_},
-            {"verdict_tables_error", verdict_tables_error_}};
+            {"verdict_tables_error", verdict_tables_error_},
+            {"verdict_alternative", alternative_ ? name_of(options_.alternative) : "none"},
+            {"verdict_alternative_error", verdict_alternative_error_}};
 }
 
 } // namespace et

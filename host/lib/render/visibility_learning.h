@@ -36,12 +36,15 @@ class VisibilityLearning : public LearningPolicy {
     nlohmann::json stats() const override;
 
   private:
-    // The verdict's passes of the fallback use sample indices of their own, never kept: they
-    // measure it without adding its variance to the image.
+    // The verdict's passes of the fallback, and of the alternative, use sample indices of their
+    // own, never kept: they measure it without adding its variance to the image.
     static constexpr uint32_t kVerdictFallbackBase = 0x80000000u;
-    // Whether pass `sample_index` renders the fallback: a verdict's measuring pass, or any pass
-    // after a verdict for it.
+    static constexpr uint32_t kVerdictAlternativeBase = 0xc0000000u;
+    // Whether pass `sample_index` renders a technique other than the tables: a verdict's
+    // measuring pass, or any pass after a verdict for the fallback (or the alternative).
     bool fallback_pass(uint32_t sample_index) const;
+    // Which, where fallback_pass.
+    Strategy fallback_technique(uint32_t sample_index) const;
     bool learns_tables(uint32_t sample_index) const;
     int verdict_start() const; // the first of the verdict's passes of the tables
     // Where the learning ends, decided at the update after `done` learning passes: there, or at
@@ -62,12 +65,14 @@ class VisibilityLearning : public LearningPolicy {
 
     const DeviceScene& scene_;
     VisibilityOptions options_;
-    bool fallback_light_batch_; // the sample_lights stage for the fallback's passes
-    bool ready_ = false;        // the cells' tables hold something learned
-    bool dropped_ = false;      // the verdict chose the fallback: the passes after it render it
-    int fallback_from_ = 0;     // where dropped_: the first pass of the fallback
-    bool screened_ = false;     // the screen was applied (at most once)
-    double screen_share_ = -1;  // the light share the screen saw (-1: none)
+    bool batches_;             // the sample_lights stage, where the fallback's technique allows it
+    bool alternative_;         // the verdict measures options_.alternative too
+    Strategy fallback_;        // what renders after a verdict against the tables
+    bool ready_ = false;       // the cells' tables hold something learned
+    bool dropped_ = false;     // the verdict chose the fallback: the passes after it render it
+    int fallback_from_ = 0;    // where dropped_: the first pass of the fallback
+    bool screened_ = false;    // the screen was applied (at most once)
+    double screen_share_ = -1; // the light share the screen saw (-1: none)
     const char* verdict_by_ = "none"; // how the verdict was given: "screen" or "measure"
     // Passes 0 .. learn_until_ - 1 record: options_.learning_passes, fewer or more as the plan
     // decides at the updates from the render's plan.
@@ -79,7 +84,7 @@ class VisibilityLearning : public LearningPolicy {
     double learning_seconds_ = 0, update_seconds_ = 0, verdict_seconds_ = 0;
     int chosen_ = -1; // the verdict: 1 tables, 0 fallback, -1 not yet
     uint64_t records_ = 0, continuation_records_ = 0, host_bytes_ = 0, device_bytes_ = 0;
-    double verdict_fallback_error_ = 0, verdict_tables_error_ = 0;
+    double verdict_fallback_error_ = 0, verdict_tables_error_ = 0, verdict_alternative_error_ = 0;
     std::map<float, uint64_t> light_counts_;
 };
 
