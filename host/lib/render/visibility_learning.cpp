@@ -95,6 +95,7 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
         return;
     const Timer t;
     take_records(device);
+    screen_alternative(pass);
     if (screen_out(pass)) {
         update_seconds_ += t.seconds();
         return;
@@ -120,6 +121,17 @@ bool VisibilityLearning::screen_out(int pass) {
     drop_tables(pass + 1);
     verdict_by_ = "screen";
     return true;
+}
+
+void VisibilityLearning::screen_alternative(int pass) {
+    // Before the verdict's first pass, which fixes the techniques it measures.
+    if (!alternative_ || alternative_screened_ || pass + 1 > verdict_start() ||
+        cache_->records() < static_cast<uint64_t>(options_.screen_records))
+        return;
+    alternative_screened_ = true;
+    screen_share_ = cache_->light_seen_share();
+    if (screen_share_ >= 0.0 && screen_share_ < options_.alternative_share)
+        alternative_ = false; // (no light carried: -1, no evidence)
 }
 
 void VisibilityLearning::drop_tables(int from) {
