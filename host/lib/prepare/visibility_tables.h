@@ -109,17 +109,17 @@ struct VisibilityOptions {
     bool screen = false;
     int screen_records = 4096;
     // A second technique the verdict measures beside the fallback where continuations are not
-    // guided (depth 1), as the fallback is measured (its passes on the same pixels and sample
-    // indices, not kept), weighed by alternative_cost, its time per sample over the fallback's;
-    // the cheapest per error of the three renders the rest of the image. Only the cosine
-    // strategy's binned technique serves (its tables sit after the learned ones in guide_cells:
-    // EtkParams::bin_cell_base); Strategy::mis: none.
+    // guided (depth 1), as the fallback is measured (its passes on the same pixels, with sample
+    // indices of their own, not kept), weighed by alternative_cost, its time per sample over the
+    // fallback's; the cheapest per error of the three renders the rest of the image. Only the
+    // cosine strategy's binned technique serves (its tables sit after the learned ones in
+    // guide_cells: EtkParams::bin_cell_base); Strategy::mis: none.
     Strategy alternative = Strategy::mis;
     double alternative_cost = 1.0;
     // ... unless, before the verdict's passes, an update with screen_records records found that
     // the shadow rays let through less than this share of the light they carried: the binned
     // samples know nothing of what blocks the map, and where most of it is blocked (rooms lit
-    // through openings: 0.013-0.085; open scenes 0.64-0.98) their passes only cost.
+    // through openings: 0.004-0.085; open scenes 0.64-0.99) their passes only cost.
     double alternative_share = 0.5;
     // What the verdict weighs the tables against, and what renders after a verdict against them:
     // the paper's MIS for the visibility strategy, compensated for auto (auto_visibility_options).
