@@ -127,10 +127,10 @@ VisibilityOptions auto_visibility_options() {
     // (docs/estimators.md).
     o.screen = true;
     // At depth 1 the verdict measures the cosine strategy's binned light samples too: under an
-    // open sky they beat compensated by 1.18-1.49x in 4 of 10 held-out scenes and lost by up to
-    // 0.70x in 3 (4 s, 3 seeds, three generated sets), and in the museum scene the tables won
-    // without any blocking they beat the tables (1.62x mis against 1.35x). Their time per sample
-    // over compensated's at depth 1: 1.19-1.26 in those ten scenes.
+    // open sky they beat compensated by 1.08-1.49x in 6 of 10 held-out scenes and lost by
+    // 0.75-0.96x in the other 4 (4 s, 3 seeds, three generated sets), and in the museum scene
+    // the tables won without any blocking they beat the tables (1.62x mis against 1.34x). Their
+    // time per sample over compensated's at depth 1: 1.19-1.26 in those ten scenes.
     o.alternative = Strategy::cosine;
     o.alternative_cost = 1.22;
     return o;
