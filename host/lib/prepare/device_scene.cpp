@@ -205,6 +205,18 @@ void add_strata(const VoronoiStrata& v, DeviceScene& d) {
 // The visibility strategy: its hash grid over the scene's bounds, the map's region tables and
 // the cells' initial tables (the map's own distribution; the continuation guide's, at depth > 1,
 // uniform with a guided share of 0).
+// The binned technique's tables, one per bin of normals (kernels/normal_bins.h), after whatever
+// guide_cells holds, from a table boundary (EtkParams::bin_cell_base): the cosine strategy's
+// alone, or auto's alternative after the learned tables. Needs guide_regions.
+void add_cosine_bins(DeviceScene& d) {
+    const size_t cell = ETK_GUIDE_CELL_FLOATS;
+    d.guide_cells.resize((d.guide_cells.size() + cell - 1) / cell * cell, 0.0f);
+    d.params.bin_cell_base = static_cast<int>(d.guide_cells.size() / cell);
+    const std::vector<float> bins =
+        cosine_bin_tables(d.env_dist, d.guide_regions, d.params.env, kCosineAlpha);
+    d.guide_cells.insert(d.guide_cells.end(), bins.begin(), bins.end());
+}
+
 void add_visibility_guide(const Scene& scene, DeviceScene& d) {
     const int64_t pixels = static_cast<int64_t>(scene.width) * scene.height;
     d.guide_options.slots = guide_slots(d.guide_options, pixels);
@@ -239,15 +251,8 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
                                       guide_portal_box(&lo[0], &hi[0]));
     d.guide_map_power = guide_map_power(d.env_texels, p.env.tex_w, p.env.tex_h);
     p.guide_inv_power = guide_inv_power(d.guide_map_power);
-    if (verdict_measures_alternative(d.guide_options, p.guide_continuation != 0)) {
-        // The binned technique's tables after the learned ones, from a table boundary.
-        const size_t cell = ETK_GUIDE_CELL_FLOATS;
-        d.guide_cells.resize((d.guide_cells.size() + cell - 1) / cell * cell, 0.0f);
-        p.bin_cell_base = static_cast<int>(d.guide_cells.size() / cell);
-        const std::vector<float> bins =
-            cosine_bin_tables(d.env_dist, d.guide_regions, p.env, kCosineAlpha);
-        d.guide_cells.insert(d.guide_cells.end(), bins.begin(), bins.end());
-    }
+    if (verdict_measures_alternative(d.guide_options, p.guide_continuation != 0))
+        add_cosine_bins(d);
 }
 
 } // namespace
@@ -319,7 +324,7 @@ DeviceScene prepare_device_scene(Scene scene, const RenderSettings& st,
     if (st.strategy == Strategy::cosine) {
         // One table per bin of normals, in the visibility strategy's slots (kernels/normal_bins.h).
         d.guide_regions = guide_region_tables(d.env_dist, p.env.dist_w, p.env.dist_h);
-        d.guide_cells = cosine_bin_tables(d.env_dist, d.guide_regions, p.env, kCosineAlpha);
+        add_cosine_bins(d);
         p.guide_slots = ETK_NORMAL_BINS;
         p.guide_ready = 1; // prepared here, never learned
     }

@@ -82,7 +82,7 @@ void VisibilityLearning::configure(etk::EtkParams& p, uint32_t sample_index, boo
         const Strategy s = fallback_technique(sample_index);
         set_technique(p, s);
         p.light_batch = batches_ && technique_batches_light_samples(p) ? 1 : 0;
-        p.guide_ready = s == Strategy::cosine ? 1 : 0;
+        p.guide_ready = p.light_first == ETK_LIGHT_BINNED ? 1 : 0;
     }
     p.guide_learn = learn && learns_tables(sample_index) ? 1 : 0;
     p.guide_continuation_share = static_cast<float>(options_.continuation_share);
@@ -95,7 +95,6 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
         return;
     const Timer t;
     take_records(device);
-    screen_alternative(pass);
     if (screen_out(pass)) {
         update_seconds_ += t.seconds();
         return;
@@ -109,29 +108,25 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
 }
 
 bool VisibilityLearning::screen_out(int pass) {
-    if (!options_.screen || !options_.continuation || screened_ || chosen_ >= 0 ||
-        options_.verdict_passes <= 0 || pass + 1 > verdict_start() ||
+    // Once, at the first update before the verdict's passes (which fix what it measures) whose
+    // records suffice: the share of their light the shadow rays found unblocked decides both
+    // what the screen drops (past depth 1) and whether the alternative is measured (depth 1).
+    const bool drops = options_.screen && options_.continuation && options_.verdict_passes > 0;
+    if (!(drops || alternative_) || screened_ || chosen_ >= 0 || pass + 1 > verdict_start() ||
         cache_->records() < static_cast<uint64_t>(options_.screen_records))
         return false;
     screened_ = true;
     screen_share_ = cache_->light_seen_share();
+    if (screen_share_ < 0.0)
+        return false; // no light carried: no evidence
+    if (screen_share_ < options_.alternative_share)
+        alternative_ = false;
     const double cost = verdict_cost_for(options_, scene_.params.guide_continuation != 0);
-    if (!(screen_share_ * cost >= 1.0))
-        return false; // (no light carried: -1, no evidence)
+    if (!drops || screen_share_ * cost < 1.0)
+        return false;
     drop_tables(pass + 1);
     verdict_by_ = "screen";
     return true;
-}
-
-void VisibilityLearning::screen_alternative(int pass) {
-    // Before the verdict's first pass, which fixes the techniques it measures.
-    if (!alternative_ || alternative_screened_ || pass + 1 > verdict_start() ||
-        cache_->records() < static_cast<uint64_t>(options_.screen_records))
-        return;
-    alternative_screened_ = true;
-    screen_share_ = cache_->light_seen_share();
-    if (screen_share_ >= 0.0 && screen_share_ < options_.alternative_share)
-        alternative_ = false; // (no light carried: -1, no evidence)
 }
 
 void VisibilityLearning::drop_tables(int from) {

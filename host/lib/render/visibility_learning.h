@@ -53,11 +53,10 @@ class VisibilityLearning : public LearningPolicy {
     // The tables after learning pass `pass`, where the schedule rebuilds them, and where the
     // learning ends (learning_end_at).
     void update_tables(int pass, WavefrontDevice& device);
-    // The verdict's screen (VisibilityOptions::screen), at the update after learning pass
-    // `pass`: true where it chose the fallback from the next pass on.
+    // The verdict's screen (VisibilityOptions::screen, alternative_share), at the update after
+    // learning pass `pass`: true where it chose the fallback from the next pass on; it also
+    // decides whether the alternative is measured.
     bool screen_out(int pass);
-    // The same screen for the verdict's alternative (depth 1): whether it is still measured.
-    void screen_alternative(int pass);
     // A verdict for the fallback: passes `from` and later render it, and the learning ends.
     void drop_tables(int from);
     // The device's record sums since the last call, into the cache (and the figures).
@@ -67,16 +66,15 @@ class VisibilityLearning : public LearningPolicy {
 
     const DeviceScene& scene_;
     VisibilityOptions options_;
-    bool batches_;          // the sample_lights stage, where the fallback's technique allows it
-    bool alternative_;      // the verdict measures options_.alternative too
-    Strategy fallback_;     // what renders after a verdict against the tables
-    bool ready_ = false;    // the cells' tables hold something learned
-    bool dropped_ = false;  // the verdict chose the fallback: the passes after it render it
-    int fallback_from_ = 0; // where dropped_: the first pass of the fallback
-    bool screened_ = false; // the screen was applied (at most once)
-    bool alternative_screened_ = false; // and the alternative's
-    double screen_share_ = -1;          // the light share the screen saw (-1: none)
-    const char* verdict_by_ = "none";   // how the verdict was given: "screen" or "measure"
+    bool batches_;             // the sample_lights stage, where the fallback's technique allows it
+    bool alternative_;         // the verdict measures options_.alternative too
+    Strategy fallback_;        // what renders after a verdict against the tables
+    bool ready_ = false;       // the cells' tables hold something learned
+    bool dropped_ = false;     // the verdict chose the fallback: the passes after it render it
+    int fallback_from_ = 0;    // where dropped_: the first pass of the fallback
+    bool screened_ = false;    // the screen was applied (at most once)
+    double screen_share_ = -1; // the light share the screen saw (-1: none)
+    const char* verdict_by_ = "none"; // how the verdict was given: "screen" or "measure"
     // Passes 0 .. learn_until_ - 1 record: options_.learning_passes, fewer or more as the plan
     // decides at the updates from the render's plan.
     int learn_until_ = 0;
