@@ -47,53 +47,15 @@ et::GuideVerdict measure(double mis, double tables, double cost,
 TEST(GuideVerdict, TablesStayWhereMisErrsByMoreThanTheirCost) {
     // Errors 1.44 : 1 -- the tables stay at a cost of 1.25, not at 1.5.
     const et::GuideVerdict cheap = measure(0.12, 0.1, 1.25), dear = measure(0.12, 0.1, 1.5);
-    EXPECT_NEAR(cheap.fallback_error() / cheap.tables_error(), 1.44, 0.015);
-    EXPECT_TRUE(cheap.tables_win());
-    EXPECT_FALSE(dear.tables_win());
+    EXPECT_NEAR(cheap.fallback_error() / cheap.kept_error(), 1.44, 0.015);
+    EXPECT_TRUE(cheap.kept_wins());
+    EXPECT_FALSE(dear.kept_wins());
     // Equal errors: MIS, the cheaper, whatever the cost above 1.
-    EXPECT_FALSE(measure(0.1, 0.1, 1.01).tables_win());
+    EXPECT_FALSE(measure(0.1, 0.1, 1.01).kept_wins());
     // Far noisier MIS (a room lit through an opening).
     const et::GuideVerdict room = measure(0.5, 0.1, 1.5);
-    EXPECT_TRUE(room.tables_win());
-    EXPECT_NEAR(room.fallback_error() / room.tables_error(), 25.0, 0.25);
-}
-
-// The same with a third technique, the alternative (t = 2), at noise `alternative`.
-et::GuideVerdict measure3(double fallback, double tables, double alternative, double cost,
-                          double alternative_cost) {
-    et::GuideVerdict v(kW, kH, kPasses, cost, alternative_cost);
-    for (int t : {1, 0, 2}) // the renderer's order: the tables' passes, then the measured ones
-        for (int k = 0; k < kPasses; ++k) {
-            const double amplitude = t == 1 ? tables : t == 0 ? fallback : alternative;
-            const std::vector<float> f = film(static_cast<uint32_t>(k), amplitude);
-            v.add(t, k, f.data());
-        }
-    return v;
-}
-
-TEST(GuideVerdict, AnAlternativeWinsWhereItsErrorPaysForItsCost) {
-    // Errors 1.44 : 1.21 : 1 (fallback : tables : alternative). At a cost of 1.25 the tables lose
-    // to the fallback alone (1.51 > 1.44), and so to the alternative at a cost of 1.2 (1.2 <
-    // 1.44); at 1.5 the alternative costs more than the fallback's error.
-    const et::GuideVerdict cheap = measure3(0.12, 0.11, 0.1, 1.25, 1.2);
-    EXPECT_NEAR(cheap.fallback_error() / cheap.alternative_error(), 1.44, 0.015);
-    EXPECT_FALSE(cheap.tables_win());
-    EXPECT_TRUE(cheap.alternative_wins());
-    const et::GuideVerdict dear = measure3(0.12, 0.11, 0.1, 1.25, 1.5);
-    EXPECT_FALSE(dear.tables_win());
-    EXPECT_FALSE(dear.alternative_wins());
-    // Tables at 0.81 beat the alternative's 1.2 x 1 at their cost of 1.25 (1.01 < 1.2).
-    const et::GuideVerdict tables = measure3(0.12, 0.09, 0.1, 1.25, 1.2);
-    EXPECT_TRUE(tables.tables_win());
-    EXPECT_FALSE(tables.alternative_wins());
-    // But not where the alternative's cost per error is below theirs: 1.25 x 0.81 > 1.0 x 0.64.
-    const et::GuideVerdict alt = measure3(0.12, 0.09, 0.08, 1.25, 1.0);
-    EXPECT_FALSE(alt.tables_win());
-    EXPECT_TRUE(alt.alternative_wins());
-    // Without an alternative, no third technique's passes are taken.
-    et::GuideVerdict two(kW, kH, kPasses, 1.25);
-    const std::vector<float> f = film(1, 0.1);
-    EXPECT_THROW(two.add(2, 0, f.data()), et::Error);
+    EXPECT_TRUE(room.kept_wins());
+    EXPECT_NEAR(room.fallback_error() / room.kept_error(), 25.0, 0.25);
 }
 
 TEST(GuideVerdict, AFireflyDoesNotDecide) {
@@ -104,8 +66,8 @@ TEST(GuideVerdict, AFireflyDoesNotDecide) {
             f[4 * 2000] = f[4 * 2000 + 1] = f[4 * 2000 + 2] = 1000.0f;
     };
     const et::GuideVerdict v = measure(0.1, 0.1, 1.25, firefly);
-    EXPECT_LT(v.fallback_error(), 1.05 * v.tables_error());
-    EXPECT_FALSE(v.tables_win());
+    EXPECT_LT(v.fallback_error(), 1.05 * v.kept_error());
+    EXPECT_FALSE(v.kept_wins());
 }
 
 TEST(GuideVerdict, DroppedSamplesAndBlackFilmsAreNoEvidence) {
@@ -117,7 +79,7 @@ TEST(GuideVerdict, DroppedSamplesAndBlackFilmsAreNoEvidence) {
     for (int k = 0; k < kPasses; ++k)
         for (int t = 0; t < 2; ++t)
             black.add(t, k, zero.data());
-    EXPECT_FALSE(black.tables_win());
+    EXPECT_FALSE(black.kept_wins());
     EXPECT_EQ(black.fallback_error(), 0.0);
     // A pixel whose samples were all dropped (w = 0) in one block is left out, not read as 0.
     auto drop = [](int t, int k, std::vector<float>& f) {
@@ -125,8 +87,8 @@ TEST(GuideVerdict, DroppedSamplesAndBlackFilmsAreNoEvidence) {
             f[4 * 77] = f[4 * 77 + 1] = f[4 * 77 + 2] = f[4 * 77 + 3] = 0.0f;
     };
     const et::GuideVerdict v = measure(0.12, 0.1, 1.25, drop);
-    EXPECT_TRUE(v.tables_win());
-    EXPECT_TRUE(std::isfinite(v.fallback_error()) && std::isfinite(v.tables_error()));
+    EXPECT_TRUE(v.kept_wins());
+    EXPECT_TRUE(std::isfinite(v.fallback_error()) && std::isfinite(v.kept_error()));
 }
 
 TEST(GuideVerdict, RefusesPassesOutOfOrderAndOddCounts) {
@@ -138,7 +100,7 @@ TEST(GuideVerdict, RefusesPassesOutOfOrderAndOddCounts) {
     v.add(1, 0, f.data());
     EXPECT_THROW(v.add(1, 2, f.data()), et::Error);
     EXPECT_THROW(v.add(2, 0, f.data()), et::Error);
-    EXPECT_FALSE(v.tables_win()) << "a verdict before its passes";
+    EXPECT_FALSE(v.kept_wins()) << "a verdict before its passes";
 }
 
 } // namespace

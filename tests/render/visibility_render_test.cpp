@@ -177,15 +177,11 @@ TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
 // auto's screen: on the open floor at depth 2 its first passes' shadow rays find all the light
 // they carry, so the verdict is compensated's at the first update with records enough, without
 // measuring; the passes after it are compensated's, bit for bit, and a render resumed past it
-// continues exactly. At depth 1 (no screen) and in the side-lit room, whose rays find little of
-// the light, the verdict is measured.
+// continues exactly. In the side-lit room, whose rays find little of the light, the verdict is
+// measured. (At depth 1: the next test.)
 TEST(VisibilityRender, AutoScreensOutASceneThatBlocksNoLight) {
     et::Scene s = open_floor(96, 64); // 6,144 paths a pass: the screen's records in two
     s.settings.strategy = et::Strategy::automatic;
-    {
-        const ett::SampleRun direct = ett::render_samples(s, 2, 0, 24);
-        EXPECT_EQ(ett::learning_verdict_by(direct.renderer->stats()), "measure");
-    }
     s.settings.max_depth = 2;
     const ett::SampleRun run = ett::render_samples(s, 2, 0, 12);
     const et::RenderStats& st = run.renderer->stats();
@@ -211,46 +207,60 @@ TEST(VisibilityRender, AutoScreensOutASceneThatBlocksNoLight) {
     EXPECT_LT(rs.learning["verdict_screen_share"].get<double>(), 0.5);
 }
 
-// auto at depth 1 measures the binned light samples (the cosine strategy's) beside compensated:
-// on the open floor under a uniform sky, whose light times the cosine the floor's one bin holds
-// exactly, they win, and the passes after the verdict are the cosine strategy's, bit for bit
-// (their tables sit after the learned ones: EtkParams::bin_cell_base); a render resumed past the
-// verdict continues exactly. In the side-lit room, whose first pass's shadow rays find little
-// of their light, the binned samples are not measured and the tables stay; past depth 1 nothing
-// but compensated is measured.
-TEST(VisibilityRender, AutoAtDepthOneMeasuresTheBinnedLightSamplesToo) {
+// auto's screen at depth 1: on the open floor, whose first passes' shadow rays find all the light
+// they carry, the tables render those two only (the screen's records); the binned light samples
+// (the cosine strategy's) render the next ones, bit for bit, and their passes 16 .. 31 are weighed
+// against compensated's measuring passes: under the uniform sky, whose light times the cosine the
+// floor's one bin holds exactly, they win and render on. A render resumed inside the verdict's
+// passes or past them continues exactly.
+TEST(VisibilityRender, AutoAtDepthOneScreensTheTablesOutUnderTheOpenSky) {
+    et::Scene s = open_floor(96, 64); // 6,144 paths a pass: the screen's records in two
+    s.settings.strategy = et::Strategy::automatic;
+    const ett::SampleRun run = ett::render_samples(s, 2, 0, 40);
+    const et::RenderStats& st = run.renderer->stats();
+    EXPECT_EQ(ett::learning_verdict_by(st), "screen");
+    EXPECT_EQ(ett::learning_count(st, "learning_passes"), 2u);
+    EXPECT_GT(st.learning["verdict_screen_share"].get<double>(), 0.999);
+    EXPECT_EQ(st.learning["verdict_kept"].get<std::string>(), "cosine");
+    EXPECT_EQ(st.learning["verdict"].get<std::string>(), "cosine");
+    EXPECT_LT(st.learning["verdict_kept_error"].get<double>(),
+              st.learning["verdict_fallback_error"].get<double>());
+    EXPECT_GT(st.learning["verdict_fallback_error"].get<double>(), 0.0) << "nothing measured";
+    EXPECT_TRUE(samples(s, et::Strategy::automatic, 2, 40) ==
+                samples(s, et::Strategy::cosine, 2, 40))
+        << "the passes after the screen are not the cosine strategy's";
+    for (int at : {20, 36}) {
+        const et::FilmSums part = ett::render_samples(s, 2, 0, at).renderer->sums();
+        s.settings.strategy = et::Strategy::automatic;
+        EXPECT_TRUE(render(s, 2, at, 40, &part).mean == run.renderer->sums().mean())
+            << "resumed at " << at;
+    }
+}
+
+// Where the screen does not put the binned samples in the tables' place at depth 1, the tables
+// are weighed against compensated alone: on the open floor at 32 x 24 (768 paths a pass, too few
+// records before the verdict's passes for the screen), and in the side-lit room, whose first
+// pass's shadow rays find little of their light. Past depth 1 the binned samples never serve.
+TEST(VisibilityRender, AutoAtDepthOneWeighsTheTablesWhereTheScreenSeesNoOpenSky) {
     et::Scene s = open_floor(32, 24);
     s.settings.strategy = et::Strategy::automatic;
-    const ett::SampleRun run = ett::render_samples(s, 2, 0, 40); // the verdict after pass 19
-    const et::RenderStats& st = run.renderer->stats();
-    EXPECT_EQ(st.learning["verdict"].get<std::string>(), "cosine");
-    EXPECT_EQ(st.learning["verdict_alternative"].get<std::string>(), "cosine");
-    EXPECT_LT(st.learning["verdict_alternative_error"].get<double>(),
-              st.learning["verdict_fallback_error"].get<double>());
-    EXPECT_TRUE(samples(s, et::Strategy::automatic, 24, 40) ==
-                samples(s, et::Strategy::cosine, 24, 40))
-        << "the passes after a verdict for the binned samples are not the cosine strategy's";
-    const et::FilmSums part = ett::render_samples(s, 2, 0, 30).renderer->sums();
-    s.settings.strategy = et::Strategy::automatic;
-    EXPECT_TRUE(render(s, 2, 30, 40, &part).mean == run.renderer->sums().mean())
-        << "resumed past the verdict";
+    const et::RenderStats st = ett::render_samples(s, 2, 0, 24).renderer->stats();
+    EXPECT_EQ(st.learning["verdict_screen_share"].get<double>(), -1.0) << "screened";
+    EXPECT_EQ(st.learning["verdict_kept"].get<std::string>(), "tables");
+    EXPECT_EQ(ett::learning_verdict_by(st), "measure");
 
     et::Scene r = room();
     r.settings.strategy = et::Strategy::automatic;
     r.settings.max_depth = 1;
     r.width = 96; // 768 pixels measured (every 8th)
     r.height = 64;
-    const ett::SampleRun room_run = ett::render_samples(r, 2, 0, 24);
-    const et::RenderStats& rs = room_run.renderer->stats();
-    EXPECT_EQ(rs.learning["verdict"].get<std::string>(), "tables");
-    // Its first pass's shadow rays found little of their light unblocked: not measured.
+    const et::RenderStats rs = ett::render_samples(r, 2, 0, 24).renderer->stats();
     EXPECT_LT(rs.learning["verdict_screen_share"].get<double>(), 0.5);
-    EXPECT_EQ(rs.learning["verdict_alternative"].get<std::string>(), "none");
-    EXPECT_EQ(rs.learning["verdict_alternative_error"].get<double>(), 0.0);
+    EXPECT_EQ(rs.learning["verdict_kept"].get<std::string>(), "tables");
+    EXPECT_EQ(rs.learning["verdict"].get<std::string>(), "tables");
     r.settings.max_depth = 2;
-    const ett::SampleRun deep_run = ett::render_samples(r, 2, 0, 24);
-    EXPECT_EQ(deep_run.renderer->stats().learning["verdict_alternative"].get<std::string>(),
-              "none");
+    const et::RenderStats deep = ett::render_samples(r, 2, 0, 24).renderer->stats();
+    EXPECT_EQ(deep.learning["verdict_kept"].get<std::string>(), "tables");
 }
 
 } // namespace

@@ -251,7 +251,7 @@ void add_visibility_guide(const Scene& scene, DeviceScene& d) {
                                       guide_portal_box(&lo[0], &hi[0]));
     d.guide_map_power = guide_map_power(d.env_texels, p.env.tex_w, p.env.tex_h);
     p.guide_inv_power = guide_inv_power(d.guide_map_power);
-    if (verdict_measures_alternative(d.guide_options, p.guide_continuation != 0))
+    if (screen_keeps_alternative(d.guide_options, p.guide_continuation != 0))
         add_cosine_bins(d);
 }
 

@@ -119,15 +119,16 @@ VisibilityOptions auto_visibility_options() {
     // and a scene whose shadow rays find most of the light unblocked leaves them little to
     // learn for their cost. Share found unblocked in the first pass (32 spp, seed 1): held-out
     // rooms and window_room 0.013-0.085, open scenes 0.64-0.98; the 20 passes of the tables a
-    // measured verdict took there were 0.14-0.24 of a 64-sample render. Past the first vertex
-    // only: at depth 1 the light sample is the whole estimate, and the tables' light x cosine
-    // per cell paid without any blocking in 1 of 7 open scenes (a museum's skylights over
-    // plastic statues: 1.25x compensated at 4 s), while at depth 5 the measured verdict chose
-    // the tables in none of 9 open scenes and the screen gained 1-9% at 4 s in all 7 measured
-    // (docs/estimators.md).
+    // measured verdict took there were 0.14-0.24 of a 64-sample render. At depth 5 the
+    // measured verdict chose the tables in none of 9 open scenes and the screen gained 1-9% at 4
+    // s in all 7 measured (docs/estimators.md). At depth 1, where the light sample is the whole
+    // estimate, the screen drops the tables for the binned samples below, which the verdict
+    // then weighs against compensated: with all three measured, the tables lost to the binned
+    // samples' light x cosine bound (cost-weighted error 1.02-3.0x theirs) in all 17 open
+    // scenes at depth 1 (15 held-out, three of the repository's bunnies; shares 0.66-0.99).
     o.screen = true;
-    // At depth 1 the verdict measures the cosine strategy's binned light samples too: under an
-    // open sky they beat compensated by 1.08-1.49x in 6 of 10 held-out scenes and lost by
+    // At depth 1 the cosine strategy's binned light samples take the tables' place under the
+    // open sky: there they beat compensated by 1.08-1.49x in 6 of 10 held-out scenes and lost by
     // 0.75-0.96x in the other 4 (4 s, 3 seeds, three generated sets), and in the museum scene
     // the tables won without any blocking they beat the tables (1.62x mis against 1.34x). Their
     // time per sample over compensated's at depth 1: 1.19-1.26 in those ten scenes.

@@ -101,25 +101,24 @@ struct VisibilityOptions {
     int verdict_stride = 1;
     double verdict_cost = 1.25;
     double verdict_cost_guided = 1.4;
-    // The verdict's screen (VisibilityLearning), where continuations are guided (depth > 1): at
-    // the first update whose records number at least screen_records, if the shadow rays found
-    // unblocked a share of the light they carried of at least 1 / the verdict's cost, the
-    // verdict is for the fallback at once, without its measuring passes; otherwise the verdict
-    // is measured as above.
+    // The verdict's screen (VisibilityLearning): at the first update before the verdict's passes
+    // whose records number at least screen_records, the share of the light they carried that the
+    // shadow rays found unblocked. Where continuations are guided (depth > 1), at a share of at
+    // least 1 / the verdict's cost, the verdict is for the fallback at once, without its
+    // measuring passes. Where the alternative serves (depth 1), at a share of at least
+    // alternative_share, the alternative renders from the next pass on instead of the tables,
+    // and the verdict weighs its passes (from a multiple of verdict_passes) against the
+    // fallback's, at alternative_cost. Otherwise the tables' verdict is measured as above.
     bool screen = false;
     int screen_records = 4096;
-    // A second technique the verdict measures beside the fallback where continuations are not
-    // guided (depth 1), as the fallback is measured (its passes on the same pixels, with sample
-    // indices of their own, not kept), weighed by alternative_cost, its time per sample over the
-    // fallback's; the cheapest per error of the three renders the rest of the image. Only the
-    // cosine strategy's binned technique serves (its tables sit after the learned ones in
-    // guide_cells: EtkParams::bin_cell_base); Strategy::mis: none.
+    // The technique the screen puts in the tables' place at depth 1, and its time per sample
+    // over the fallback's. Only the cosine strategy's binned technique serves (its tables sit
+    // after the learned ones in guide_cells: EtkParams::bin_cell_base); Strategy::mis: none.
     Strategy alternative = Strategy::mis;
     double alternative_cost = 1.0;
-    // ... unless, before the verdict's passes, an update with screen_records records found that
-    // the shadow rays let through less than this share of the light they carried: the binned
-    // samples know nothing of what blocks the map, and where most of it is blocked (rooms lit
-    // through openings: 0.004-0.085; open scenes 0.64-0.99) their passes only cost.
+    // The binned samples know nothing of what blocks the map: where most of its light is
+    // blocked (rooms lit through openings: shares 0.004-0.085; open scenes 0.64-0.99) the tables
+    // stay in the verdict.
     double alternative_share = 0.5;
     // What the verdict weighs the tables against, and what renders after a verdict against them:
     // the paper's MIS for the visibility strategy, compensated for auto (auto_visibility_options).
@@ -137,10 +136,11 @@ inline double verdict_cost_for(const VisibilityOptions& o, bool continuation_gui
     return continuation_guided ? o.verdict_cost_guided : o.verdict_cost;
 }
 
-// Whether the verdict measures options.alternative beside the fallback: only where continuations
+// Whether the screen may put options.alternative in the tables' place: only where continuations
 // are not guided (depth 1), and only the binned technique (the cosine strategy's).
-inline bool verdict_measures_alternative(const VisibilityOptions& o, bool continuation_guided) {
-    return !continuation_guided && o.verdict_passes > 0 && o.alternative == Strategy::cosine;
+inline bool screen_keeps_alternative(const VisibilityOptions& o, bool continuation_guided) {
+    return !continuation_guided && o.screen && o.verdict_passes > 0 &&
+           o.alternative == Strategy::cosine;
 }
 
 // The map's region masses and row tables from its 2D distribution (piecewise_constant.h layout).

@@ -4,7 +4,6 @@
 #include "util/error.h"
 
 #include <algorithm>
-#include <cmath>
 
 namespace et {
 
@@ -18,23 +17,22 @@ constexpr size_t kRadius = 2; // the reference mean's neighbourhood: 5 x 5 pixel
 constexpr double kTrim = 0.999;
 } // namespace
 
-GuideVerdict::GuideVerdict(int width, int height, int passes, double cost, double alternative_cost)
+GuideVerdict::GuideVerdict(int width, int height, int passes, double cost)
     : pixels_(static_cast<size_t>(width) * static_cast<size_t>(height)), width_(width),
-      passes_(passes), techniques_(alternative_cost > 0.0 ? 3 : 2), cost_(cost),
-      alternative_cost_(alternative_cost) {
+      passes_(passes), cost_(cost) {
     if (width < 1 || height < 1)
         throw Error("visibility verdict: an empty film");
     if (passes < 4 || passes % 2 != 0)
         throw Error("visibility verdict: needs an even number of passes, at least 4 (got " +
                     std::to_string(passes) + ")");
-    for (int k = 0; k < 2 * techniques_; ++k) {
+    for (int k = 0; k < 4; ++k) {
         sum_[k].assign(pixels_, 0.0);
         n_[k].assign(pixels_, 0u);
     }
 }
 
 void GuideVerdict::add(int t, int k, const float* film_sum_rgba) {
-    if (t < 0 || t >= techniques_ || k != added_[t] || k >= passes_)
+    if (t < 0 || t > 1 || k != added_[t] || k >= passes_)
         throw Error("visibility verdict: pass " + std::to_string(k) + " of technique " +
                     std::to_string(t) + " out of order");
     const int slot = 2 * t + (k < passes_ / 2 ? 0 : 1);
@@ -47,18 +45,15 @@ void GuideVerdict::add(int t, int k, const float* film_sum_rgba) {
         sum[i] += etk::etk_luma(etk::make_float3(s[0], s[1], s[2]));
         n[i] += 1u;
     }
-    ++added_[t];
-    for (int u = 0; u < techniques_; ++u)
-        if (added_[u] != passes_)
-            return;
-    decide();
+    if (++added_[t] == passes_ && added_[1 - t] == passes_)
+        decide();
 }
 
 void GuideVerdict::decide() {
-    // Each pixel's mean over the fallback's and the tables' blocks, then over its neighbourhood
-    // (kRadius pixels each way, clamped at the film's edges; only the pixels each of those blocks
-    // has samples of, so with the fallback on every 8th pixel the measured ones among them): the
-    // reference each block's error is relative to. Not the
+    // Each pixel's mean over every block, then over its neighbourhood (kRadius pixels each way,
+    // clamped at the film's edges; only the pixels every block has samples of, so with the
+    // fallback on every 8th pixel the measured ones among them): the reference each block's error
+    // is relative to. Not the
     // pixel's own mean -- a block that caught a rare bright sample would then be measured
     // against a mean made of that sample, and heavy tails (the errors MIS makes where the map's
     // light comes through a small opening) would look small (the relative error is then at most
@@ -66,7 +61,6 @@ void GuideVerdict::decide() {
     const size_t w = static_cast<size_t>(width_), h = pixels_ / w;
     std::vector<double> pixel_mean(pixels_, 0.0);
     std::vector<uint8_t> full(pixels_, 0);
-    // (An alternative's blocks are measured against the same reference: see the cap below.)
     for (size_t i = 0; i < pixels_; ++i) {
         if (!(n_[0][i] && n_[1][i] && n_[2][i] && n_[3][i]))
             continue; // a block without a sample here (every one dropped)
@@ -101,48 +95,33 @@ void GuideVerdict::decide() {
     const double floor2 = (0.01 * mean) * (0.01 * mean);
     // Per technique and pixel, half the squared difference of its blocks, relative to the
     // reference; each capped at the pooled values' kTrim quantile.
-    std::vector<double> rel[3];
-    for (int t = 0; t < techniques_; ++t) {
+    std::vector<double> rel[2];
+    for (int t = 0; t < 2; ++t) {
         rel[t].reserve(used);
         for (size_t i = 0; i < pixels_; ++i) {
-            if (!full[i] || !(n_[2 * t][i] && n_[2 * t + 1][i]))
+            if (!full[i])
                 continue;
             const double d = sum_[2 * t][i] / n_[2 * t][i] - sum_[2 * t + 1][i] / n_[2 * t + 1][i];
             const double denom = ref[i] * ref[i] + floor2;
             rel[t].push_back(denom > 0.0 ? 0.5 * d * d / denom : 0.0);
         }
     }
-    // The reference and the cap from the fallback's and the tables' values alone, as without an
-    // alternative: with a noisier alternative's (the binned samples in a room lit through an
-    // opening) in both, both errors rose, enough to turn a room's verdict against the tables
-    // (fresh room006_d1, seed 2: 4.03 / 2.82 -> 5.07 / 4.11). The alternative's are capped alike.
     std::vector<double> pooled(rel[0]);
     pooled.insert(pooled.end(), rel[1].begin(), rel[1].end());
     const size_t q = std::min(pooled.size() - 1, static_cast<size_t>(kTrim * pooled.size()));
     std::nth_element(pooled.begin(), pooled.begin() + static_cast<std::ptrdiff_t>(q), pooled.end());
     const double cap = pooled[q];
-    for (int t = 0; t < techniques_; ++t) {
+    for (int t = 0; t < 2; ++t) {
         double s = 0.0;
         for (double v : rel[t])
             s += std::min(v, cap);
-        // (an alternative without a pixel of its own measured: no evidence for it)
-        error_[t] = rel[t].empty() ? HUGE_VAL : s / static_cast<double>(rel[t].size());
+        error_[t] = s / static_cast<double>(used);
     }
     decided_ = true;
 }
 
-double GuideVerdict::fallback_score() const {
-    return techniques_ > 2 ? std::min(error_[0], alternative_cost_ * error_[2]) : error_[0];
-}
-
-bool GuideVerdict::tables_win() const {
-    const double fallback = fallback_score();
-    return decided_ && fallback > 0.0 && fallback >= cost_ * error_[1];
-}
-
-bool GuideVerdict::alternative_wins() const {
-    return decided_ && techniques_ > 2 && !tables_win() &&
-           alternative_cost_ * error_[2] < error_[0];
+bool GuideVerdict::kept_wins() const {
+    return decided_ && error_[0] > 0.0 && error_[0] >= cost_ * error_[1];
 }
 
 } // namespace et

@@ -32,10 +32,9 @@
 // the more of the stratification they see: blocks of 2 overstated the tables under the open sky
 // by 1.2-1.7x, blocks of 8 did not (auto_visibility_options).
 //
-// A third technique (an alternative to the fallback, VisibilityOptions::alternative) may be
-// measured as the fallback is, on the same pixels: each technique's error times its time per
-// sample (relative to the fallback's) is then its cost per error, and the tables stay where theirs
-// is at most the cheaper fallback's; otherwise the cheaper of the two renders the rest.
+// The kept passes' technique is the tables' in the verdict's first use; where the screen
+// dropped the tables at depth 1 (render/visibility_learning.h) it is the binned light samples
+// instead, weighed against the fallback as the tables are, at their own cost.
 //
 // The verdict depends on the passes' film values alone: the seed's, on every thread count and
 // wave size, and on a process that starts past them (it renders them first, renderer.cpp).
@@ -48,30 +47,26 @@ namespace et {
 
 class GuideVerdict {
   public:
-    // alternative_cost > 0: a third technique, measured (t = 2) at that time per sample.
-    GuideVerdict(int width, int height, int passes, double cost, double alternative_cost = 0.0);
+    // cost: the kept technique's time per sample over the fallback's.
+    GuideVerdict(int width, int height, int passes, double cost);
     // Adds the film of pass k (0 .. passes - 1, in order) of technique t (0: the fallback, 1:
-    // the tables, 2: the alternative): film_sum per pixel, RGB and w the samples it holds.
+    // the kept passes' technique): film_sum per pixel, RGB and w the samples it holds.
     void add(int t, int k, const float* film_sum_rgba);
-    // After the last pass: the verdict and the errors it compared.
-    bool tables_win() const;
-    bool alternative_wins() const; // the alternative rather than the fallback, where not tables
+    // After the last pass: the verdict and the errors it compared. kept_wins: the kept passes'
+    // technique renders on.
+    bool kept_wins() const;
     double fallback_error() const { return error_[0]; }
-    double tables_error() const { return error_[1]; }
-    double alternative_error() const { return error_[2]; }
+    double kept_error() const { return error_[1]; }
 
   private:
     void decide();
-    // The cheaper fallback's cost per error: the fallback's error, or the alternative's times
-    // its cost where that is less.
-    double fallback_score() const;
     size_t pixels_;
-    int width_, passes_, techniques_, added_[3] = {0, 0, 0};
-    double cost_, alternative_cost_;
+    int width_, passes_, added_[2] = {0, 0};
+    double cost_;
     // Per technique t and block b (index 2 t + b), per pixel: the block's luminance sum, samples.
-    std::vector<double> sum_[6];
-    std::vector<uint32_t> n_[6];
-    double error_[3] = {0.0, 0.0, 0.0};
+    std::vector<double> sum_[4];
+    std::vector<uint32_t> n_[4];
+    double error_[2] = {0.0, 0.0};
     bool decided_ = false;
 };
 

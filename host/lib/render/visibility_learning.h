@@ -7,8 +7,10 @@
 // visibility strategy, compensated for auto: VisibilityOptions::fallback) measure it
 // (guide_verdict.h), and the cheaper one per error renders the rest of the image. For auto a
 // screen comes first (VisibilityOptions::screen): where the first updates' shadow rays found
-// nearly all the light they carried unblocked (an open sky), the verdict is the fallback's at
-// once, saving the 20 passes of the tables a measured verdict costs there. How long the
+// nearly all the light they carried unblocked (an open sky), the tables go, saving the 20 passes
+// of them a measured verdict costs there: past depth 1 the verdict is the fallback's at once; at
+// depth 1 the binned light samples (VisibilityOptions::alternative) render on, and the verdict
+// weighs their passes against the fallback's. How long the
 // learning goes on is decided at each update from the samples the render will take (plan): it
 // ends at an update whose successor no planned sample would use (a learning pass costs about
 // 1.25 steady ones, and a 64-sample render at 128 x 96 paid it on passes 33-64 for tables after
@@ -21,6 +23,7 @@
 
 #include <map>
 #include <memory>
+#include <vector>
 
 namespace et {
 
@@ -36,17 +39,16 @@ class VisibilityLearning : public LearningPolicy {
     nlohmann::json stats() const override;
 
   private:
-    // The verdict's passes of the fallback, and of the alternative, use sample indices of their
-    // own, never kept: they measure it without adding its variance to the image.
+    // The verdict's passes of the fallback use sample indices of their own, never kept: they
+    // measure it without adding its variance to the image.
     static constexpr uint32_t kVerdictFallbackBase = 0x80000000u;
-    static constexpr uint32_t kVerdictAlternativeBase = 0xc0000000u;
-    // Whether pass `sample_index` renders a technique other than the tables: a verdict's
-    // measuring pass, or any pass after a verdict for the fallback (or the alternative).
-    bool fallback_pass(uint32_t sample_index) const;
-    // Which, where fallback_pass.
-    Strategy fallback_technique(uint32_t sample_index) const;
+    // What pass `sample_index` renders: Strategy::visibility for the tables, or a verdict's
+    // measuring pass's technique, or the technique of the last switch at or before it.
+    Strategy technique_of(uint32_t sample_index) const;
+    // The technique the verdict's kept passes render: the tables, or the screen's alternative.
+    Strategy kept_technique() const;
     bool learns_tables(uint32_t sample_index) const;
-    int verdict_start() const; // the first of the verdict's passes of the tables
+    int verdict_start() const; // the first of the verdict's kept passes
     // Where the learning ends, decided at the update after `done` learning passes: there, or at
     // the next update, or at L.
     int learning_end_at(int done) const;
@@ -54,11 +56,11 @@ class VisibilityLearning : public LearningPolicy {
     // learning ends (learning_end_at).
     void update_tables(int pass, WavefrontDevice& device);
     // The verdict's screen (VisibilityOptions::screen, alternative_share), at the update after
-    // learning pass `pass`: true where it chose the fallback from the next pass on; it also
-    // decides whether the alternative is measured.
+    // learning pass `pass`: true where it dropped the tables from the next pass on, for the
+    // fallback (past depth 1) or for the alternative, which the verdict then weighs (depth 1).
     bool screen_out(int pass);
-    // A verdict for the fallback: passes `from` and later render it, and the learning ends.
-    void drop_tables(int from);
+    // Passes `from` and later render `technique` (the learning of the tables ends).
+    void switch_to(int from, Strategy technique);
     // The device's record sums since the last call, into the cache (and the figures).
     void take_records(WavefrontDevice& device);
     // The verdict's passes of the fallback, then the choice. False where one was abandoned.
@@ -66,14 +68,22 @@ class VisibilityLearning : public LearningPolicy {
 
     const DeviceScene& scene_;
     VisibilityOptions options_;
-    bool batches_;             // the sample_lights stage, where the fallback's technique allows it
-    bool alternative_;         // the verdict measures options_.alternative too
-    Strategy fallback_;        // what renders after a verdict against the tables
-    bool ready_ = false;       // the cells' tables hold something learned
-    bool dropped_ = false;     // the verdict chose the fallback: the passes after it render it
-    int fallback_from_ = 0;    // where dropped_: the first pass of the fallback
-    bool screened_ = false;    // the screen was applied (at most once)
-    double screen_share_ = -1; // the light share the screen saw (-1: none)
+    bool batches_;       // the sample_lights stage, where the fallback's technique allows it
+    bool alternative_;   // at depth 1 the screen may drop the tables for options_.alternative
+    bool ready_ = false; // the cells' tables hold something learned
+    // What the passes render past the tables: from each switch's pass on, its technique, until
+    // the next. A verdict against the tables switches at the end of its passes; the screen at the
+    // next pass (past depth 1 to the fallback, at depth 1 to the alternative, which its verdict
+    // then measures against the fallback and may switch from).
+    struct Switch {
+        int from;
+        Strategy technique;
+    };
+    std::vector<Switch> switches_;
+    bool decided_ = false;            // the verdict is given: no more passes to measure
+    bool alternative_kept_ = false;   // the screen kept the alternative for the verdict to weigh
+    bool screened_ = false;           // the screen was applied (at most once)
+    double screen_share_ = -1;        // the light share the screen saw (-1: none)
     const char* verdict_by_ = "none"; // how the verdict was given: "screen" or "measure"
     // Passes 0 .. learn_until_ - 1 record: options_.learning_passes, fewer or more as the plan
     // decides at the updates from the render's plan.
@@ -83,9 +93,8 @@ class VisibilityLearning : public LearningPolicy {
     std::unique_ptr<GuideVerdict> verdict_;
     // Figures (stats()).
     double learning_seconds_ = 0, update_seconds_ = 0, verdict_seconds_ = 0;
-    int chosen_ = -1; // the verdict: 1 tables, 0 fallback, -1 not yet
     uint64_t records_ = 0, continuation_records_ = 0, host_bytes_ = 0, device_bytes_ = 0;
-    double verdict_fallback_error_ = 0, verdict_tables_error_ = 0, verdict_alternative_error_ = 0;
+    double verdict_fallback_error_ = 0, verdict_kept_error_ = 0;
     std::map<float, uint64_t> light_counts_;
 };
 
