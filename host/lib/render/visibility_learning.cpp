@@ -220,7 +220,7 @@ bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
     const int end = verdict_start() + options_.verdict_passes;
     if (!verdict_->kept_wins())
         switch_to(end, options_.fallback);
-    else if (alternative_kept_)
+    else if (alternative_kept_) // (the same technique: the learning's passes end here)
         switch_to(end, options_.alternative);
     if (!alternative_kept_) // (else the screen chose what the verdict weighed)
         verdict_by_ = "measure";
