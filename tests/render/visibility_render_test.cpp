@@ -139,6 +139,22 @@ et::Scene open_floor(int width, int height) {
     return s;
 }
 
+// The side-lit room with its open side walled but for a window of a sixteenth of it (the
+// wall in squares of 0.5, one left out): the shadow rays find little of the map's light.
+et::Scene window_room(int width, int height) {
+    et::Scene s = room();
+    s.width = width;
+    s.height = height;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            if (!(i == 1 && j == 2))
+                ett::add_square(s.triangles, glm::vec3(-0.75f + 0.5f * i, 0.25f + 0.5f * j, -1.0f),
+                                glm::vec3(0, 0, 1), 0.25f, 0);
+    s.camera.eye = {0.0f, 1.0f, -0.5f}; // facing the back wall, the window behind
+    s.camera.target = {0.0f, 0.8f, 1.0f};
+    return s;
+}
+
 TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
     // MIS wins the verdict on the open floor; the passes after it are MIS's own (the strategy's
     // balance heuristic), bit for bit, batched map samples and all.
@@ -234,6 +250,28 @@ TEST(VisibilityRender, AutoAtDepthOneScreensTheTablesOutUnderTheOpenSky) {
         s.settings.strategy = et::Strategy::automatic;
         EXPECT_TRUE(render(s, 2, at, 40, &part).mean == run.renderer->sums().mean())
             << "resumed at " << at;
+    }
+}
+
+// auto's screen where the shadow rays find little of the light they carry unblocked (the
+// window room): the tables at once, at depth 1 and past it, without the verdict's measuring
+// passes; a render resumed past the screen continues exactly.
+TEST(VisibilityRender, AutoKeepsTheTablesAtOnceWhereLittleLightComesThrough) {
+    et::Scene s = window_room(96, 64);
+    s.settings.strategy = et::Strategy::automatic;
+    for (int depth : {1, 2}) {
+        s.settings.max_depth = depth;
+        const ett::SampleRun run = ett::render_samples(s, 2, 0, 24);
+        const et::RenderStats& st = run.renderer->stats();
+        EXPECT_EQ(ett::learning_verdict(st), 1) << "depth " << depth;
+        EXPECT_EQ(ett::learning_verdict_by(st), "screen") << "depth " << depth;
+        const double share = st.learning["verdict_screen_share"].get<double>();
+        EXPECT_GT(share, 0.0);
+        EXPECT_LT(share, 0.1);
+        EXPECT_EQ(st.learning["verdict_fallback_error"].get<double>(), 0.0) << "measured";
+        const et::FilmSums part = ett::render_samples(s, 2, 0, 10).renderer->sums();
+        EXPECT_TRUE(render(s, 2, 10, 24, &part).mean == run.renderer->sums().mean())
+            << "resumed past the screen, depth " << depth;
     }
 }
 

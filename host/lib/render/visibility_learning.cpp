@@ -50,9 +50,8 @@ int VisibilityLearning::learning_passes() const {
     // the learning where that technique begins.
     if (decided_ && !switches_.empty())
         return switches_.back().from;
-    const int verdict_end =
-        options_.verdict_passes > 0 ? verdict_start() + options_.verdict_passes : 0;
-    return std::max(learn_until_, verdict_end);
+    const bool verdict = options_.verdict_passes > 0 && (!decided_ || measured_);
+    return std::max(learn_until_, verdict ? verdict_start() + options_.verdict_passes : 0);
 }
 
 Strategy VisibilityLearning::technique_of(uint32_t sample_index) const {
@@ -130,8 +129,9 @@ bool VisibilityLearning::screen_out(int pass) {
     // records suffice: the share of their light the shadow rays found unblocked decides what the
     // verdict weighs: at depth 1 (where the alternative serves), at a share of at least
     // alternative_share, the alternative against the fallback, without the tables; past depth 1,
-    // at a share of at least 1 / the tables' cost, the fallback at once. Otherwise, or without
-    // the records, the tables against the fallback.
+    // at a share of at least 1 / the tables' cost, the fallback at once; at any depth, below
+    // tables_share (but some light found), the tables at once. Otherwise, or without the
+    // records, the tables against the fallback.
     if (!options_.screen || options_.verdict_passes <= 0 || screened_ || decided_ ||
         pass + 1 > verdict_start() ||
         cache_->records() < static_cast<uint64_t>(options_.screen_records))
@@ -146,6 +146,8 @@ bool VisibilityLearning::screen_out(int pass) {
     } else if (options_.continuation && screen_share_ * verdict_cost_for(options_, true) >= 1.0) {
         switch_to(pass + 1, options_.fallback);
         decided_ = true;
+    } else if (screen_share_ > 0.0 && screen_share_ < options_.tables_share) {
+        decided_ = true; // the tables, unmeasured
     } else {
         return false;
     }
@@ -224,7 +226,7 @@ bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
         switch_to(end, options_.alternative);
     if (!alternative_kept_) // (else the screen chose what the verdict weighed)
         verdict_by_ = "measure";
-    decided_ = true;
+    decided_ = measured_ = true;
     verdict_fallback_error_ = verdict_->fallback_error();
     verdict_kept_error_ = verdict_->kept_error();
     verdict_.reset();

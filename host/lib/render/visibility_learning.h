@@ -10,7 +10,8 @@
 // nearly all the light they carried unblocked (an open sky), the tables go, saving the 20 passes
 // of them a measured verdict costs there: past depth 1 the verdict is the fallback's at once; at
 // depth 1 the binned light samples (VisibilityOptions::alternative) render on, and the verdict
-// weighs their passes against the fallback's. How long the
+// weighs their passes against the fallback's. Where they found very little of it unblocked (a
+// room lit through openings), the tables stay at once, unmeasured. How long the
 // learning goes on is decided at each update from the samples the render will take (plan): it
 // ends at an update whose successor no planned sample would use (a learning pass costs about
 // 1.25 steady ones, and a 64-sample render at 128 x 96 paid it on passes 33-64 for tables after
@@ -81,6 +82,7 @@ class VisibilityLearning : public LearningPolicy {
     };
     std::vector<Switch> switches_;
     bool decided_ = false;            // the verdict is given: no more passes to measure
+    bool measured_ = false;           // ... by measuring (a resume renders its passes again)
     bool alternative_kept_ = false;   // the screen kept the alternative for the verdict to weigh
     bool screened_ = false;           // the screen was applied (at most once)
     double screen_share_ = -1;        // the light share the screen saw (-1: none)
