@@ -255,7 +255,8 @@ TEST(VisibilityRender, AutoAtDepthOneScreensTheTablesOutUnderTheOpenSky) {
 
 // auto's screen where the shadow rays find little of the light they carry unblocked (the
 // window room): the tables at once, at depth 1 and past it, without the verdict's measuring
-// passes; a render resumed past the screen continues exactly.
+// passes: the same bits as the tables without a verdict (the screen's update uploads its tables
+// as any other); a render resumed past the screen continues exactly.
 TEST(VisibilityRender, AutoKeepsTheTablesAtOnceWhereLittleLightComesThrough) {
     et::Scene s = window_room(96, 64);
     s.settings.strategy = et::Strategy::automatic;
@@ -269,6 +270,11 @@ TEST(VisibilityRender, AutoKeepsTheTablesAtOnceWhereLittleLightComesThrough) {
         EXPECT_GT(share, 0.0);
         EXPECT_LT(share, 0.1);
         EXPECT_EQ(st.learning["verdict_fallback_error"].get<double>(), 0.0) << "measured";
+        EXPECT_EQ(st.learning["verdict_kept"].get<std::string>(), "none");
+        et::Scene unjudged = s;
+        unjudged.settings.guide_verdict = false;
+        EXPECT_TRUE(render(unjudged, 2, 0, 24).mean == run.renderer->sums().mean())
+            << "not the tables' bits, depth " << depth;
         const et::FilmSums part = ett::render_samples(s, 2, 0, 10).renderer->sums();
         EXPECT_TRUE(render(s, 2, 10, 24, &part).mean == run.renderer->sums().mean())
             << "resumed past the screen, depth " << depth;
@@ -294,10 +300,13 @@ TEST(VisibilityRender, AutoAtDepthOneWeighsTheTablesWhereTheScreenSeesNoOpenSky)
     r.height = 64;
     const et::RenderStats rs = ett::render_samples(r, 2, 0, 24).renderer->stats();
     EXPECT_LT(rs.learning["verdict_screen_share"].get<double>(), 0.5);
+    EXPECT_GE(rs.learning["verdict_screen_share"].get<double>(), 0.1) << "the tables at once";
+    EXPECT_EQ(ett::learning_verdict_by(rs), "measure");
     EXPECT_EQ(rs.learning["verdict_kept"].get<std::string>(), "tables");
     EXPECT_EQ(rs.learning["verdict"].get<std::string>(), "tables");
     r.settings.max_depth = 2;
     const et::RenderStats deep = ett::render_samples(r, 2, 0, 24).renderer->stats();
+    EXPECT_EQ(ett::learning_verdict_by(deep), "measure");
     EXPECT_EQ(deep.learning["verdict_kept"].get<std::string>(), "tables");
 }
 

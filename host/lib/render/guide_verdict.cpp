@@ -90,7 +90,7 @@ void GuideVerdict::decide() {
             ++used;
         }
     if (used == 0)
-        return; // nothing to compare: both errors 0, MIS (the cheaper)
+        return; // nothing to compare: both errors 0, the fallback (the cheaper)
     mean /= static_cast<double>(used);
     const double floor2 = (0.01 * mean) * (0.01 * mean);
     // Per technique and pixel, half the squared difference of its blocks, relative to the

@@ -33,11 +33,11 @@ VisibilityLearning::VisibilityLearning(const DeviceScene& scene, bool batches)
 int VisibilityLearning::verdict_start() const {
     const int start = std::min(options_.learning_passes, options_.verdict_after);
     // The alternative's kept passes from a multiple of verdict_passes: its blocks then stand in
-    // the Sobol' sequence as the measured techniques' do (kVerdict*Base + 0 .. passes - 1, one
-    // aligned run of 16). The two blocks' difference depends on that: on passes 8 .. 23 the
-    // binned samples' error measured 1.10-1.40x what it did on their measuring indices (two open
-    // scenes, six seeds each) and turned most of those verdicts against them; on 16 .. 31,
-    // 0.85-1.16x (three seeds each).
+    // the Sobol' sequence as the fallback's measuring passes do (kVerdictFallbackBase + 0 ..
+    // passes - 1, one aligned run of 16). The two blocks' difference depends on that: on passes 8
+    // .. 23 the binned samples' error measured 1.10-1.40x what it did on their measuring indices
+    // (two open scenes, six seeds each) and turned most of those verdicts against them; on 16 ..
+    // 31, 0.85-1.16x (three seeds each).
     if (alternative_kept_) {
         const int block = std::max(1, options_.verdict_passes);
         return (start + block - 1) / block * block;
@@ -147,7 +147,9 @@ bool VisibilityLearning::screen_out(int pass) {
         switch_to(pass + 1, options_.fallback);
         decided_ = true;
     } else if (screen_share_ > 0.0 && screen_share_ < options_.tables_share) {
-        decided_ = true; // the tables, unmeasured
+        decided_ = true; // the tables, unmeasured: this update's go up as any other's
+        verdict_by_ = "screen";
+        return false;
     } else {
         return false;
     }
@@ -237,10 +239,14 @@ nlohmann::json VisibilityLearning::stats() const {
     nlohmann::json counts = nlohmann::json::object();
     for (const auto& [n, cells] : light_counts_)
         counts[nlohmann::json(n).dump()] = cells; // keys "0.5", "0.25", "0.125"
-    // The learning's length: where its plan ends it, or, after a verdict for the fallback, where
-    // the fallback begins (the passes from there learn nothing).
-    const int learnt = learn_until_;
-    return {{"learning_passes", learnt},
+    // The learning's length: where its plan ends it, or where another technique begins (the
+    // passes from there learn nothing). What the verdict weighed: nothing where the screen
+    // decided alone.
+    const Strategy kept = kept_technique();
+    const char* kept_name = decided_ && !measured_         ? "none"
+                            : kept == Strategy::visibility ? "tables"
+                                                           : name_of(kept);
+    return {{"learning_passes", learn_until_},
             {"learning_seconds", learning_seconds_},
             {"update_seconds", update_seconds_},
             {"records", records_},
@@ -255,11 +261,12 @@ nlohmann::json VisibilityLearning::stats() const {
             {"verdict_screen_share", screen_share_},
             {"verdict_passes", options_.verdict_passes},
             {"verdict_stride", options_.verdict_stride},
-            {"verdict_cost", verdict_cost_for(options_, scene_.params.guide_continuation != 0)},
+            {"verdict_cost",
+             alternative_kept_ ? options_.alternative_cost
+                               : verdict_cost_for(options_, scene_.params.guide_continuation != 0)},
             {"verdict_seconds", verdict_seconds_},
             {"verdict_fallback_error", verdict_fallback_error_},
-            {"verdict_kept",
-             kept_technique() == Strategy::visibility ? "tables" : name_of(kept_technique())},
+            {"verdict_kept", kept_name},
             {"verdict_kept_error", verdict_kept_error_}};
 }
 
