@@ -202,9 +202,6 @@ void add_strata(const VoronoiStrata& v, DeviceScene& d) {
     d.params.strata_height = v.height;
 }
 
-// The visibility strategy: its hash grid over the scene's bounds, the map's region tables and
-// the cells' initial tables (the map's own distribution; the continuation guide's, at depth > 1,
-// uniform with a guided share of 0).
 // The binned technique's tables, one per bin of normals (kernels/normal_bins.h), after whatever
 // guide_cells holds, from a table boundary (EtkParams::bin_cell_base): the cosine strategy's
 // alone, or auto's alternative after the learned tables. Needs guide_regions.
@@ -217,6 +214,9 @@ void add_cosine_bins(DeviceScene& d) {
     d.guide_cells.insert(d.guide_cells.end(), bins.begin(), bins.end());
 }
 
+// The visibility strategy: its hash grid over the scene's bounds, the map's region tables and
+// the cells' initial tables (the map's own distribution; the continuation guide's, at depth > 1,
+// uniform with a guided share of 0).
 void add_visibility_guide(const Scene& scene, DeviceScene& d) {
     const int64_t pixels = static_cast<int64_t>(scene.width) * scene.height;
     d.guide_options.slots = guide_slots(d.guide_options, pixels);

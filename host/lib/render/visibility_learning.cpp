@@ -112,7 +112,8 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
         return;
     const Timer t;
     take_records(device);
-    if (screen_out(pass)) {
+    screen(pass);
+    if (!switches_.empty()) { // the screen dropped the tables: nothing more to upload
         update_seconds_ += t.seconds();
         return;
     }
@@ -124,7 +125,7 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
     update_seconds_ += t.seconds();
 }
 
-bool VisibilityLearning::screen_out(int pass) {
+void VisibilityLearning::screen(int pass) {
     // Once, at the first update before the verdict's passes (which fix what it measures) whose
     // records suffice: the share of their light the shadow rays found unblocked decides what the
     // verdict weighs: at depth 1 (where the alternative serves), at a share of at least
@@ -135,11 +136,11 @@ bool VisibilityLearning::screen_out(int pass) {
     if (!options_.screen || options_.verdict_passes <= 0 || screened_ || decided_ ||
         pass + 1 > verdict_start() ||
         cache_->records() < static_cast<uint64_t>(options_.screen_records))
-        return false;
+        return;
     screened_ = true;
     screen_share_ = cache_->light_seen_share();
     if (screen_share_ < 0.0)
-        return false; // no light carried: no evidence
+        return; // no light carried: no evidence
     if (alternative_ && screen_share_ >= options_.alternative_share) {
         switch_to(pass + 1, options_.alternative); // its verdict is still to be measured
         alternative_kept_ = true;
@@ -147,14 +148,11 @@ bool VisibilityLearning::screen_out(int pass) {
         switch_to(pass + 1, options_.fallback);
         decided_ = true;
     } else if (screen_share_ > 0.0 && screen_share_ < options_.tables_share) {
-        decided_ = true; // the tables, unmeasured: this update's go up as any other's
-        verdict_by_ = "screen";
-        return false;
+        decided_ = true; // the tables, unmeasured
     } else {
-        return false;
+        return;
     }
     verdict_by_ = "screen";
-    return true;
 }
 
 void VisibilityLearning::switch_to(int from, Strategy technique) {

@@ -57,10 +57,10 @@ class VisibilityLearning : public LearningPolicy {
     // learning ends (learning_end_at).
     void update_tables(int pass, WavefrontDevice& device);
     // The verdict's screen (VisibilityOptions::screen, alternative_share, tables_share), at the
-    // update after learning pass `pass`: true where it dropped the tables from the next pass on,
-    // for the fallback (past depth 1) or for the alternative, which the verdict then weighs
-    // (depth 1); false otherwise, also where it kept the tables without a verdict.
-    bool screen_out(int pass);
+    // update after learning pass `pass`: it may switch from the next pass to the fallback (past
+    // depth 1) or to the alternative, which the verdict then weighs (depth 1), or keep the
+    // tables without a verdict; otherwise the verdict is measured.
+    void screen(int pass);
     // Passes `from` and later render `technique` (the learning of the tables ends).
     void switch_to(int from, Strategy technique);
     // The device's record sums since the last call, into the cache (and the figures).
