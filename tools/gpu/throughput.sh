@@ -3,13 +3,14 @@
 # rays over the render's seconds) on a 1.1M-triangle bunny at 2048x2048 (and 4096x4096) at depth
 # 1 and 5, the paths in flight, the film's sums on the device against the host's fold and the
 # queue sizes kept on the device against the host's reads (the films compared bit for bit), and
-# the native back end on the machine's CPU threads for the ratio.
+# the native back end on the machine's CPU threads for the ratio; then the learning strategies'
+# rays a second against mis's in the window room.
 #
 #   tools/gpu/throughput.sh ENVTRACE OUT_DIR [PLATFORM]
 #
 # ENVTRACE_DATA must name the data folder (a bundle's PFM maps will do: tools/gpu/make_bundle.sh);
 # python3 with numpy makes the mesh (tools/bench/subdivide_mesh.py). Writes OUT_DIR/summary.txt
-# and each render's --stats JSON. About two minutes on an H200. SIZE (2048) and BIG (4096) set the
+# and each render's --stats JSON. About two minutes on an H200. SIZE (2048), BIG (4096) and ROOM (1024) set the
 # films' sides (small ones to try the script on a CPU device).
 set -u
 exe=$(realpath "$1")
@@ -50,4 +51,16 @@ for d in 1 5; do
 done
 for p in 1048576 2097152; do render "d5_paths_$p" opencl --spp 16 --max-depth 5 --paths $p; done
 render d5_big opencl --spp 4 --max-depth 5 --width "${BIG:-4096}" --height "${BIG:-4096}"
+# The learning strategies' rays a second against mis's in a room lit through a window (issue: the
+# learning stays on the device): the tables throughout, auto as the user gets it, and mis, at depth
+# 5 on a film of ROOM (1024) pixels a side; 64 samples, so that the learning's 32 passes and the
+# steady passes after them are both in it.
+scene=$root/scenes/interiors/window_room.json
+room=${ROOM:-1024}
+for st in mis auto visibility; do
+    extra=()
+    [ "$st" = visibility ] && extra=(--guide-verdict off)
+    render "room_$st" opencl --spp 64 --max-depth 5 --strategy "$st" --width "$room" \
+        --height "$room" "${extra[@]}"
+done
 rm -f "$out"/*.pfm
