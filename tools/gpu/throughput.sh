@@ -10,8 +10,8 @@
 #
 # ENVTRACE_DATA must name the data folder (a bundle's PFM maps will do: tools/gpu/make_bundle.sh);
 # python3 with numpy makes the mesh (tools/bench/subdivide_mesh.py). Writes OUT_DIR/summary.txt
-# and each render's --stats JSON. About two minutes on an H200. SIZE (2048), BIG (4096) and ROOM (1024) set the
-# films' sides (small ones to try the script on a CPU device).
+# and each render's --stats JSON. About two minutes on an H200. SIZE (2048), BIG (4096) and ROOM
+# (1024) set the films' sides (small ones to try the script on a CPU device).
 set -u
 exe=$(realpath "$1")
 out=$(realpath -m "$2")
@@ -51,10 +51,10 @@ for d in 1 5; do
 done
 for p in 1048576 2097152; do render "d5_paths_$p" opencl --spp 16 --max-depth 5 --paths $p; done
 render d5_big opencl --spp 4 --max-depth 5 --width "${BIG:-4096}" --height "${BIG:-4096}"
-# The learning strategies' rays a second against mis's in a room lit through a window (issue: the
-# learning stays on the device): the tables throughout, auto as the user gets it, and mis, at depth
-# 5 on a film of ROOM (1024) pixels a side; 64 samples, so that the learning's 32 passes and the
-# steady passes after them are both in it.
+# The learning strategies' rays a second against mis's in a room lit through a window (their
+# records are summed on the device; the host reads them only at the tables' updates): the tables
+# throughout, auto as the user gets it, and mis, at depth 5 on a film of ROOM (1024) pixels a side;
+# 64 samples, so that the learning passes and the steady passes after them are both in it.
 scene=$root/scenes/interiors/window_room.json
 room=${ROOM:-1024}
 for st in mis auto visibility; do
