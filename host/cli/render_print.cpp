@@ -1,5 +1,6 @@
 #include "render_print.h"
 
+#include "render/learning_summary.h"
 #include "util/error.h"
 #include "util/interrupt.h"
 
@@ -79,6 +80,9 @@ void print_summary(const RenderSession& s, const RenderOutputs& o, const Session
                 (unsigned long long)st.continuation_rays, (unsigned long long)st.shadow_rays,
                 double(rendered) * ds.width() * ds.height() / secs, secs / std::max(1, rendered),
                 r.stopped ? " (the time and rays include the pass abandoned at the stop)" : "");
+    const std::string learning = learning_summary(st.learning);
+    if (!learning.empty())
+        std::printf("%s\n", learning.c_str());
     if (st.nonfinite_samples > 0 && cl.root())
         warn(s.options().scene + ": " + std::to_string(st.nonfinite_samples) +
              " samples were not finite and counted as zero (a renderer bug: please "

@@ -5,6 +5,7 @@
 // uninterrupted render was. Its verdict (render/guide_verdict.h) keeps the tables in a room lit
 // through an opening; under an open sky it renders the paper's MIS from then on, bit for bit.
 #include "render/executor_cpu.h"
+#include "render/learning_summary.h"
 #include "render_util.h"
 
 #include <gtest/gtest.h>
@@ -242,6 +243,15 @@ TEST(VisibilityRender, AutoAtDepthOneScreensTheTablesOutUnderTheOpenSky) {
     EXPECT_LT(st.learning["verdict_kept_error"].get<double>(),
               st.learning["verdict_fallback_error"].get<double>());
     EXPECT_GT(st.learning["verdict_fallback_error"].get<double>(), 0.0) << "nothing measured";
+    const std::string said = et::learning_summary(st.learning);
+    EXPECT_EQ(said.rfind("learning: `cosine` after the learning (the shadow rays of its first "
+                         "update found ",
+                         0),
+              0u)
+        << said;
+    EXPECT_NE(said.find("% of their light unblocked; then measured: `compensated`'s error "),
+              std::string::npos)
+        << said;
     EXPECT_TRUE(samples(s, et::Strategy::automatic, 2, 40) ==
                 samples(s, et::Strategy::cosine, 2, 40))
         << "the passes after the screen are not the cosine strategy's";
@@ -271,6 +281,13 @@ TEST(VisibilityRender, AutoKeepsTheTablesAtOnceWhereLittleLightComesThrough) {
         EXPECT_LT(share, 0.1);
         EXPECT_EQ(st.learning["verdict_fallback_error"].get<double>(), 0.0) << "measured";
         EXPECT_EQ(st.learning["verdict_kept"].get<std::string>(), "none");
+        const std::string said = et::learning_summary(st.learning);
+        EXPECT_EQ(said.rfind("learning: kept the learned tables (the shadow rays of its first "
+                             "update found ",
+                             0),
+                  0u)
+            << said;
+        EXPECT_EQ(said.find("measured"), std::string::npos) << said;
         et::Scene unjudged = s;
         unjudged.settings.guide_verdict = false;
         EXPECT_TRUE(render(unjudged, 2, 0, 24).mean == run.renderer->sums().mean())
