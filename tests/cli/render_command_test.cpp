@@ -521,6 +521,7 @@ TEST(RenderCommand, StatsAndMetadataAgree) {
         const std::string unquoted = value[0] == '"' ? value.substr(1, value.size() - 2) : value;
         EXPECT_EQ(metadata(dir + "/out.exr", key), unquoted) << key;
     }
+    EXPECT_NE(json.find("\"summary\": \"learning: "), std::string::npos) << json;
     EXPECT_EQ(metadata(dir + "/out.exr", "noise_target"), "none");
     EXPECT_EQ(metadata(dir + "/out.exr", "light_share"), "");
     EXPECT_EQ(json.find("noise_target"), std::string::npos);

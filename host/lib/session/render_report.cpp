@@ -1,5 +1,6 @@
 #include "session/render_report.h"
 
+#include "render/learning_summary.h"
 #include "util/interrupt.h"
 
 #include <algorithm>
@@ -62,6 +63,7 @@ void add_settings_facts(RenderReport& r, const ReportInputs& in) {
 json learning_facts(const RenderStats& s) {
     json j = s.learning;
     j["learning_passes_extra"] = s.learning_passes;
+    j["summary"] = learning_summary(s.learning);
     return j;
 }
 
