@@ -20,21 +20,38 @@ std::string figure(const char* format, double v) {
     return buf;
 }
 
-// Why the verdict went as it did: the screen's share of the light found unblocked, and (where
-// one was made) the measured errors against the kept technique's cost per sample.
-std::string reason(const nlohmann::json& l) {
-    std::string screen, measure;
-    if (l.value("verdict_by", "none") == "screen")
-        screen = "the shadow rays of its first update found " +
-                 figure("%.3g", 100.0 * l.value("verdict_screen_share", 0.0)) +
-                 "% of their light unblocked";
+// What the verdict weighed: the fallback's error against the kept technique's, and the cost
+// the kept one had to earn.
+std::string measured(const nlohmann::json& l, const std::string& kept) {
+    const std::string fallback = l.value("verdict_fallback", "");
     const double kept_error = l.value("verdict_kept_error", 0.0);
+    const double fallback_error = l.value("verdict_fallback_error", 0.0);
+    const std::string cost =
+        ", against a cost of " + figure("%.3g", l.value("verdict_cost", 1.0)) + "x";
+    if (!(kept_error > 0.0))
+        return "measured: " + possessive(kept) + " error 0, " +
+               (fallback.empty() ? "the fallback's" : possessive(fallback)) + " " +
+               figure("%.3g", fallback_error) + cost;
+    return "measured: " + (fallback.empty() ? "the fallback's" : possessive(fallback)) + " error " +
+           figure("%.3g", fallback_error / kept_error) + "x " + possessive(kept) + cost;
+}
+
+// Why the verdict went as it did: the screen's share of the light found unblocked, and (where
+// one was made) the measured errors.
+std::string reason(const nlohmann::json& l) {
+    const std::string by = l.value("verdict_by", "none");
     const std::string kept = l.value("verdict_kept", "none");
-    if (kept != "none" && kept_error > 0.0)
-        measure = "measured: " + possessive(l.value("verdict_fallback", "compensated")) +
-                  " error " + figure("%.3g", l.value("verdict_fallback_error", 0.0) / kept_error) +
-                  "x " + possessive(kept) + ", against a cost of " +
-                  figure("%.3g", l.value("verdict_cost", 1.0)) + "x";
+    std::string screen, measure;
+    if (by == "screen")
+        screen = "its shadow rays had found " +
+                 figure("%.3g", 100.0 * l.value("verdict_screen_share", 0.0)) +
+                 "% of their light unblocked at the screen";
+    // The screen can leave a measurement to make (the binned samples against the fallback): its
+    // errors are there once made; a measured verdict always has them.
+    const bool made = by == "measure" || l.value("verdict_fallback_error", 0.0) > 0.0 ||
+                      l.value("verdict_kept_error", 0.0) > 0.0;
+    if (kept != "none" && made)
+        measure = measured(l, kept);
     if (screen.empty() && measure.empty())
         return "";
     return " (" + screen + (screen.empty() || measure.empty() ? "" : "; then ") + measure + ")";
@@ -46,20 +63,24 @@ std::string learning_summary(const nlohmann::json& l) {
     if (!l.is_object() || !l.contains("verdict"))
         return "";
     const std::string verdict = l.value("verdict", "none");
-    std::string s = "learning: ";
     const std::string kept = l.value("verdict_kept", "none");
+    std::string s = "learning: ";
     if (verdict == "none") // the render ended first, or there is no verdict (--guide-verdict off)
-        s += (kept == "none" || kept == "tables" ? "the learned tables"
+        s += (kept == "tables" || kept == "none" ? "the learned tables"
                                                  : technique(kept) + " in the tables' place") +
              ", no verdict given";
     else if (verdict == "tables")
         s += "kept the learned tables";
     else
         s += technique(verdict) + " after the learning";
-    const int passes = l.value("learning_passes", 0);
+    // The passes learnt in this process (a render that stopped early learnt fewer than the
+    // learning's planned end), and their time with the verdict's measuring passes.
+    const int passes = l.value("learned_passes", l.value("learning_passes", 0));
+    const double verdict_seconds = l.value("verdict_seconds", 0.0);
     return s + reason(l) + "; " + std::to_string(passes) +
-           (passes == 1 ? " learning pass, " : " learning passes, ") +
-           figure("%.2f", l.value("learning_seconds", 0.0)) + " s";
+           (passes == 1 ? " learning pass" : " learning passes") +
+           (verdict_seconds > 0.0 ? " and the verdict's: " : ": ") +
+           figure("%.2f", l.value("learning_seconds", 0.0) + verdict_seconds) + " s";
 }
 
 } // namespace et

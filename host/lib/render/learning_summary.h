@@ -2,8 +2,7 @@
 // report: what `auto` (or `visibility`) rendered with, how it decided, and what its learning
 // took. The figures come from RenderStats::learning (VisibilityLearning::stats); the JSON keeps
 // them all for programs.
-#ifndef ET_RENDER_LEARNING_SUMMARY_H
-#define ET_RENDER_LEARNING_SUMMARY_H
+#pragma once
 
 #include <string>
 
@@ -15,5 +14,3 @@ namespace et {
 std::string learning_summary(const nlohmann::json& learning);
 
 } // namespace et
-
-#endif

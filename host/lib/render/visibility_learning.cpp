@@ -181,6 +181,7 @@ bool VisibilityLearning::after_pass(int pass, uint32_t sample_index, const Film*
         const Timer t;
         update_tables(pass, device);
         learning_seconds_ += seconds + t.seconds();
+        ++learned_passes_;
         if (pass + 1 >= learn_until_)
             cache_.reset(); // learned, or screened out: the sums are no longer needed
     }
@@ -245,6 +246,7 @@ nlohmann::json VisibilityLearning::stats() const {
                             : kept == Strategy::visibility ? "tables"
                                                            : name_of(kept);
     return {{"learning_passes", learn_until_},
+            {"learned_passes", learned_passes_},
             {"learning_seconds", learning_seconds_},
             {"update_seconds", update_seconds_},
             {"records", records_},
