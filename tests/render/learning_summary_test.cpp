@@ -10,6 +10,7 @@ namespace {
 nlohmann::json figures(const std::string& verdict, const std::string& by, const std::string& kept) {
     return {{"verdict", verdict},
             {"verdict_by", by},
+            {"verdict_measured", verdict != "none" && kept != "none"},
             {"verdict_kept", kept},
             {"verdict_fallback", "compensated"},
             {"verdict_screen_share", 0.0125},
@@ -68,14 +69,10 @@ TEST(LearningSummary, SaysWhatTheVerdictKeptAndWhy) {
 TEST(LearningSummary, AVerdictNotYetGiven) {
     nlohmann::json ended = figures("none", "none", "tables");
     ended["learned_passes"] = 10;
-    ended["verdict_kept_error"] = 0.0;
-    ended["verdict_fallback_error"] = 0.0;
     ended["verdict_seconds"] = 0.0;
     EXPECT_EQ(et::learning_summary(ended),
               "learning: the learned tables, no verdict given; 10 learning passes: 0.50 s");
     nlohmann::json waiting = figures("none", "screen", "cosine");
-    waiting["verdict_kept_error"] = 0.0;
-    waiting["verdict_fallback_error"] = 0.0;
     waiting["verdict_seconds"] = 0.0;
     EXPECT_EQ(et::learning_summary(waiting),
               "learning: `cosine` in the tables' place, no verdict given (its shadow rays had "

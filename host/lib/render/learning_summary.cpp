@@ -23,17 +23,16 @@ std::string figure(const char* format, double v) {
 // What the verdict weighed: the fallback's error against the kept technique's, and the cost
 // the kept one had to earn.
 std::string measured(const nlohmann::json& l, const std::string& kept) {
-    const std::string fallback = l.value("verdict_fallback", "");
+    const std::string fallback = possessive(l.value("verdict_fallback", "fallback"));
     const double kept_error = l.value("verdict_kept_error", 0.0);
     const double fallback_error = l.value("verdict_fallback_error", 0.0);
     const std::string cost =
         ", against a cost of " + figure("%.3g", l.value("verdict_cost", 1.0)) + "x";
     if (!(kept_error > 0.0))
-        return "measured: " + possessive(kept) + " error 0, " +
-               (fallback.empty() ? "the fallback's" : possessive(fallback)) + " " +
+        return "measured: " + possessive(kept) + " error 0, " + fallback + " " +
                figure("%.3g", fallback_error) + cost;
-    return "measured: " + (fallback.empty() ? "the fallback's" : possessive(fallback)) + " error " +
-           figure("%.3g", fallback_error / kept_error) + "x " + possessive(kept) + cost;
+    return "measured: " + fallback + " error " + figure("%.3g", fallback_error / kept_error) +
+           "x " + possessive(kept) + cost;
 }
 
 // Why the verdict went as it did: the screen's share of the light found unblocked, and (where
@@ -46,11 +45,8 @@ std::string reason(const nlohmann::json& l) {
         screen = "its shadow rays had found " +
                  figure("%.3g", 100.0 * l.value("verdict_screen_share", 0.0)) +
                  "% of their light unblocked at the screen";
-    // The screen can leave a measurement to make (the binned samples against the fallback): its
-    // errors are there once made; a measured verdict always has them.
-    const bool made = by == "measure" || l.value("verdict_fallback_error", 0.0) > 0.0 ||
-                      l.value("verdict_kept_error", 0.0) > 0.0;
-    if (kept != "none" && made)
+    // (The screen can leave a measurement to make: the binned samples against the fallback.)
+    if (l.value("verdict_measured", false))
         measure = measured(l, kept);
     if (screen.empty() && measure.empty())
         return "";
@@ -75,7 +71,7 @@ std::string learning_summary(const nlohmann::json& l) {
         s += technique(verdict) + " after the learning";
     // The passes learnt in this process (a render that stopped early learnt fewer than the
     // learning's planned end), and their time with the verdict's measuring passes.
-    const int passes = l.value("learned_passes", l.value("learning_passes", 0));
+    const int passes = l.value("learned_passes", 0);
     const double verdict_seconds = l.value("verdict_seconds", 0.0);
     return s + reason(l) + "; " + std::to_string(passes) +
            (passes == 1 ? " learning pass" : " learning passes") +

@@ -258,6 +258,7 @@ nlohmann::json VisibilityLearning::stats() const {
                         : switches_.empty() ? "tables"
                                             : name_of(switches_.back().technique)},
             {"verdict_by", verdict_by_},
+            {"verdict_measured", measured_},
             {"verdict_fallback", name_of(options_.fallback)},
             {"verdict_screen_share", screen_share_},
             {"verdict_passes", options_.verdict_passes},
