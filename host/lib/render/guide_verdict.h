@@ -18,7 +18,9 @@
 // tools/experiments' relative MSE); the mean over the image of each technique's value, every
 // pixel's capped at the 99.9% quantile (a firefly in one block must not decide), is its error. The
 // tables stay when the fallback's error is at least `cost` times theirs (the time they cost per
-// sample); otherwise the passes that follow render the fallback, with its batched map samples.
+// sample) by one standard error of the ratio's log, from the pixels' spread (log_ratio_se: a ratio
+// that a few pixels make is not yet a measurement); otherwise the passes that follow render the
+// fallback, with its batched map samples.
 // The fallback's passes are not kept: in a room lit through a window, 8 of them among 300 passes
 // of the tables would add 20% to the image's variance.
 //
@@ -57,6 +59,9 @@ class GuideVerdict {
     bool kept_wins() const;
     double fallback_error() const { return error_[0]; }
     double kept_error() const { return error_[1]; }
+    // The standard error of log(fallback_error / kept_error), from the spread of the pixels'
+    // values (the delta method for a ratio of means); 0 where nothing was compared.
+    double log_ratio_se() const { return log_ratio_se_; }
 
   private:
     void decide();
@@ -67,6 +72,7 @@ class GuideVerdict {
     std::vector<double> sum_[4];
     std::vector<uint32_t> n_[4];
     double error_[2] = {0.0, 0.0};
+    double log_ratio_se_ = 0.0;
     bool decided_ = false;
 };
 

@@ -230,6 +230,7 @@ bool VisibilityLearning::give_verdict(const MeasuringPass& measure) {
     decided_ = measured_ = true;
     verdict_fallback_error_ = verdict_->fallback_error();
     verdict_kept_error_ = verdict_->kept_error();
+    verdict_log_ratio_se_ = verdict_->log_ratio_se();
     verdict_.reset();
     return true;
 }
@@ -269,7 +270,8 @@ nlohmann::json VisibilityLearning::stats() const {
             {"verdict_seconds", verdict_seconds_},
             {"verdict_fallback_error", verdict_fallback_error_},
             {"verdict_kept", kept_name},
-            {"verdict_kept_error", verdict_kept_error_}};
+            {"verdict_kept_error", verdict_kept_error_},
+            {"verdict_log_ratio_se", verdict_log_ratio_se_}};
 }
 
 } // namespace et

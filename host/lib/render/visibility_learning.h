@@ -98,7 +98,7 @@ class VisibilityLearning : public LearningPolicy {
     double learning_seconds_ = 0, update_seconds_ = 0, verdict_seconds_ = 0;
     int learned_passes_ = 0; // learning passes rendered so far (learn_until_: where they end)
     uint64_t records_ = 0, continuation_records_ = 0, host_bytes_ = 0, device_bytes_ = 0;
-    double verdict_fallback_error_ = 0, verdict_kept_error_ = 0;
+    double verdict_fallback_error_ = 0, verdict_kept_error_ = 0, verdict_log_ratio_se_ = 0;
     std::map<float, uint64_t> light_counts_;
 };
 
