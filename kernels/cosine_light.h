@@ -147,7 +147,8 @@ ETK_FN void etk_cosine_density_batch(ETK_GLOBAL const float* dist, ETK_GLOBAL co
 
 // The light samples of the paths in slots[0 .. n-1] (n <= ETK_LIGHT_BATCH), of bins cell[k] (-1:
 // the full map), from (xu[k], xv[k]), into light_dir, light_L and light_cell. A full-map sample
-// goes through the steps with bin 0's table and is drawn again, alone, at the end (dielectrics:
+// goes through the steps with the first slot's table of guide_cells (always there; every read
+// stays in bounds whatever it holds) and is drawn again, alone, at the end (rough dielectrics:
 // rare).
 ETK_FN void etk_cosine_light_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOBAL const int* slots,
                                    const int* cell, const float* xu, const float* xv, int n) {

@@ -91,23 +91,25 @@ TEST(GuideVerdict, DroppedSamplesAndBlackFilmsAreNoEvidence) {
     EXPECT_TRUE(std::isfinite(v.fallback_error()) && std::isfinite(v.kept_error()));
 }
 
-// The same ratio of errors, 1.3 at a cost of 1.25, on a small film: spread evenly over the pixels
-// it is a measurement and the tables stay; made of half the pixels at 2.25 and half at 0.36, its
-// log's standard error (~0.08 here) says it may be chance, and the fallback stays.
+// A ratio of errors spread evenly over the pixels is a measurement; the same size of ratio made
+// by two pixels of 256 may be chance. Films without noise: each pixel's two blocks are 1 + d and
+// 1 - d, so its error is fixed by d. The tables' d is 0.1 everywhere; the fallback's is
+// 0.1 sqrt(1.3) everywhere (ratio 1.3, no spread: the tables stay at a cost of 1.25), or 0.1 but
+// 0.1 sqrt(65) at two pixels (ratio 1.5, its log's standard error 0.235: the bar is 1.25 x 1.265 =
+// 1.58, and the fallback stays, where the ratio alone would have kept the tables).
 TEST(GuideVerdict, ARatioFewPixelsMakeMustBeSure) {
     constexpr int w = 16, h = 16;
-    auto verdict = [&](bool even) {
+    auto verdict = [&](bool spread) {
         et::GuideVerdict v(w, h, kPasses, 1.25);
         for (int k = 0; k < kPasses; ++k)
             for (int t = 1; t >= 0; --t) {
                 std::vector<float> f(4 * w * h);
-                uint32_t x = static_cast<uint32_t>(k) * 2654435761u + 1u;
                 for (int i = 0; i < w * h; ++i) {
-                    x = x * 1664525u + 1013904223u;
-                    const double u = (x >> 8) * (1.0 / 16777216.0) * 2.0 - 1.0;
-                    const double scale = t ? 1.0 : even ? std::sqrt(1.3) : (i % 2 ? 1.6 : 0.6);
-                    f[4 * i] = f[4 * i + 1] = f[4 * i + 2] =
-                        static_cast<float>(1.0 + 0.1 * scale * u);
+                    const double scale = t        ? 1.0
+                                         : spread ? std::sqrt(1.3)
+                                                  : (i == 37 || i == 200 ? std::sqrt(65.0) : 1.0);
+                    const double d = 0.1 * scale * (k < kPasses / 2 ? 1.0 : -1.0);
+                    f[4 * i] = f[4 * i + 1] = f[4 * i + 2] = static_cast<float>(1.0 + d);
                     f[4 * i + 3] = 1.0f;
                 }
                 v.add(t, k, f.data());
@@ -118,8 +120,8 @@ TEST(GuideVerdict, ARatioFewPixelsMakeMustBeSure) {
     EXPECT_NEAR(spread.fallback_error() / spread.kept_error(), 1.3, 0.01);
     EXPECT_LT(spread.log_ratio_se(), 0.01);
     EXPECT_TRUE(spread.kept_wins());
-    EXPECT_GT(few.fallback_error() / few.kept_error(), 1.25);
-    EXPECT_GT(few.log_ratio_se(), 0.04);
+    EXPECT_NEAR(few.fallback_error() / few.kept_error(), 1.5, 0.03);
+    EXPECT_NEAR(few.log_ratio_se(), 0.235, 0.02);
     EXPECT_FALSE(few.kept_wins());
 }
 

@@ -57,15 +57,15 @@ TEST(LearningSummary, SaysWhatTheVerdictKeptAndWhy) {
          "learning: `compensated` after the learning (its shadow rays had found 97.7% of their "
          "light unblocked at the screen); 1 learning pass: 0.50 s"},
         // The ratio's standard error, where the stats hold it: 1.3x beat a cost of 1.12x, but
-        // not by the 26% it is uncertain by.
+        // not by the factor it is uncertain by.
         {with(
              with(with(figures("compensated", "screen", "cosine"), "verdict_fallback_error", 0.013),
                   "verdict_cost", 1.12),
              "verdict_log_ratio_se", 0.23),
          "learning: `compensated` after the learning (its shadow rays had found 1.25% of their "
          "light unblocked at the screen; then measured: `compensated`'s error 1.3x `cosine`'s, "
-         "give or take 26%, against a cost of 1.12x); 32 learning passes and the verdict's: 0.75 "
-         "s"},
+         "uncertain by a factor of 1.26, against a cost of 1.12x); 32 learning passes and the "
+         "verdict's: 0.75 s"},
         {figures("cosine", "screen", "cosine"),
          "learning: `cosine` after the learning (its shadow rays had found 1.25% of their light "
          "unblocked at the screen; then measured: `compensated`'s error 3x `cosine`'s, against a "

@@ -127,7 +127,8 @@ void GuideVerdict::decide() {
     }
     // The ratio's spread: R = A / B of the two means over the same pixels has, to first order,
     // var(R) / R^2 = var(a - R b) / (n A^2).
-    if (error_[0] > 0.0 && error_[1] > 0.0) {
+    if (error_[0] > 0.0 && error_[1] > 0.0 && std::isfinite(error_[0]) &&
+        std::isfinite(error_[1])) {
         const double r = error_[0] / error_[1];
         double s2 = 0.0;
         for (size_t i = 0; i < used; ++i) {

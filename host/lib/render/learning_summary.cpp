@@ -32,12 +32,13 @@ std::string measured(const nlohmann::json& l, const std::string& kept) {
     if (!(kept_error > 0.0))
         return "measured: " + possessive(kept) + " error 0, " + fallback + " " +
                figure("%.3g", fallback_error) + cost;
-    // The ratio's uncertainty (one standard error), which the verdict demands it beat the cost by.
+    // The ratio's uncertainty: the factor of one standard error of its log (the verdict demands
+    // that the ratio beat the cost by it); none below half a percent.
     const double se = l.value("verdict_log_ratio_se", 0.0);
-    const std::string give_or_take =
-        se > 0.0 ? ", give or take " + figure("%.2g", 100.0 * (std::exp(se) - 1.0)) + "%" : "";
+    const std::string uncertain =
+        se >= 0.005 ? ", uncertain by a factor of " + figure("%.3g", std::exp(se)) : "";
     return "measured: " + fallback + " error " + figure("%.3g", fallback_error / kept_error) +
-           "x " + possessive(kept) + give_or_take + cost;
+           "x " + possessive(kept) + uncertain + cost;
 }
 
 // Why the verdict went as it did: the screen's share of the light found unblocked, and (where

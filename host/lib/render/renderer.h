@@ -112,8 +112,12 @@ class Renderer {
 };
 
 // The renderer for scene.settings (back end, device, paths in flight, threads). `build`
-// receives the OpenCL program build time (untouched for the native back end).
+// receives the OpenCL program build time (untouched for the native back end). The renderer reads
+// the scene's arrays where they are (an OpenCL buffer over host memory, the native kernels): the
+// scene must outlive it, so a temporary is refused.
 std::unique_ptr<Renderer> make_renderer(const DeviceScene& scene,
                                         ProgramBuildInfo* build = nullptr);
+std::unique_ptr<Renderer> make_renderer(const DeviceScene&& scene,
+                                        ProgramBuildInfo* build = nullptr) = delete;
 
 } // namespace et
