@@ -26,14 +26,15 @@ ETK_FN float etk_cosine_light_pdf(EtkScene S, EtkParams p, int cell, float2 uv) 
 }
 
 // The binned light samples of a batch, drawn by etk_cosine_light_batch (below) in steps, each a
-// loop over the batch's arrays of scalars, so that both compilers vectorise them and the cache
-// misses of the bins' tables and the map's rows overlap: etk_guide_sample's operations per sample,
-// in the same order, so the same bits as one at a time. Each search runs step by step across the
-// batch with the batch's largest step count: a step larger than a sample's own never moves it
-// (etk_find_interval, etk_find_interval_between). Sample k's bin table is at gc + tab[k].
+// loop over the batch's arrays of scalars, so that both compilers vectorise the searches and the
+// cache misses of the bins' tables and the map's rows overlap: etk_guide_sample's own steps
+// (visibility_guide.h, piecewise_constant.h) per sample, in the same order, so the same bits as
+// one at a time. Each search runs step by step across the batch with the batch's largest step
+// count: a step larger than a sample's own never moves it (etk_interval_step). Sample k's bin
+// table is at gc + tab[k].
 
-// The regions (etk_guide_pick_region): the band, then the column, by binary lifting; (tu, tv)
-// where each sample lies inside its region.
+// The regions (etk_guide_pick_region): the band, then the column; (tu, tv) where each sample lies
+// inside its region.
 ETK_FN void etk_cosine_pick_batch(ETK_GLOBAL const float* gc, const int* tab, const float* xu,
                                   const float* xv, int n, int* band, int* col, float* tu,
                                   float* tv) {
@@ -42,7 +43,7 @@ ETK_FN void etk_cosine_pick_batch(ETK_GLOBAL const float* gc, const int* tab, co
         band[k] = 0;
     for (int step = ETK_GUIDE_ROWS / 2; step > 0; step >>= 1)
         for (int k = 0; k < n; ++k)
-            band[k] += step & -(int)(gc[tab[k] + (band[k] + step) * ETK_GUIDE_COLS] <= xv[k]);
+            band[k] = etk_guide_band_step(gc + tab[k], band[k], step, xv[k]);
     for (int k = 0; k < n; ++k) {
         int first = tab[k] + band[k] * ETK_GUIDE_COLS;
         b0[k] = gc[first];
@@ -51,14 +52,14 @@ ETK_FN void etk_cosine_pick_batch(ETK_GLOBAL const float* gc, const int* tab, co
         col[k] = 0;
     }
     for (int step = ETK_GUIDE_COLS / 2; step > 0; step >>= 1)
-        for (int k = 0; k < n; ++k) {
-            float c = gc[tab[k] + band[k] * ETK_GUIDE_COLS + col[k] + step];
-            col[k] += step & -((int)(c <= x[k]) & (int)(c < b1[k]));
-        }
+        for (int k = 0; k < n; ++k)
+            col[k] = etk_guide_col_step(gc + tab[k], band[k] * ETK_GUIDE_COLS, col[k], step, x[k],
+                                        b1[k]);
     for (int k = 0; k < n; ++k) {
-        int R = tab[k] + band[k] * ETK_GUIDE_COLS + col[k];
-        tu[k] = etk_guide_rescale(x[k], gc[R], gc[R + 1]);
-        tv[k] = etk_guide_rescale(xv[k], b0[k], b1[k]);
+        float2 t = etk_guide_region_offset(gc + tab[k], band[k] * ETK_GUIDE_COLS + col[k], x[k],
+                                           xv[k], b0[k], b1[k]);
+        tu[k] = t.x;
+        tv[k] = t.y;
     }
 }
 
@@ -73,15 +74,11 @@ ETK_FN void etk_cosine_row_batch(ETK_GLOBAL const float* gr, int h, const int* b
         rows[k] = etk_guide_row_start(band[k] + 1, h) - row[k];
         off[k] = etk_guide_row_table(band[k], col[k], h);
         lo[k] = 0;
-        while (2 * first < rows[k])
-            first *= 2;
+        first = max(first, etk_interval_first_step(rows[k]));
     }
     for (int step = first; step > 0; step >>= 1)
-        for (int k = 0; k < n; ++k) {
-            int mid = lo[k] + step;
-            float c = gr[off[k] + min(mid, rows[k] - 1)];
-            lo[k] += step & -((int)(mid < rows[k]) & (int)(c <= tv[k]));
-        }
+        for (int k = 0; k < n; ++k)
+            lo[k] = etk_interval_step(gr + off[k], lo[k], step, rows[k] - 1, tv[k]);
     for (int k = 0; k < n; ++k) {
         ETK_GLOBAL const float* rcdf = gr + off[k];
         row[k] += lo[k];
@@ -89,8 +86,8 @@ ETK_FN void etk_cosine_row_batch(ETK_GLOBAL const float* gr, int h, const int* b
     }
 }
 
-// The columns (its second half): each row's conditional CDF over the region's column band
-// (etk_guide_column): the sub-band, then etk_find_interval_between over its columns; u.
+// The columns (its second half): each row's conditional CDF over the region's column band, the
+// sub-band, then etk_find_interval_between over its columns (etk_guide_column); u.
 ETK_FN void etk_cosine_column_batch(ETK_GLOBAL const float* dist, ETK_GLOBAL const float* gr, int w,
                                     int h, const int* row, const int* col, const float* tu, int n,
                                     float* u) {
@@ -99,49 +96,17 @@ ETK_FN void etk_cosine_column_batch(ETK_GLOBAL const float* dist, ETK_GLOBAL con
     int first = 1;
     for (int k = 0; k < n; ++k) {
         ETK_GLOBAL const float* split = gr + etk_guide_split_table(row[k], h);
-        float a = split[col[k] * ETK_GUIDE_SPLITS], b = split[(col[k] + 1) * ETK_GUIDE_SPLITS];
-        x[k] = a + clamp(tu[k], 0.0f, ETK_ONE_MINUS_EPS) * (b - a);
-        int j0 = col[k] * ETK_GUIDE_SPLITS, c1 = etk_guide_col_start(col[k] + 1, w), j = j0;
-        for (int i = j0 + 1; i < j0 + ETK_GUIDE_SPLITS; ++i)
-            j = split[i] <= x[k] && etk_guide_sub_start(i, w) < c1 ? i : j;
-        lo[k] = etk_guide_sub_start(j, w);
-        hi[k] = max(etk_guide_sub_start(j + 1, w) - 1, lo[k]);
+        x[k] = etk_guide_band_point(split, col[k], tu[k]);
+        etk_guide_sub_band(split, col[k], w, x[k], &lo[k], &hi[k]);
         off[k] = (int)(etk_dist2d_row_cdf(dist, w, h, row[k]) - dist);
-        while (2 * first <= hi[k] - lo[k])
-            first *= 2;
+        first = max(first, etk_interval_first_step_between(hi[k] - lo[k]));
     }
     for (int step = first; step > 0; step >>= 1)
-        for (int k = 0; k < n; ++k) {
-            int mid = lo[k] + step;
-            float c = dist[off[k] + min(mid, hi[k])];
-            lo[k] += step & -((int)(mid <= hi[k]) & (int)(c <= x[k]));
-        }
+        for (int k = 0; k < n; ++k)
+            lo[k] = etk_interval_step(dist + off[k], lo[k], step, hi[k], x[k]);
     for (int k = 0; k < n; ++k) {
         ETK_GLOBAL const float* ccdf = dist + off[k];
         u[k] = etk_interval_point(ccdf[lo[k]], ccdf[lo[k] + 1], x[k], lo[k], w);
-    }
-}
-
-// The directions and densities at (u, v) (etk_guide_sample_at): the map's density times the bin's
-// factor Q(R) / M_R.
-ETK_FN void etk_cosine_density_batch(ETK_GLOBAL const float* dist, ETK_GLOBAL const float* gc,
-                                     ETK_GLOBAL const float* gr, EtkEnvMap env, const int* tab,
-                                     const float* u, const float* v, int n, float* dx, float* dy,
-                                     float* dz, float* pdf) {
-    int w = env.dist_w, h = env.dist_h;
-    for (int k = 0; k < n; ++k) {
-        int r = etk_cell_of(v[k], h), c = etk_cell_of(u[k], w);
-        float pdf_uv = etk_interval_density(dist + etk_dist2d_marginal_cdf(h), h, r) *
-                       etk_interval_density(etk_dist2d_row_cdf(dist, w, h, r), w, c);
-        float2 theta = etk_sincospi(v[k]);
-        float3 d = etk_env_sample_dir(env, u[k], theta);
-        dx[k] = d.x;
-        dy[k] = d.y;
-        dz[k] = d.z;
-        int R = etk_guide_region_row(r, h) * ETK_GUIDE_COLS + etk_guide_region_col(c, w);
-        float M = gr[R];
-        float f = M > 0.0f ? (gc[tab[k] + R + 1] - gc[tab[k] + R]) / M : 1.0f;
-        pdf[k] = etk_env_sample_pdf(env, pdf_uv, theta.x) * f;
     }
 }
 
@@ -170,8 +135,13 @@ ETK_FN void etk_cosine_light_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOB
         etk_cosine_row_batch(S.guide_regions, p.env.dist_h, band, col, tv, n, row, v);
         etk_cosine_column_batch(S.env_dist, S.guide_regions, p.env.dist_w, p.env.dist_h, row, col,
                                 tu, n, u);
-        etk_cosine_density_batch(S.env_dist, S.guide_cells, S.guide_regions, p.env, tab, u, v, n,
-                                 dx, dy, dz, pdf);
+        for (int k = 0; k < n; ++k) { // directions and densities (etk_guide_sample_at)
+            EtkEnvSample ls = etk_guide_sample_at(S, p, max(cell[k], 0), make_float2(u[k], v[k]));
+            dx[k] = ls.dir.x;
+            dy[k] = ls.dir.y;
+            dz[k] = ls.dir.z;
+            pdf[k] = ls.pdf;
+        }
     }
     for (int k = 0; k < n; ++k)
         if (cell[k] < 0) {

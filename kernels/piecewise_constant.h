@@ -53,6 +53,32 @@ ETK_FN int etk_dist2d_size(int w, int h) {
     return etk_dist2d_conditional_guide(w, h) + h * (etk_guide_cells(w) + 1);
 }
 
+// One step of binary lifting over cdf[lo .. last]: lo + step where cdf[lo + step] <= u (and
+// lo + step <= last), else lo; a select, not a branch. etk_find_interval and
+// etk_find_interval_between step with it, and the batched searches that run a batch's samples
+// step by step (cosine_light.h): a step of last - lo + 1 or more never moves lo.
+ETK_FN int etk_interval_step(ETK_GLOBAL const float* cdf, int lo, int step, int last, float u) {
+    int mid = lo + step;
+    float c = cdf[min(mid, last)];
+    return lo + (step & -((int)(mid <= last) & (int)(c <= u)));
+}
+// The first step of etk_find_interval over n intervals: the largest power of two below n (1 for n
+// <= 2).
+ETK_FN int etk_interval_first_step(int n) {
+    int first = 1;
+    while (2 * first < n)
+        first *= 2;
+    return first;
+}
+// The first step of etk_find_interval_between over [lo, lo + span]: the largest power of two <=
+// span (1 for span <= 1).
+ETK_FN int etk_interval_first_step_between(int span) {
+    int step = 1;
+    while (2 * step <= span)
+        step *= 2;
+    return step;
+}
+
 // Largest i in [0, n-1] with cdf[i] <= u, for a CDF of n+1 entries. Cells of zero width are
 // never returned for u in [0,1): the last of a run of equal entries is the one whose successor
 // is larger.
@@ -61,15 +87,9 @@ ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
     // work-item runs the same instructions, so OpenCL compilers can vectorise across work-items.
     // Steps of n or more never move (mid >= n), so the search starts at the largest power of
     // two below n: log2(n) steps rather than 17, the same result.
-    int first = 1;
-    while (2 * first < n)
-        first *= 2;
     int lo = 0; // invariant: cdf[lo] <= u
-    for (int step = first; step > 0; step >>= 1) {
-        int mid = lo + step;
-        float c = cdf[min(mid, n - 1)];
-        lo += step & -((int)(mid < n) & (int)(c <= u));
-    }
+    for (int step = etk_interval_first_step(n); step > 0; step >>= 1)
+        lo = etk_interval_step(cdf, lo, step, n - 1, u);
     return lo;
 }
 
@@ -77,14 +97,8 @@ ETK_FN int etk_find_interval(ETK_GLOBAL const float* cdf, int n, float u) {
 // largest power of two <= hi - lo, with selects rather than branches (the comparisons are
 // unpredictable; only the trip count varies, and it is 0 or 1 for most short ranges).
 ETK_FN int etk_find_interval_between(ETK_GLOBAL const float* cdf, int lo, int hi, float u) {
-    int step = 1;
-    while (2 * step <= hi - lo)
-        step *= 2;
-    for (; step > 0; step >>= 1) {
-        int mid = lo + step;
-        float c = cdf[min(mid, hi)];
-        lo += step & -((int)(mid <= hi) & (int)(c <= u));
-    }
+    for (int step = etk_interval_first_step_between(hi - lo); step > 0; step >>= 1)
+        lo = etk_interval_step(cdf, lo, step, hi, u);
     return lo;
 }
 

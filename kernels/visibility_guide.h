@@ -159,14 +159,29 @@ ETK_FN float etk_guide_light_count(EtkScene S, EtkParams p, int cell) {
 // below x, then the last of its columns whose CDF entry is <= x. The same column as the plain
 // search clamped to the band, clamp(etk_find_interval(ccdf, w, x), c0, c1 - 1): the sub-band
 // starts are entries of the same CDF (tests/kernels/visibility_guide_test.cpp).
-ETK_FN int etk_guide_column(ETK_GLOBAL const float* ccdf, ETK_GLOBAL const float* split, int Rc,
-                            int w, float x) {
+// Its first half: the columns [*lo, *hi] of the sub-band x lies in (hi >= lo even in a band of
+// no columns, never sampled).
+ETK_FN void etk_guide_sub_band(ETK_GLOBAL const float* split, int Rc, int w, float x, int* lo,
+                               int* hi) {
     int first = Rc * ETK_GUIDE_SPLITS, c1 = etk_guide_col_start(Rc + 1, w);
     int j = first;
     for (int k = first + 1; k < first + ETK_GUIDE_SPLITS; ++k)
         j = split[k] <= x && etk_guide_sub_start(k, w) < c1 ? k : j;
-    int lo = etk_guide_sub_start(j, w); // hi >= lo even in a band of no columns (never sampled)
-    return etk_find_interval_between(ccdf, lo, max(etk_guide_sub_start(j + 1, w) - 1, lo), x);
+    *lo = etk_guide_sub_start(j, w);
+    *hi = max(etk_guide_sub_start(j + 1, w) - 1, *lo);
+}
+ETK_FN int etk_guide_column(ETK_GLOBAL const float* ccdf, ETK_GLOBAL const float* split, int Rc,
+                            int w, float x) {
+    int lo, hi;
+    etk_guide_sub_band(split, Rc, w, x, &lo, &hi);
+    return etk_find_interval_between(ccdf, lo, hi, x);
+}
+
+// The point of the row's CDF u of the way through column band Rc's span [ccdf[c0], ccdf[c1]]
+// (split: the row's CDF at the sub-band starts).
+ETK_FN float etk_guide_band_point(ETK_GLOBAL const float* split, int Rc, float u) {
+    float a = split[Rc * ETK_GUIDE_SPLITS], b = split[(Rc + 1) * ETK_GUIDE_SPLITS];
+    return a + clamp(u, 0.0f, ETK_ONE_MINUS_EPS) * (b - a);
 }
 
 // Map coordinates drawn inside region R (row band Rr, column band Rc) proportionally to the map,
@@ -183,8 +198,7 @@ ETK_FN float2 etk_guide_sample_region(EtkScene S, EtkEnvMap env, int R, float2 u
     // The column: the row's conditional CDF, its span over the band's columns.
     ETK_GLOBAL const float* ccdf = etk_dist2d_row_cdf(S.env_dist, w, h, row);
     ETK_GLOBAL const float* split = S.guide_regions + etk_guide_split_table(row, h);
-    float a = split[Rc * ETK_GUIDE_SPLITS], b = split[(Rc + 1) * ETK_GUIDE_SPLITS]; // ccdf[c0, c1]
-    float x = a + clamp(u.x, 0.0f, ETK_ONE_MINUS_EPS) * (b - a);
+    float x = etk_guide_band_point(split, Rc, u.x);
     int c = etk_guide_column(ccdf, split, Rc, w, x);
     return make_float2(etk_interval_point(ccdf[c], ccdf[c + 1], x, c, w), v);
 }
@@ -199,23 +213,38 @@ ETK_FN float etk_guide_rescale(float u, float a, float b) {
 // cdf[COLS b]), then the last column of it whose start is <= the point u.x of the way through
 // the band's mass: never a region of zero probability unless the whole table is -- and, in *t,
 // where u lies inside the region, rescaled to [0,1)^2 for the next level.
+// Its steps, which the batched binned samples also take (cosine_light.h). Both conditions hold for
+// a prefix of the (non-decreasing) entries, so binary lifting finds the last of them: 4 + 5 steps
+// where a scan of every entry took 15 + 31. ROWS and COLS are powers of two, so the steps sum to
+// ROWS - 1 and COLS - 1: no index passes the table. The band: the last whose start is <= y.
+ETK_FN int etk_guide_band_step(ETK_GLOBAL const float* cdf, int band, int step, float y) {
+    return band + (step & -(int)(cdf[(band + step) * ETK_GUIDE_COLS] <= y));
+}
+// The column in the band that starts at entry `first` and ends at b1: the last whose start is <=
+// x and below the band's end (never a column of zero probability).
+ETK_FN int etk_guide_col_step(ETK_GLOBAL const float* cdf, int first, int col, int step, float x,
+                              float b1) {
+    float c = cdf[first + col + step];
+    return col + (step & -((int)(c <= x) & (int)(c < b1)));
+}
+// Where (u.x, u.y) lies inside region R of the band [b0, b1], x the point u.x of the way through
+// the band's mass.
+ETK_FN float2 etk_guide_region_offset(ETK_GLOBAL const float* cdf, int R, float x, float y,
+                                      float b0, float b1) {
+    return make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(y, b0, b1));
+}
 ETK_FN int etk_guide_pick_region(ETK_GLOBAL const float* cdf, float2 u, float2* t) {
-    // Both conditions hold for a prefix of the (non-decreasing) entries, so binary lifting finds
-    // the last of them: 4 + 5 steps where a scan of every entry took 15 + 31. ROWS and COLS are
-    // powers of two, so the steps sum to ROWS - 1 and COLS - 1: no index passes the table.
     int band = 0;
     for (int step = ETK_GUIDE_ROWS / 2; step > 0; step >>= 1)
-        band += step & -(int)(cdf[(band + step) * ETK_GUIDE_COLS] <= u.y);
+        band = etk_guide_band_step(cdf, band, step, u.y);
     int first = band * ETK_GUIDE_COLS;
     float b0 = cdf[first], b1 = cdf[first + ETK_GUIDE_COLS];
     float x = b0 + u.x * (b1 - b0);
     int col = 0;
-    for (int step = ETK_GUIDE_COLS / 2; step > 0; step >>= 1) {
-        float c = cdf[first + col + step];
-        col += step & -((int)(c <= x) & (int)(c < b1));
-    }
+    for (int step = ETK_GUIDE_COLS / 2; step > 0; step >>= 1)
+        col = etk_guide_col_step(cdf, first, col, step, x, b1);
     int R = first + col;
-    *t = make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(u.y, b0, b1));
+    *t = etk_guide_region_offset(cdf, R, x, u.y, b0, b1);
     return R;
 }
 
