@@ -45,10 +45,7 @@ ETK_FN void etk_cosine_pick_batch(ETK_GLOBAL const float* gc, const int* tab, co
         for (int k = 0; k < n; ++k)
             band[k] = etk_guide_band_step(gc + tab[k], band[k], step, xv[k]);
     for (int k = 0; k < n; ++k) {
-        int first = tab[k] + band[k] * ETK_GUIDE_COLS;
-        b0[k] = gc[first];
-        b1[k] = gc[first + ETK_GUIDE_COLS];
-        x[k] = b0[k] + xu[k] * (b1[k] - b0[k]);
+        x[k] = etk_guide_band_mass(gc + tab[k], band[k], xu[k], &b0[k], &b1[k]);
         col[k] = 0;
     }
     for (int step = ETK_GUIDE_COLS / 2; step > 0; step >>= 1)

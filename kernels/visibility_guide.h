@@ -233,13 +233,20 @@ ETK_FN float2 etk_guide_region_offset(ETK_GLOBAL const float* cdf, int R, float 
                                       float b0, float b1) {
     return make_float2(etk_guide_rescale(x, cdf[R], cdf[R + 1]), etk_guide_rescale(y, b0, b1));
 }
+// The band's ends b0, b1 in the cell's CDF, and the point ux of the way through its mass.
+ETK_FN float etk_guide_band_mass(ETK_GLOBAL const float* cdf, int band, float ux, float* b0,
+                                 float* b1) {
+    *b0 = cdf[band * ETK_GUIDE_COLS];
+    *b1 = cdf[(band + 1) * ETK_GUIDE_COLS];
+    return *b0 + ux * (*b1 - *b0);
+}
 ETK_FN int etk_guide_pick_region(ETK_GLOBAL const float* cdf, float2 u, float2* t) {
     int band = 0;
     for (int step = ETK_GUIDE_ROWS / 2; step > 0; step >>= 1)
         band = etk_guide_band_step(cdf, band, step, u.y);
     int first = band * ETK_GUIDE_COLS;
-    float b0 = cdf[first], b1 = cdf[first + ETK_GUIDE_COLS];
-    float x = b0 + u.x * (b1 - b0);
+    float b0, b1;
+    float x = etk_guide_band_mass(cdf, band, u.x, &b0, &b1);
     int col = 0;
     for (int step = ETK_GUIDE_COLS / 2; step > 0; step >>= 1)
         col = etk_guide_col_step(cdf, first, col, step, x, b1);
