@@ -143,7 +143,7 @@ ETK_FN EtkGuidedSample etk_cguide_sample_mixture(EtkScene S, EtkParams p, int ce
     if (u.x < c) {
         float x = etk_guide_rescale(u.x, 0.0f, c), q = etk_spot_share(S, p, cell);
         g.wi_world =
-            x < q ? etk_portal_sample_dir(etk_spot_table(S, p), s,
+            x < q ? etk_portal_sample_dir(etk_spot_table(S, p), etk_surface_start(s),
                                           make_float2(etk_guide_rescale(x, 0.0f, q), u.y))
                   : etk_cguide_sample(S, p, cell, make_float2(etk_guide_rescale(x, q, 1.0f), u.y));
         g.wi = etk_to_local(g.wi_world, t, b, n);

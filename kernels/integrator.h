@@ -101,17 +101,6 @@ ETK_FN float etk_last_bsdf_choice(EtkParams p, int pixel) {
     return etk_unit_float(etk_hash(key + p.sample_index * 0x9e3779b9u));
 }
 
-// The surface a path's ray hit (its hit record, stored by the intersect stage).
-ETK_FN EtkSurface etk_path_surface(EtkScene S, EtkPaths P, EtkParams p, int slot) {
-    float4 h4 = P.hit[slot];
-    EtkHit h;
-    h.t = h4.x;
-    h.prim = (int)as_uint(h4.y);
-    h.b1 = h4.z;
-    h.b2 = h4.w;
-    return etk_surface_at(S, p, etk_xyz(P.ray_o[slot]), etk_xyz(P.ray_d[slot]), h);
-}
-
 // A vertex being shaded: its surface, throughput and place in the path, and what its samples
 // are drawn from. Made once per vertex (etk_shade_vertex); the steps after it only read it.
 typedef struct {
@@ -261,11 +250,11 @@ ETK_FN void etk_intersect(ETK_STAGE_PARAMS) {
 // The cell (etk_light_cell) of the binned technique's vertex in `slot`, from the hit alone (the
 // shade stage finds the same from its surface): sample_lights draws before the surface is made.
 ETK_FN int etk_hit_cosine_cell(EtkScene S, EtkPaths P, EtkParams p, int slot) {
-    float4 h = P.hit[slot];
-    int prim = (int)as_uint(h.y), front;
+    EtkHit h = etk_path_hit(P, slot);
+    int front;
     float3 ng;
-    float3 ns = etk_shading_normal(S, prim, h.z, h.w, etk_xyz(P.ray_d[slot]), &ng, &front);
-    return etk_cosine_cell(p, etk_material_load(S.materials, S.tri_material[prim]), ns);
+    float3 ns = etk_shading_normal(S, h.prim, h.b1, h.b2, etk_xyz(P.ray_d[slot]), &ng, &front);
+    return etk_cosine_cell(p, etk_material_load(S.materials, S.tri_material[h.prim]), ns);
 }
 
 // The sample_lights stage's work-items for a shade queue of `shade` entries: one per batch of
@@ -275,11 +264,11 @@ ETK_FN int etk_light_batch_items(uint shade) {
 }
 
 // Stage 2': the shade queue's light samples, drawn ahead of the shade stage ETK_LIGHT_BATCH at a
-// time (etk_env_light_batch, etk_cosine_light_batch: the cache misses of a batch overlap, where
-// one sample per shade call leaves them in series), where the techniques allow it
-// (etk_light_batches). i: the batch; the queue's length is the shade counter intersect left (the
-// host launches this stage after it). A batch past the queue's end repeats its last entry and
-// stores nothing for the repeats. The same values as etk_light_sample in the shade stage would
+// time (etk_env_light_batch, etk_cosine_light_batch, etk_guide_light_batch: the cache misses of
+// a batch overlap, where one sample per shade call leaves them in series), where the techniques
+// allow it (etk_light_batches). i: the batch; the queue's length is the shade counter intersect
+// left (the host launches this stage after it). A batch past the queue's end repeats its last entry
+// and stores nothing for the repeats. The same values as etk_light_sample in the shade stage would
 // draw: the same bits.
 ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
     (void)out;
@@ -293,6 +282,10 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
         float2 xi = etk_dims(p, P.pixel[slot], etk_vertex_pair(P.depth[slot]));
         xu[k] = xi.x;
         xv[k] = xi.y;
+    }
+    if (kind == ETK_LIGHT_LEARNED) {
+        etk_guide_light_batch(S, P, p, Q.shade + first, xu, xv, min(ETK_LIGHT_BATCH, n - first));
+        return;
     }
     if (kind == ETK_LIGHT_BINNED) {
         int cell[ETK_LIGHT_BATCH];
@@ -331,9 +324,10 @@ ETK_CL_INLINE_FN EtkVertex etk_shade_vertex(EtkScene S, EtkPaths P, EtkFilm F, E
     v.delta = etk_bsdf_is_delta(v.s.m);
     v.bsdf_count = etk_last_bsdf_share(p, v.s.m, v.s.wo, v.last, v.delta);
     int kind = etk_light_kind(p, v.depth);
-    // The binned cell as sample_lights found it, if it drew the light sample.
-    int cell = kind == ETK_LIGHT_BINNED && p.light_batch ? P.light_cell[slot]
-                                                         : etk_light_cell(p, kind, v.s, v.s.m);
+    // The binned or learned cell as sample_lights found it, if it drew the light sample.
+    int cell = (kind == ETK_LIGHT_BINNED || kind == ETK_LIGHT_LEARNED) && p.light_batch
+                   ? P.light_cell[slot]
+                   : etk_light_cell(p, kind, v.s, v.s.m);
     v.light = etk_light_source(p, v.depth, cell);
     v.light_count = etk_light_count(S, p, v.light);
     // The guided share of the continuation; none at the last bounce, where the continuation
@@ -403,7 +397,12 @@ ETK_CL_INLINE_FN EtkLightContribution etk_light_contribution(EtkScene S, EtkPath
     r.c = v.beta * f * L * (fabs(wi.z) * w / ls.pdf);
     if (p.guide_learn) { // what this direction would bring, unweighted, and where
         r.value = etk_luma(L) * fabs(wi.z) / ls.pdf;
-        r.key = v.light.cell * ETK_GUIDE_REGIONS + etk_guide_region(p.env, ls.uv);
+        if (drawn && v.light.kind == ETK_LIGHT_LEARNED) { // etk_guide_light_batch left them
+            r.key = P.shadow_key[v.slot];
+            r.parts = P.guide_parts[v.slot];
+        } else {
+            r.key = etk_guide_record_key(p.env, v.light.cell, ls.uv);
+        }
     }
     return r;
 }

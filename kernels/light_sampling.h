@@ -52,9 +52,10 @@ ETK_FN int etk_light_cell(EtkParams p, int kind, EtkSurface s, EtkMaterial m) {
 }
 
 // Whether the sample_lights stage can draw the technique's samples ahead of the shade stage, in
-// batches: one map sample each, from a table that depends on nothing but the vertex's bin.
+// batches: one sample each, from tables that depend on nothing but the vertex's bin or cell.
 ETK_FN int etk_light_batches(int kind) {
-    return kind == ETK_LIGHT_MAP || kind == ETK_LIGHT_COMPENSATED || kind == ETK_LIGHT_BINNED;
+    return kind == ETK_LIGHT_MAP || kind == ETK_LIGHT_COMPENSATED || kind == ETK_LIGHT_BINNED ||
+           kind == ETK_LIGHT_LEARNED;
 }
 
 // The 2D table of the map-shaped techniques: the compensated one's, or the map's own.

@@ -145,51 +145,152 @@ ETK_FN float3 etk_portal_point(ETK_GLOBAL const float* box, float2 u) {
     return make_float3(x, y, z);
 }
 
-// The direction from surface s towards a point drawn from the table: aimed from the surface's
-// origin on the side it leaves by (the origin its shadow ray, or its continuation, starts from).
-ETK_CL_INLINE_FN float3 etk_portal_sample_dir(ETK_GLOBAL const float* box, EtkSurface s, float2 u) {
+// The direction from a surface (its ray start r) towards a point drawn from the table: aimed from
+// the surface's origin on the side it leaves by (the origin its shadow ray, or its continuation,
+// starts from).
+ETK_CL_INLINE_FN float3 etk_portal_sample_dir(ETK_GLOBAL const float* box, EtkRayStart r,
+                                              float2 u) {
     float3 y = etk_portal_point(box, u);
-    return normalize(y - etk_surface_origin(s, normalize(y - s.origin)));
+    return normalize(y - etk_start_towards(r, normalize(y - r.origin)));
+}
+
+// The whole mixture's density from its parts' densities pv and pp and the portal share b.
+ETK_FN float etk_portal_mix(float b, float pv, float pp) {
+    return b > 0.0f ? (1.0f - b) * pv + b * pp : pv;
 }
 
 // The light sample's density at a vertex in hash-grid `cell` whose ray towards d (unit; map
 // coordinates uv) starts at o: the cell's mixture, and the portal table's share of it.
 ETK_FN float etk_guide_light_pdf(EtkScene S, EtkParams p, int cell, float3 o, float3 d, float2 uv) {
-    float pv = etk_env_pdf_uv(S.env_dist, p.env, uv) * etk_guide_factor(S, p, cell, uv);
+    float pv = etk_guide_pdf_uv(S, p, cell, uv);
     float b = etk_portal_share(S, p, cell);
-    return b > 0.0f ? (1.0f - b) * pv + b * etk_portal_pdf(etk_portal_table(S, p), o, d) : pv;
+    return b > 0.0f ? etk_portal_mix(b, pv, etk_portal_pdf(etk_portal_table(S, p), o, d)) : pv;
+}
+
+// The visibility strategy's light sample is drawn in two steps, which the batch below shares:
+// the direction from one part of the mixture, then the whole mixture's density.
+// The portal part's direction from ray start r (u.x already below the share b, rescaled) and its
+// map coordinates.
+ETK_CL_INLINE_FN EtkEnvSample etk_portal_light_dir(EtkScene S, EtkParams p, EtkRayStart r,
+                                                   float2 u) {
+    EtkEnvSample e;
+    e.dir = etk_portal_sample_dir(etk_portal_table(S, p), r, u);
+    e.uv = etk_env_uv(p.env, e.dir);
+    e.row = etk_cell_of(e.uv.y, p.env.dist_h);
+    e.col = etk_cell_of(e.uv.x, p.env.dist_w);
+    e.pdf = 0.0f; // the mixture's, below
+    return e;
+}
+// The mixture's density of direction d from ray start r, given the cell's mixture's density pv
+// and the portal share b; *parts: p_vis and p_portal (the latter only while learning or where
+// b > 0), for the learning's choice of b.
+ETK_FN float etk_guide_light_mix(EtkParams p, ETK_GLOBAL const float* box, float b, EtkRayStart r,
+                                 float3 d, float pv, float2* parts) {
+    float pp = b > 0.0f || p.guide_learn ? etk_portal_pdf(box, etk_start_towards(r, d), d) : 0.0f;
+    *parts = make_float2(pv, pp);
+    return etk_portal_mix(b, pv, pp);
 }
 
 // The visibility strategy's light sample at surface s in `cell`, from u in [0,1)^2: with
 // probability b (u.x < b) towards the portal table's point, else the cell's mixture
-// (etk_guide_sample); pdf: the whole mixture's. *parts: the densities of its two parts, p_vis
-// and p_portal (the latter only while learning or where b > 0), for the learning's choice of b.
+// (etk_guide_sample); pdf: the whole mixture's.
 ETK_FN EtkEnvSample etk_guide_light_sample(EtkScene S, EtkParams p, int cell, EtkSurface s,
                                            float2 u, float2* parts) {
     float b = etk_portal_share(S, p, cell);
-    ETK_GLOBAL const float* box = etk_portal_table(S, p);
+    EtkRayStart start = etk_surface_start(s);
     EtkEnvSample r;
     float pv;
-    if (!(b > 0.0f)) {
-        r = etk_guide_sample(S, p, cell, u);
-        *parts = make_float2(
-            r.pdf, p.guide_learn ? etk_portal_pdf(box, etk_surface_origin(s, r.dir), r.dir) : 0.0f);
-        return r;
-    }
-    if (u.x < b) {
-        r.dir = etk_portal_sample_dir(box, s, make_float2(etk_guide_rescale(u.x, 0.0f, b), u.y));
-        r.uv = etk_env_uv(p.env, r.dir);
-        r.row = etk_cell_of(r.uv.y, p.env.dist_h);
-        r.col = etk_cell_of(r.uv.x, p.env.dist_w);
-        pv = etk_env_pdf_uv(S.env_dist, p.env, r.uv) * etk_guide_factor(S, p, cell, r.uv);
+    if (b > 0.0f && u.x < b) {
+        r = etk_portal_light_dir(S, p, start, make_float2(etk_guide_rescale(u.x, 0.0f, b), u.y));
+        pv = etk_guide_pdf_uv(S, p, cell, r.uv);
     } else {
-        r = etk_guide_sample(S, p, cell, make_float2(etk_guide_rescale(u.x, b, 1.0f), u.y));
+        r = etk_guide_sample(S, p, cell,
+                             b > 0.0f ? make_float2(etk_guide_rescale(u.x, b, 1.0f), u.y) : u);
         pv = r.pdf;
     }
-    float pp = etk_portal_pdf(box, etk_surface_origin(s, r.dir), r.dir);
-    r.pdf = (1.0f - b) * pv + b * pp;
-    *parts = make_float2(pv, pp);
+    r.pdf = etk_guide_light_mix(p, etk_portal_table(S, p), b, start, r.dir, pv, parts);
     return r;
+}
+
+// The learned light samples of the paths in slots[0 .. n-1] (n <= ETK_LIGHT_BATCH) from (xu[k],
+// xv[k]), as etk_guide_light_sample draws them, into light_dir, light_L and light_cell, and while
+// learning the record's key and parts into shadow_key and guide_parts (the shade stage pushes them
+// with the shadow ray; the last bounce's records were taken before this stage). The samples of
+// the cells' tables in steps across the batch (etk_guide_table_batch), gathered into a batch of
+// their own; the portal's, and every sample before the first tables, one at a time.
+ETK_FN void etk_guide_light_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOBAL const int* slots,
+                                  const float* xu, const float* xv, int n) {
+    ETK_GLOBAL const float* box = etk_portal_table(S, p);
+    EtkRayStart start[ETK_LIGHT_BATCH];
+    int cell[ETK_LIGHT_BATCH], item[ETK_LIGHT_BATCH], tcell[ETK_LIGHT_BATCH],
+        portal[ETK_LIGHT_BATCH];
+    float b[ETK_LIGHT_BATCH], u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pdf[ETK_LIGHT_BATCH];
+    float dx[ETK_LIGHT_BATCH], dy[ETK_LIGHT_BATCH], dz[ETK_LIGHT_BATCH];
+    float tx[ETK_LIGHT_BATCH], ty[ETK_LIGHT_BATCH]; // the table samples' values
+    int m = 0, np = 0;                              // table samples, portal samples
+    // Each sample's cell and part of the mixture; the portal's directions at once.
+    for (int k = 0; k < n; ++k) {
+        start[k] = etk_path_start(S, P, p, slots[k]);
+        cell[k] = etk_guide_cell(p, start[k].origin, start[k].ng);
+        b[k] = etk_portal_share(S, p, cell[k]);
+        if (b[k] > 0.0f && xu[k] < b[k]) {
+            EtkEnvSample r = etk_portal_light_dir(
+                S, p, start[k], make_float2(etk_guide_rescale(xu[k], 0.0f, b[k]), xv[k]));
+            u[k] = r.uv.x;
+            v[k] = r.uv.y;
+            dx[k] = r.dir.x;
+            dy[k] = r.dir.y;
+            dz[k] = r.dir.z;
+            portal[np++] = k;
+        } else {
+            item[m] = k;
+            tcell[m] = cell[k];
+            tx[m] = b[k] > 0.0f ? etk_guide_rescale(xu[k], b[k], 1.0f) : xu[k];
+            ty[m] = xv[k];
+            ++m;
+        }
+    }
+    for (int j = 0; j < np; ++j) // the portal samples' densities, their misses overlapping
+        etk_guide_pdf_prefetch(S, p, cell[portal[j]], make_float2(u[portal[j]], v[portal[j]]));
+    for (int j = 0; j < np; ++j) {
+        int k = portal[j];
+        pdf[k] = etk_guide_pdf_uv(S, p, cell[k], make_float2(u[k], v[k]));
+    }
+    float tu[ETK_LIGHT_BATCH], tv[ETK_LIGHT_BATCH], tdx[ETK_LIGHT_BATCH], tdy[ETK_LIGHT_BATCH];
+    float tdz[ETK_LIGHT_BATCH], tpdf[ETK_LIGHT_BATCH];
+    if (p.guide_ready) {
+        etk_guide_table_batch(S, p, tcell, tx, ty, m, tu, tv, tdx, tdy, tdz, tpdf);
+    } else { // etk_guide_sample's map samples (no portal share before the tables either)
+        for (int j = 0; j < m; ++j) {
+            EtkEnvSample r = etk_env_sample(S.env_dist, p.env, make_float2(tx[j], ty[j]));
+            tu[j] = r.uv.x;
+            tv[j] = r.uv.y;
+            tdx[j] = r.dir.x;
+            tdy[j] = r.dir.y;
+            tdz[j] = r.dir.z;
+            tpdf[j] = r.pdf;
+        }
+    }
+    for (int j = 0; j < m; ++j) {
+        int k = item[j];
+        u[k] = tu[j];
+        v[k] = tv[j];
+        dx[k] = tdx[j];
+        dy[k] = tdy[j];
+        dz[k] = tdz[j];
+        pdf[k] = tpdf[j];
+    }
+    // Every sample's whole mixture density; while learning, its record's key and parts.
+    for (int k = 0; k < n; ++k) {
+        float2 parts;
+        pdf[k] = etk_guide_light_mix(p, box, b[k], start[k], make_float3(dx[k], dy[k], dz[k]),
+                                     pdf[k], &parts);
+        if (p.guide_learn) {
+            P.guide_parts[slots[k]] = parts;
+            P.shadow_key[slots[k]] = etk_guide_record_key(p.env, cell[k], make_float2(u[k], v[k]));
+        }
+    }
+    etk_guide_store_batch(S, P, p, slots, cell, n, u, v, dx, dy, dz, pdf);
 }
 
 ETK_END

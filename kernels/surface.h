@@ -43,10 +43,25 @@ typedef struct {
     float3 origin_back;
 } EtkSurface;
 
-// The origin of a ray leaving the surface in world direction wi: offset to wi's side of the
-// geometric surface, so that a transmitted ray does not hit the surface it crossed.
+// Where the rays that leave a surface start: its geometric normal on the viewer's side, the origin
+// on that side and the one on the other (rays a dielectric transmits).
+typedef struct {
+    float3 ng, origin, origin_back;
+} EtkRayStart;
+// The origin of a ray in world direction wi: on wi's side of the geometric surface, so that a
+// transmitted ray does not hit the surface it crossed.
+ETK_FN float3 etk_start_towards(EtkRayStart r, float3 wi_world) {
+    return dot(wi_world, r.ng) < 0.0f ? r.origin_back : r.origin;
+}
+ETK_FN EtkRayStart etk_surface_start(EtkSurface s) {
+    EtkRayStart r;
+    r.ng = s.ng;
+    r.origin = s.origin;
+    r.origin_back = s.origin_back;
+    return r;
+}
 ETK_FN float3 etk_surface_origin(EtkSurface s, float3 wi_world) {
-    return dot(wi_world, s.ng) < 0.0f ? s.origin_back : s.origin;
+    return etk_start_towards(etk_surface_start(s), wi_world);
 }
 
 // Whether a direction's local cosine wz (shading frame) and its world side (dwg = dot(wi, ng))
@@ -119,6 +134,14 @@ ETK_FN float3 etk_reflecting_normal(float3 ns, float3 ng, float3 wo) {
     return lh > 0.0f ? h / lh : ng;
 }
 
+// The geometric normal of triangle prim on the side a ray in direction d sees; *front: whether
+// the triangle's winding faces the ray.
+ETK_FN float3 etk_facing_normal(EtkScene S, int prim, float3 d, int* front) {
+    float3 g = etk_xyz(S.face_normals[prim]);
+    *front = dot(g, -d) >= 0.0f;
+    return *front ? g : -g;
+}
+
 // The normals at barycentrics (b1, b2) of triangle prim hit by a ray in direction d: the
 // interpolated shading normal, returned, and the geometric one, *ng, both on the side that faces
 // the viewer (surfaces are two-sided); *front: whether the triangle's winding faces the viewer.
@@ -130,13 +153,33 @@ ETK_FN float3 etk_shading_normal(EtkScene S, int prim, float b1, float b2, float
                 etk_xyz(S.normals[3 * prim + 2]) * b2;
     float nl = length(ns);
     ns = nl > 0.0f && isfinite(nl) ? ns / nl : g;
-    *front = dot(g, -d) >= 0.0f;
-    if (!*front)
-        g = -g;
+    g = etk_facing_normal(S, prim, d, front);
     if (dot(ns, g) < 0.0f)
         ns = -ns;
     *ng = g;
     return etk_reflecting_normal(ns, g, -d);
+}
+
+// The ray start of a hit at pos, its coordinates' magnitude `extent` (etk_hit_point), geometric
+// normal ng. The offset follows the hit point's rounding error off the triangle's plane, a few
+// ulps of the coordinates etk_hit_point names (the vertices', or the ray's where those are
+// smaller): relative, with no absolute floor, so a scene renders alike at any unit, position and
+// camera distance, and however large its triangles (tests/kernels/surface_test.cpp). The tiny
+// floor keeps a triangle at the origin off zero.
+ETK_FN EtkRayStart etk_ray_start(EtkParams p, float3 pos, float extent, float3 ng) {
+    float scale = fmax(extent, 1.0e-30f);
+    EtkRayStart r;
+    r.ng = ng;
+    r.origin = pos + ng * (p.ray_epsilon * scale);
+    r.origin_back = pos - ng * (p.ray_epsilon * scale);
+    return r;
+}
+// The ray start of the closest hit h of a ray (o, d), without the rest of its surface.
+ETK_FN EtkRayStart etk_hit_start(EtkScene S, EtkParams p, float3 o, float3 d, EtkHit h) {
+    float extent;
+    float3 pos = etk_hit_point(S, o, d, h, &extent);
+    int front;
+    return etk_ray_start(p, pos, extent, etk_facing_normal(S, h.prim, d, &front));
 }
 
 // The surface at the closest hit h of a ray in direction d. Surfaces are two-sided; the shading
@@ -161,15 +204,30 @@ ETK_FN EtkSurface etk_surface_at(EtkScene S, EtkParams p, float3 o, float3 d, Et
     // from the back, the ray is inside and sees 1 / ior.
     if (!front && etk_bsdf_is_dielectric(s.m))
         s.m.eta = 1.0f / s.m.eta;
-    // The offset follows the hit point's rounding error off the triangle's plane, a few ulps of
-    // the coordinates etk_hit_point names (the vertices', or the ray's where those are smaller):
-    // relative, with no absolute floor, so a scene renders alike at any unit, position and
-    // camera distance, and however large its triangles (tests/kernels/surface_test.cpp). The
-    // tiny floor keeps a triangle at the origin off zero.
-    float scale = fmax(extent, 1.0e-30f);
-    s.origin = pos + ng * (p.ray_epsilon * scale);
-    s.origin_back = pos - ng * (p.ray_epsilon * scale);
+    EtkRayStart r = etk_ray_start(p, pos, extent, ng);
+    s.origin = r.origin;
+    s.origin_back = r.origin_back;
     return s;
+}
+
+// The hit a path's ray made (its hit record, stored by the intersect stage), the surface there,
+// and its ray start alone.
+ETK_FN EtkHit etk_path_hit(EtkPaths P, int slot) {
+    float4 h4 = P.hit[slot];
+    EtkHit h;
+    h.t = h4.x;
+    h.prim = (int)as_uint(h4.y);
+    h.b1 = h4.z;
+    h.b2 = h4.w;
+    return h;
+}
+ETK_FN EtkSurface etk_path_surface(EtkScene S, EtkPaths P, EtkParams p, int slot) {
+    return etk_surface_at(S, p, etk_xyz(P.ray_o[slot]), etk_xyz(P.ray_d[slot]),
+                          etk_path_hit(P, slot));
+}
+ETK_FN EtkRayStart etk_path_start(EtkScene S, EtkPaths P, EtkParams p, int slot) {
+    return etk_hit_start(S, p, etk_xyz(P.ray_o[slot]), etk_xyz(P.ray_d[slot]),
+                         etk_path_hit(P, slot));
 }
 
 ETK_END

@@ -141,6 +141,25 @@ ETK_FN float etk_guide_factor(EtkScene S, EtkParams p, int cell, float2 uv) {
     return M > 0.0f ? (cdf[R + 1] - cdf[R]) / M : 1.0f;
 }
 
+// The key of a light sample's record (visibility_record.h): its cell's slot and the region of its
+// map coordinates uv.
+ETK_FN int etk_guide_record_key(EtkEnvMap env, int cell, float2 uv) {
+    return cell * ETK_GUIDE_REGIONS + etk_guide_region(env, uv);
+}
+
+// The density of the cell's mixture (its table's, ignoring portals) at map coordinates uv: the
+// map's times the cell's factor.
+ETK_FN float etk_guide_pdf_uv(EtkScene S, EtkParams p, int cell, float2 uv) {
+    return etk_env_pdf_uv(S.env_dist, p.env, uv) * etk_guide_factor(S, p, cell, uv);
+}
+// Its two likely cache misses requested (the map row's CDF entry, the cell's table entry), for a
+// batch that asks for many before it reads any.
+ETK_FN void etk_guide_pdf_prefetch(EtkScene S, EtkParams p, int cell, float2 uv) {
+    int w = p.env.dist_w, h = p.env.dist_h;
+    ETK_PREFETCH(etk_dist2d_row_cdf(S.env_dist, w, h, etk_cell_of(uv.y, h)) + etk_cell_of(uv.x, w));
+    ETK_PREFETCH(S.guide_cells + cell * ETK_GUIDE_CELL_FLOATS + etk_guide_region(p.env, uv));
+}
+
 // The expected number of light samples n in (0, 1] a vertex in `cell` takes: the light sample is
 // drawn only when a sample dimension of its own falls below n, and both its MIS weight and the
 // escaped continuation's count it as n samples (etk_light_sample_weight, etk_bsdf_sample_weight:
@@ -274,6 +293,131 @@ ETK_CL_INLINE_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell
     float2 t;
     int R = etk_guide_pick_region(S.guide_cells + cell * ETK_GUIDE_CELL_FLOATS, u, &t);
     return etk_guide_sample_at(S, p, cell, etk_guide_sample_region(S, p.env, R, t));
+}
+
+// A batch's samples of the cells' tables (etk_guide_table_batch, below; the binned and the learned
+// techniques' batches: cosine_light.h, portal_guide.h), drawn in steps, each a loop over the
+// batch's arrays of scalars, so that both compilers vectorise the searches and the cache misses of
+// the cells' tables and the map's rows overlap: etk_guide_sample's own steps per sample, in the
+// same order, so the same bits as one at a time. Each search runs step by step across the batch
+// with the batch's largest step count: a step larger than a sample's own never moves it
+// (etk_interval_step). Sample k's cell table is at gc + tab[k].
+
+// The regions (etk_guide_pick_region): the band, then the column; (tu, tv) where each sample lies
+// inside its region.
+ETK_FN void etk_guide_pick_batch(ETK_GLOBAL const float* gc, const int* tab, const float* xu,
+                                 const float* xv, int n, int* band, int* col, float* tu,
+                                 float* tv) {
+    float b0[ETK_LIGHT_BATCH], b1[ETK_LIGHT_BATCH], x[ETK_LIGHT_BATCH];
+    for (int k = 0; k < n; ++k)
+        band[k] = 0;
+    for (int step = ETK_GUIDE_ROWS / 2; step > 0; step >>= 1)
+        for (int k = 0; k < n; ++k)
+            band[k] = etk_guide_band_step(gc + tab[k], band[k], step, xv[k]);
+    for (int k = 0; k < n; ++k) {
+        x[k] = etk_guide_band_mass(gc + tab[k], band[k], xu[k], &b0[k], &b1[k]);
+        col[k] = 0;
+    }
+    for (int step = ETK_GUIDE_COLS / 2; step > 0; step >>= 1)
+        for (int k = 0; k < n; ++k)
+            col[k] = etk_guide_col_step(gc + tab[k], band[k] * ETK_GUIDE_COLS, col[k], step, x[k],
+                                        b1[k]);
+    for (int k = 0; k < n; ++k) {
+        float2 t = etk_guide_region_offset(gc + tab[k], band[k] * ETK_GUIDE_COLS + col[k], x[k],
+                                           xv[k], b0[k], b1[k]);
+        tu[k] = t.x;
+        tv[k] = t.y;
+    }
+}
+
+// The distribution rows inside the regions (etk_guide_sample_region's first half): each band's
+// row CDF for its column band, searched as etk_find_interval searches it; v and the row.
+ETK_FN void etk_guide_row_batch(ETK_GLOBAL const float* gr, int h, const int* band, const int* col,
+                                const float* tv, int n, int* row, float* v) {
+    int lo[ETK_LIGHT_BATCH], rows[ETK_LIGHT_BATCH], off[ETK_LIGHT_BATCH];
+    int first = 1;
+    for (int k = 0; k < n; ++k) {
+        row[k] = etk_guide_row_start(band[k], h);
+        rows[k] = etk_guide_row_start(band[k] + 1, h) - row[k];
+        off[k] = etk_guide_row_table(band[k], col[k], h);
+        lo[k] = 0;
+        first = max(first, etk_interval_first_step(rows[k]));
+    }
+    for (int step = first; step > 0; step >>= 1)
+        for (int k = 0; k < n; ++k)
+            lo[k] = etk_interval_step(gr + off[k], lo[k], step, rows[k] - 1, tv[k]);
+    for (int k = 0; k < n; ++k) {
+        ETK_GLOBAL const float* rcdf = gr + off[k];
+        row[k] += lo[k];
+        v[k] = etk_interval_point(rcdf[lo[k]], rcdf[lo[k] + 1], tv[k], row[k], h);
+    }
+}
+
+// The columns (its second half): each row's conditional CDF over the region's column band, the
+// sub-band, then etk_find_interval_between over its columns (etk_guide_column); u.
+ETK_FN void etk_guide_column_batch(ETK_GLOBAL const float* dist, ETK_GLOBAL const float* gr, int w,
+                                   int h, const int* row, const int* col, const float* tu, int n,
+                                   float* u) {
+    int lo[ETK_LIGHT_BATCH], hi[ETK_LIGHT_BATCH], off[ETK_LIGHT_BATCH];
+    float x[ETK_LIGHT_BATCH];
+    int first = 1;
+    for (int k = 0; k < n; ++k) {
+        ETK_GLOBAL const float* split = gr + etk_guide_split_table(row[k], h);
+        x[k] = etk_guide_band_point(split, col[k], tu[k]);
+        etk_guide_sub_band(split, col[k], w, x[k], &lo[k], &hi[k]);
+        off[k] = (int)(etk_dist2d_row_cdf(dist, w, h, row[k]) - dist);
+        first = max(first, etk_interval_first_step_between(hi[k] - lo[k]));
+    }
+    for (int step = first; step > 0; step >>= 1)
+        for (int k = 0; k < n; ++k)
+            lo[k] = etk_interval_step(dist + off[k], lo[k], step, hi[k], x[k]);
+    for (int k = 0; k < n; ++k) {
+        ETK_GLOBAL const float* ccdf = dist + off[k];
+        u[k] = etk_interval_point(ccdf[lo[k]], ccdf[lo[k] + 1], x[k], lo[k], w);
+    }
+}
+
+// The samples of cells cell[0 .. n-1] (p.guide_ready) from (xu[k], xv[k]): map coordinates (u, v),
+// direction and density, as etk_guide_sample draws them.
+ETK_FN void etk_guide_table_batch(EtkScene S, EtkParams p, const int* cell, const float* xu,
+                                  const float* xv, int n, float* u, float* v, float* dx, float* dy,
+                                  float* dz, float* pdf) {
+    int tab[ETK_LIGHT_BATCH], band[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH], row[ETK_LIGHT_BATCH];
+    float tu[ETK_LIGHT_BATCH], tv[ETK_LIGHT_BATCH];
+    for (int k = 0; k < n; ++k)
+        tab[k] = cell[k] * ETK_GUIDE_CELL_FLOATS;
+    etk_guide_pick_batch(S.guide_cells, tab, xu, xv, n, band, col, tu, tv);
+    etk_guide_row_batch(S.guide_regions, p.env.dist_h, band, col, tv, n, row, v);
+    etk_guide_column_batch(S.env_dist, S.guide_regions, p.env.dist_w, p.env.dist_h, row, col, tu, n,
+                           u);
+    for (int k = 0; k < n; ++k) { // directions and densities
+        EtkEnvSample ls = etk_guide_sample_at(S, p, cell[k], make_float2(u[k], v[k]));
+        dx[k] = ls.dir.x;
+        dy[k] = ls.dir.y;
+        dz[k] = ls.dir.z;
+        pdf[k] = ls.pdf;
+    }
+}
+
+// A batch's light samples (map coordinates, direction, density; 0: none) with the map's radiance
+// at them, into the slots' light_dir, light_L and light_cell (integrator.h, sample_lights).
+ETK_FN void etk_guide_store_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOBAL const int* slots,
+                                  const int* cell, int n, float* u, float* v, const float* dx,
+                                  const float* dy, const float* dz, const float* pdf) {
+    float Lr[ETK_LIGHT_BATCH], Lg[ETK_LIGHT_BATCH], Lb[ETK_LIGHT_BATCH];
+    for (int k = 0; k < ETK_LIGHT_BATCH; ++k)
+        if (k >= n || !(pdf[k] > 0.0f)) { // no sample: no light, and coordinates lookups can read
+            u[k] = 0.0f;
+            v[k] = 0.0f;
+        }
+    etk_env_radiance_batch(S.env_texels, p.env, u, v, Lr, Lg, Lb);
+    for (int k = 0; k < n; ++k) {
+        int lit = pdf[k] > 0.0f;
+        P.light_dir[slots[k]] = make_float4(dx[k], dy[k], dz[k], pdf[k]);
+        P.light_L[slots[k]] =
+            make_float4(lit ? Lr[k] : 0.0f, lit ? Lg[k] : 0.0f, lit ? Lb[k] : 0.0f, 0.0f);
+        P.light_cell[slots[k]] = cell[k];
+    }
 }
 
 ETK_END

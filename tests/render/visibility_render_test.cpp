@@ -156,6 +156,30 @@ et::Scene window_room(int width, int height) {
     return s;
 }
 
+// The sample_lights stage draws the learned light samples in batches (kernels/portal_guide.h,
+// etk_guide_light_batch): in the window room most cells send a share of them towards the learned
+// portal table, so batches mix the portal's samples with the tables', before the first tables,
+// while learning and after. The same bits as the shade stage drawing each, on both back ends.
+TEST(VisibilityRender, BatchedLearnedLightSamplesGiveTheSameBits) {
+    et::Scene s = window_room(24, 16);
+    s.settings.max_depth = 3;
+    s.settings.guide_verdict = false; // the tables on every pass after the learning
+    for (et::Backend b : {et::Backend::cpu, et::Backend::opencl}) {
+        SCOPED_TRACE(b == et::Backend::cpu ? "native" : "OpenCL");
+        s.settings.backend = b;
+        std::vector<float> films[2];
+        for (int m = 0; m < 2; ++m) {
+            s.settings.light_batch = m ? et::LightBatch::on : et::LightBatch::off;
+            const ett::SampleRun run = ett::render_samples(s, 2, 0, 70);
+            EXPECT_EQ(run.renderer->batches_light_samples(), m == 1);
+            EXPECT_GT(ett::learning_count(run.renderer->stats(), "records"), 0u);
+            films[m] = run.renderer->sums().mean();
+        }
+        EXPECT_GT(ett::image_mean(films[0]), 0.0);
+        EXPECT_TRUE(films[0] == films[1]) << "batched, the learned light samples differ";
+    }
+}
+
 TEST(VisibilityRender, VerdictForMisRendersThePapersEstimatorFromThenOn) {
     // MIS wins the verdict on the open floor; the passes after it are MIS's own (the strategy's
     // balance heuristic), bit for bit, batched map samples and all.
