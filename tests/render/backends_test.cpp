@@ -204,7 +204,9 @@ TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
 
 // The sample_lights stage draws the light samples of the light, mis, compensated and cosine
 // strategies in batches ahead of the shade stage (kernels/integrator.h; the cosine strategy's
-// first vertex from its bins' tables); without it the shade stage draws each itself. The same
+// first vertex from its bins' tables; the visibility strategy's learned ones:
+// VisibilityRender.BatchedLearnedLightSamplesGiveTheSameBits); without it the shade stage draws
+// each itself. The same
 // values: bit-identical films on each back end, at depth 3 (shade queues of many lengths, their
 // last batch partly past the queue's end, vertices of three depths).
 TEST_P(Backends, BatchedLightSamplesGiveTheSameBits) {
