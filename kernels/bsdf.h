@@ -226,7 +226,7 @@ ETK_FN int etk_bsdf_is_delta(EtkMaterial m) {
             etk_dielectric_is_delta(m.type == ETK_MAT_SMOOTH_DIELECTRIC, m.eta));
 }
 
-ETK_CL_INLINE_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
+ETK_STRUCT_INLINE_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
     float3 zero = make_float3(0.0f, 0.0f, 0.0f);
     if (etk_bsdf_is_dielectric(m))
         return etk_bsdf_is_delta(m) ? zero : etk_dielectric_eval(m.albedo, m.eta, m.alpha, wo, wi);
@@ -244,7 +244,7 @@ ETK_CL_INLINE_FN float3 etk_bsdf_eval(EtkMaterial m, float3 wo, float3 wi) {
     return spec + m.albedo * (ETK_INV_PI * etk_base_coupling(m, wi.z, wo.z));
 }
 
-ETK_CL_INLINE_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
+ETK_STRUCT_INLINE_FN float etk_bsdf_pdf(EtkMaterial m, float3 wo, float3 wi) {
     if (etk_bsdf_is_dielectric(m))
         return etk_bsdf_is_delta(m) ? 0.0f
                                     : etk_dielectric_pdf(m.eta, m.alpha, m.ggx_sampling, wo, wi);
@@ -291,7 +291,7 @@ typedef struct {
 } EtkBsdfSample;
 
 // u: two values for the direction; lobe: one value choosing diffuse or specular.
-ETK_CL_INLINE_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 u, float lobe) {
+ETK_STRUCT_INLINE_FN EtkBsdfSample etk_bsdf_sample(EtkMaterial m, float3 wo, float2 u, float lobe) {
     EtkBsdfSample s;
     s.weight = make_float3(0.0f, 0.0f, 0.0f);
     s.pdf = 0.0f;

@@ -30,17 +30,17 @@
 #else
 #define ETK_FORCE_INLINE_FN static inline
 #endif
-// Forced inline in OpenCL C only: functions that take a struct by value (EtkMaterial, EtkEnvMap,
-// EtkParams, EtkSurface) and that PoCL leaves as calls, copying the struct through memory on
-// every call (PoCL's shade stage 0.98-1.09x native's -> 0.74-0.84x at depth 5), while
-// GCC, forced, made the native back end slower (the visibility strategy's render +5%), so
-// natively they stay plain inline. Plain too where the host defines ETK_PLAIN_INLINE: for
-// Oclgrind, whose interpreter has no llvm.experimental.noalias.scope.decl, which clang emits when
-// it inlines a function that returns a struct (opencl_runtime.cpp).
+// Forced inline: functions that take a struct by value (EtkScene, EtkPaths, EtkParams,
+// EtkSurface, EtkVertex) and that the compilers leave as calls, copying the structs (about a
+// kilobyte) through memory on every call: PoCL's shade stage 0.98-1.09x native's -> 0.74-0.84x at
+// depth 5 as calls; natively 5-11% faster renders forced, every strategy, the same bits
+// (docs/history/bench-journal.md, "Stage steps inlined natively"). Plain where the host defines
+// ETK_PLAIN_INLINE: for Oclgrind, whose interpreter has no llvm.experimental.noalias.scope.decl,
+// which clang emits when it inlines a function that returns a struct (opencl_runtime.cpp).
 #ifdef ETK_PLAIN_INLINE
-#define ETK_CL_INLINE_FN ETK_FN
+#define ETK_STRUCT_INLINE_FN ETK_FN
 #else
-#define ETK_CL_INLINE_FN ETK_FORCE_INLINE_FN
+#define ETK_STRUCT_INLINE_FN ETK_FORCE_INLINE_FN
 #endif
 // A call in OpenCL C on CPU devices (the host defines ETK_CPU_DEVICE there): for functions with
 // a large private array (the BVH's traversal stack). PoCL gives every private array of a kernel
@@ -167,8 +167,8 @@ static inline float3 etk_normalize3(float3 a) {
 #else
 #define ETK_FORCE_INLINE_FN inline
 #endif
-#define ETK_CL_INLINE_FN inline   // forced in OpenCL C only (above)
-#define ETK_CL_NOINLINE_FN inline // a call in OpenCL C only (above)
+#define ETK_STRUCT_INLINE_FN ETK_FORCE_INLINE_FN // forced natively too (above)
+#define ETK_CL_NOINLINE_FN inline                // a call in OpenCL C only (above)
 #define ETK_GLOBAL
 #define ETK_TABLE static const
 #define ETK_UINT_MAX 0xffffffffu

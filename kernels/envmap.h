@@ -82,8 +82,8 @@ ETK_FN float2 etk_env_uv(EtkEnvMap env, float3 d) {
     return etk_dir_to_latlong(etk_world_to_env(env, d));
 }
 
-ETK_CL_INLINE_FN float3 etk_env_radiance_uv(ETK_GLOBAL const float* texels, EtkEnvMap env,
-                                            float2 uv) {
+ETK_STRUCT_INLINE_FN float3 etk_env_radiance_uv(ETK_GLOBAL const float* texels, EtkEnvMap env,
+                                                float2 uv) {
     return etk_env_lookup_uv(texels, env.tex_w, env.tex_h, uv) * env.scale;
 }
 ETK_FN float3 etk_env_radiance(ETK_GLOBAL const float* texels, EtkEnvMap env, float3 d) {
@@ -133,8 +133,8 @@ ETK_FN float etk_env_sample_pdf(EtkEnvMap env, float pdf_uv, float sin_theta) {
 // The sample at map coordinates uv (distribution cell row, col) drawn with density pdf_uv on the
 // unit square: its world direction and solid-angle density, from one sin/cos of theta. Every
 // technique that samples the map ends here (etk_env_sample; visibility_guide.h).
-ETK_CL_INLINE_FN EtkEnvSample etk_env_sample_at(EtkEnvMap env, float2 uv, float pdf_uv, int row,
-                                                int col) {
+ETK_STRUCT_INLINE_FN EtkEnvSample etk_env_sample_at(EtkEnvMap env, float2 uv, float pdf_uv, int row,
+                                                    int col) {
     EtkEnvSample s;
     s.uv = uv;
     s.row = row;
@@ -145,8 +145,8 @@ ETK_CL_INLINE_FN EtkEnvSample etk_env_sample_at(EtkEnvMap env, float2 uv, float 
     return s;
 }
 
-ETK_CL_INLINE_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env,
-                                             float2 xi) {
+ETK_STRUCT_INLINE_FN EtkEnvSample etk_env_sample(ETK_GLOBAL const float* dist, EtkEnvMap env,
+                                                 float2 xi) {
     float pdf_uv;
     int row, col;
     float2 uv = etk_sample_2d(dist, env.dist_w, env.dist_h, xi, &pdf_uv, &row, &col);
@@ -307,11 +307,11 @@ ETK_FN void etk_env_radiance_batch(ETK_GLOBAL const float* texels, EtkEnvMap env
 // 10% dark, different from run to run -- though the same functions pass in a small kernel
 // (EnvmapSampling tests) and the sample_lights stage drawing one by one gives the shade stage's
 // own bits (docs/devices.md). A GPU hides the latency with other work-items anyway.
-ETK_CL_INLINE_FN void etk_env_light_batch(ETK_GLOBAL const float* dist,
-                                          ETK_GLOBAL const float* texels, EtkEnvMap env,
-                                          const float* xu, const float* xv, float* dx, float* dy,
-                                          float* dz, float* pdf, float* Lr, float* Lg, float* Lb,
-                                          int* row, int* col) {
+ETK_STRUCT_INLINE_FN void etk_env_light_batch(ETK_GLOBAL const float* dist,
+                                              ETK_GLOBAL const float* texels, EtkEnvMap env,
+                                              const float* xu, const float* xv, float* dx,
+                                              float* dy, float* dz, float* pdf, float* Lr,
+                                              float* Lg, float* Lb, int* row, int* col) {
 #if defined(ETK_OPENCL_C) && !defined(ETK_CPU_DEVICE)
     for (int k = 0; k < ETK_LIGHT_BATCH; ++k) {
         EtkEnvSample e = etk_env_sample(dist, env, make_float2(xu[k], xv[k]));

@@ -309,8 +309,8 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
 
 // Shade step 1: the vertex in `slot` -- its surface (and, at the camera ray's hit, the AOVs), its
 // light sample's source and expected counts.
-ETK_CL_INLINE_FN EtkVertex etk_shade_vertex(EtkScene S, EtkPaths P, EtkFilm F, EtkParams p,
-                                            int slot) {
+ETK_STRUCT_INLINE_FN EtkVertex etk_shade_vertex(EtkScene S, EtkPaths P, EtkFilm F, EtkParams p,
+                                                int slot) {
     EtkVertex v;
     v.slot = slot;
     v.depth = P.depth[slot];
@@ -351,8 +351,8 @@ ETK_FN int etk_takes_light_sample(EtkParams p, EtkVertex v) {
 // guided vertex's mixture with the learned directions (asked only there: the call's arguments
 // cost ~65 instructions a light sample in GCC's native code even when it returns at once), and
 // at a thinned last vertex the expected count times it.
-ETK_CL_INLINE_FN float etk_continuation_pdf(EtkScene S, EtkParams p, EtkVertex v, float3 wi,
-                                            float3 wi_world) {
+ETK_STRUCT_INLINE_FN float etk_continuation_pdf(EtkScene S, EtkParams p, EtkVertex v, float3 wi,
+                                                float3 wi_world) {
     float pb = v.bsdf_count * etk_bsdf_pdf(v.s.m, v.s.wo, wi);
     if (v.guided > 0.0f)
         pb = etk_cguide_mix_pdf(S, p, v.light.cell, v.guided, pb, etk_surface_origin(v.s, wi_world),
@@ -371,8 +371,8 @@ typedef struct {
 
 // The vertex's one light sample from the light-sampling module, weighted by MIS against the
 // continuation where the pass combines them. c is 0 where it brings nothing.
-ETK_CL_INLINE_FN EtkLightContribution etk_light_contribution(EtkScene S, EtkPaths P, EtkParams p,
-                                                             EtkVertex v) {
+ETK_STRUCT_INLINE_FN EtkLightContribution etk_light_contribution(EtkScene S, EtkPaths P,
+                                                                 EtkParams p, EtkVertex v) {
     EtkLightContribution r;
     r.c = make_float3(0.0f, 0.0f, 0.0f);
     r.value = 0.0f;
@@ -427,8 +427,8 @@ ETK_FN EtkLightContribution etk_strata_contribution(EtkScene S, EtkParams p, Etk
 // Shade step 2: the vertex's light sample, pushed as a shadow ray if it could bring anything.
 // Shadow rays stop at any surface, glass included: light through glass (caustics) is the
 // continuation's to find, as indirect light, never the light sample's.
-ETK_CL_INLINE_FN void etk_shade_light(EtkScene S, EtkPaths P, EtkParams p, EtkVertex v,
-                                      EtkPushes* out) {
+ETK_STRUCT_INLINE_FN void etk_shade_light(EtkScene S, EtkPaths P, EtkParams p, EtkVertex v,
+                                          EtkPushes* out) {
     if (!etk_takes_light_sample(p, v))
         return;
     EtkLightContribution r = v.light.kind == ETK_LIGHT_STRATA ? etk_strata_contribution(S, p, v)
@@ -474,8 +474,8 @@ typedef struct {
 // The continuation's direction: at a guided vertex from the mixture of the cell's learned
 // directions and the BSDF, else from the BSDF (at a thinned last vertex, one of expected count
 // bsdf_count: density bsdf_count p_bsdf in the escaped ray's weight).
-ETK_CL_INLINE_FN EtkContinuation etk_continuation_sample(EtkScene S, EtkParams p, EtkVertex v,
-                                                         float2 u, float lobe) {
+ETK_STRUCT_INLINE_FN EtkContinuation etk_continuation_sample(EtkScene S, EtkParams p, EtkVertex v,
+                                                             float2 u, float lobe) {
     EtkContinuation c;
     c.ok = 0;
     c.rr_scale = 1.0f;
@@ -528,8 +528,8 @@ ETK_FN int etk_continues(EtkParams p, EtkVertex v) {
 
 // Shade step 4: the continuation, pushed as the path's next ray unless it brings nothing or
 // Russian roulette ends the path.
-ETK_CL_INLINE_FN void etk_shade_continue(EtkScene S, EtkPaths P, EtkParams p, EtkVertex v,
-                                         EtkPushes* out) {
+ETK_STRUCT_INLINE_FN void etk_shade_continue(EtkScene S, EtkPaths P, EtkParams p, EtkVertex v,
+                                             EtkPushes* out) {
     if (!etk_continues(p, v))
         return;
     float2 rr = etk_dims(p, v.pixel, v.pair + 2u);

@@ -71,8 +71,8 @@ ETK_FN float etk_light_count(EtkScene S, EtkParams p, EtkLightSource src) {
 
 // A light sample at surface s from u in [0,1)^2: direction, map coordinates and density (0: no
 // sample). *parts: the learned technique's two densities (portal_guide.h), for its learning.
-ETK_CL_INLINE_FN EtkEnvSample etk_light_sample(EtkScene S, EtkParams p, EtkLightSource src,
-                                               EtkSurface s, float2 u, float2* parts) {
+ETK_STRUCT_INLINE_FN EtkEnvSample etk_light_sample(EtkScene S, EtkParams p, EtkLightSource src,
+                                                   EtkSurface s, float2 u, float2* parts) {
     if (src.kind == ETK_LIGHT_LEARNED)
         return etk_guide_light_sample(S, p, src.cell, s, u, parts);
     if (src.kind == ETK_LIGHT_BINNED)
@@ -91,8 +91,8 @@ ETK_CL_INLINE_FN EtkEnvSample etk_light_sample(EtkScene S, EtkParams p, EtkLight
 
 // The density etk_light_sample draws direction d (unit; map coordinates uv) with from a vertex
 // whose rays start at o: what MIS weighs a BSDF sample in that direction against.
-ETK_CL_INLINE_FN float etk_light_pdf(EtkScene S, EtkParams p, EtkLightSource src, float3 o,
-                                     float3 d, float2 uv) {
+ETK_STRUCT_INLINE_FN float etk_light_pdf(EtkScene S, EtkParams p, EtkLightSource src, float3 o,
+                                         float3 d, float2 uv) {
     if (src.kind == ETK_LIGHT_LEARNED)
         return etk_guide_light_pdf(S, p, src.cell, o, d, uv);
     if (src.kind == ETK_LIGHT_BINNED)

@@ -148,8 +148,8 @@ ETK_FN float3 etk_portal_point(ETK_GLOBAL const float* box, float2 u) {
 // The direction from a surface (its ray start r) towards a point drawn from the table: aimed from
 // the surface's origin on the side it leaves by (the origin its shadow ray, or its continuation,
 // starts from).
-ETK_CL_INLINE_FN float3 etk_portal_sample_dir(ETK_GLOBAL const float* box, EtkRayStart r,
-                                              float2 u) {
+ETK_STRUCT_INLINE_FN float3 etk_portal_sample_dir(ETK_GLOBAL const float* box, EtkRayStart r,
+                                                  float2 u) {
     float3 y = etk_portal_point(box, u);
     return normalize(y - etk_start_towards(r, normalize(y - r.origin)));
 }
@@ -171,8 +171,8 @@ ETK_FN float etk_guide_light_pdf(EtkScene S, EtkParams p, int cell, float3 o, fl
 // the direction from one part of the mixture, then the whole mixture's density.
 // The portal part's direction from ray start r (u.x already below the share b, rescaled) and its
 // map coordinates.
-ETK_CL_INLINE_FN EtkEnvSample etk_portal_light_dir(EtkScene S, EtkParams p, EtkRayStart r,
-                                                   float2 u) {
+ETK_STRUCT_INLINE_FN EtkEnvSample etk_portal_light_dir(EtkScene S, EtkParams p, EtkRayStart r,
+                                                       float2 u) {
     EtkEnvSample e;
     e.dir = etk_portal_sample_dir(etk_portal_table(S, p), r, u);
     e.uv = etk_env_uv(p.env, e.dir);

@@ -287,7 +287,7 @@ ETK_FN EtkEnvSample etk_guide_sample_at(EtkScene S, EtkParams p, int cell, float
     return s;
 }
 
-ETK_CL_INLINE_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
+ETK_STRUCT_INLINE_FN EtkEnvSample etk_guide_sample(EtkScene S, EtkParams p, int cell, float2 u) {
     if (!p.guide_ready)
         return etk_env_sample(S.env_dist, p.env, u);
     float2 t;

@@ -255,7 +255,7 @@ cl::Program ClRuntime::build_source(const std::string& file, const std::string& 
                                     const std::string& options, ProgramBuildInfo* info) {
     Timer timer;
     // Oclgrind's interpreter lacks an intrinsic that forced inlining makes (kernels/compat.h,
-    // ETK_CL_INLINE_FN): it checks the kernels as plain inline functions, the same operations.
+    // ETK_STRUCT_INLINE_FN): it checks the kernels as plain inline functions, the same operations.
     const bool plain_inline = is_oclgrind();
     const std::string full_options =
         std::string("-cl-std=CL1.2 ") +
