@@ -31,12 +31,13 @@
 #define ETK_FORCE_INLINE_FN static inline
 #endif
 // Forced inline: functions that take a struct by value (EtkScene, EtkPaths, EtkParams,
-// EtkSurface, EtkVertex) and that the compilers leave as calls, copying the structs (about a
-// kilobyte) through memory on every call: PoCL's shade stage 0.98-1.09x native's -> 0.74-0.84x at
-// depth 5 as calls; natively 5-11% faster renders forced, every strategy, the same bits
-// (docs/history/bench-journal.md, "Stage steps inlined natively"). Plain where the host defines
-// ETK_PLAIN_INLINE: for Oclgrind, whose interpreter has no llvm.experimental.noalias.scope.decl,
-// which clang emits when it inlines a function that returns a struct (opencl_runtime.cpp).
+// EtkSurface, EtkVertex, EtkMaterial, EtkEnvMap) and that the compilers leave as calls, copying the
+// structs (about a kilobyte) through memory on every call: PoCL's shade stage 0.98-1.09x native's
+// -> 0.74-0.84x at depth 5 as calls; natively 5-11% faster renders forced, every strategy, the same
+// bits (docs/history/bench-journal.md, "Stage steps inlined natively"). Plain where the host
+// defines ETK_PLAIN_INLINE: for Oclgrind, whose interpreter has no
+// llvm.experimental.noalias.scope.decl, which clang emits when it inlines a function that returns a
+// struct (opencl_runtime.cpp).
 #ifdef ETK_PLAIN_INLINE
 #define ETK_STRUCT_INLINE_FN ETK_FN
 #else

@@ -43,15 +43,9 @@ ETK_FN void etk_cosine_light_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOB
     if (binned) // the bins' tables exist
         etk_guide_table_batch(S, p, tab, xu, xv, n, u, v, dx, dy, dz, pdf);
     for (int k = 0; k < n; ++k)
-        if (cell[k] < 0) {
-            EtkEnvSample ls = etk_env_sample(S.env_dist, p.env, make_float2(xu[k], xv[k]));
-            u[k] = ls.uv.x;
-            v[k] = ls.uv.y;
-            dx[k] = ls.dir.x;
-            dy[k] = ls.dir.y;
-            dz[k] = ls.dir.z;
-            pdf[k] = ls.pdf;
-        }
+        if (cell[k] < 0)
+            etk_batch_put(etk_env_sample(S.env_dist, p.env, make_float2(xu[k], xv[k])), k, u, v, dx,
+                          dy, dz, pdf);
     etk_guide_store_batch(S, P, p, slots, cell, n, u, v, dx, dy, dz, pdf);
 }
 

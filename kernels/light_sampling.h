@@ -52,7 +52,8 @@ ETK_FN int etk_light_cell(EtkParams p, int kind, EtkSurface s, EtkMaterial m) {
 }
 
 // Whether the sample_lights stage can draw the technique's samples ahead of the shade stage, in
-// batches: one sample each, from tables that depend on nothing but the vertex's bin or cell.
+// batches: one sample each, from tables that depend on nothing but the vertex's bin or cell (and,
+// for the learned portals, its ray start, which the batch finds from the hit).
 ETK_FN int etk_light_batches(int kind) {
     return kind == ETK_LIGHT_MAP || kind == ETK_LIGHT_COMPENSATED || kind == ETK_LIGHT_BINNED ||
            kind == ETK_LIGHT_LEARNED;

@@ -48,7 +48,8 @@
     X(float4, shadow_o)  /* shadow ray origin */                                                   \
     X(float4, shadow_d)  /* shadow ray direction (to the map: unbounded); w: 0 */                  \
     X(float4, shadow_L)  /* tentative contribution of the shadow ray */                            \
-    X(int, shadow_key)   /* visibility learning: its cell x regions + region of its direction */   \
+    X(int, shadow_key)   /* visibility learning: its cell x regions + region of its direction      \
+                            (it and guide_parts written by sample_lights for learned samples) */   \
     X(float, shadow_val) /* visibility learning: its unweighted L cos / pdf */                     \
     X(int, pixel)        /* film pixel of the path */                                              \
     X(float2, guide_parts) /* visibility learning: the shadow ray's p_vis and p_portal */          \

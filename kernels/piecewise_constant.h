@@ -56,7 +56,7 @@ ETK_FN int etk_dist2d_size(int w, int h) {
 // One step of binary lifting over cdf[lo .. last]: lo + step where cdf[lo + step] <= u (and
 // lo + step <= last), else lo; a select, not a branch. etk_find_interval and
 // etk_find_interval_between step with it, and the batched searches that run a batch's samples
-// step by step (cosine_light.h): a step of last - lo + 1 or more never moves lo.
+// step by step (visibility_guide.h): a step of last - lo + 1 or more never moves lo.
 ETK_FN int etk_interval_step(ETK_GLOBAL const float* cdf, int lo, int step, int last, float u) {
     int mid = lo + step;
     float c = cdf[min(mid, last)];

@@ -191,6 +191,15 @@ ETK_FN float etk_guide_light_mix(EtkParams p, ETK_GLOBAL const float* box, float
     return etk_portal_mix(b, pv, pp);
 }
 
+// Which part of the mixture u in [0,1)^2 draws from at portal share b: the portal table's (1)
+// where u.x < b, else the cell's tables (0); *t: u with u.x rescaled into that part.
+ETK_FN int etk_guide_light_part(float b, float2 u, float2* t) {
+    int portal = b > 0.0f && u.x < b;
+    *t = portal ? make_float2(etk_guide_rescale(u.x, 0.0f, b), u.y)
+                : (b > 0.0f ? make_float2(etk_guide_rescale(u.x, b, 1.0f), u.y) : u);
+    return portal;
+}
+
 // The visibility strategy's light sample at surface s in `cell`, from u in [0,1)^2: with
 // probability b (u.x < b) towards the portal table's point, else the cell's mixture
 // (etk_guide_sample); pdf: the whole mixture's.
@@ -200,12 +209,12 @@ ETK_FN EtkEnvSample etk_guide_light_sample(EtkScene S, EtkParams p, int cell, Et
     EtkRayStart start = etk_surface_start(s);
     EtkEnvSample r;
     float pv;
-    if (b > 0.0f && u.x < b) {
-        r = etk_portal_light_dir(S, p, start, make_float2(etk_guide_rescale(u.x, 0.0f, b), u.y));
+    float2 t;
+    if (etk_guide_light_part(b, u, &t)) {
+        r = etk_portal_light_dir(S, p, start, t);
         pv = etk_guide_pdf_uv(S, p, cell, r.uv);
     } else {
-        r = etk_guide_sample(S, p, cell,
-                             b > 0.0f ? make_float2(etk_guide_rescale(u.x, b, 1.0f), u.y) : u);
+        r = etk_guide_sample(S, p, cell, t);
         pv = r.pdf;
     }
     r.pdf = etk_guide_light_mix(p, etk_portal_table(S, p), b, start, r.dir, pv, parts);
@@ -233,20 +242,15 @@ ETK_FN void etk_guide_light_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOBA
         start[k] = etk_path_start(S, P, p, slots[k]);
         cell[k] = etk_guide_cell(p, start[k].origin, start[k].ng);
         b[k] = etk_portal_share(S, p, cell[k]);
-        if (b[k] > 0.0f && xu[k] < b[k]) {
-            EtkEnvSample r = etk_portal_light_dir(
-                S, p, start[k], make_float2(etk_guide_rescale(xu[k], 0.0f, b[k]), xv[k]));
-            u[k] = r.uv.x;
-            v[k] = r.uv.y;
-            dx[k] = r.dir.x;
-            dy[k] = r.dir.y;
-            dz[k] = r.dir.z;
-            portal[np++] = k;
+        float2 t;
+        if (etk_guide_light_part(b[k], make_float2(xu[k], xv[k]), &t)) {
+            etk_batch_put(etk_portal_light_dir(S, p, start[k], t), k, u, v, dx, dy, dz, pdf);
+            portal[np++] = k; // its density below
         } else {
             item[m] = k;
             tcell[m] = cell[k];
-            tx[m] = b[k] > 0.0f ? etk_guide_rescale(xu[k], b[k], 1.0f) : xu[k];
-            ty[m] = xv[k];
+            tx[m] = t.x;
+            ty[m] = t.y;
             ++m;
         }
     }
@@ -261,15 +265,9 @@ ETK_FN void etk_guide_light_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOBA
     if (p.guide_ready) {
         etk_guide_table_batch(S, p, tcell, tx, ty, m, tu, tv, tdx, tdy, tdz, tpdf);
     } else { // etk_guide_sample's map samples (no portal share before the tables either)
-        for (int j = 0; j < m; ++j) {
-            EtkEnvSample r = etk_env_sample(S.env_dist, p.env, make_float2(tx[j], ty[j]));
-            tu[j] = r.uv.x;
-            tv[j] = r.uv.y;
-            tdx[j] = r.dir.x;
-            tdy[j] = r.dir.y;
-            tdz[j] = r.dir.z;
-            tpdf[j] = r.pdf;
-        }
+        for (int j = 0; j < m; ++j)
+            etk_batch_put(etk_env_sample(S.env_dist, p.env, make_float2(tx[j], ty[j])), j, tu, tv,
+                          tdx, tdy, tdz, tpdf);
     }
     for (int j = 0; j < m; ++j) {
         int k = item[j];

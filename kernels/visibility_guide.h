@@ -232,7 +232,7 @@ ETK_FN float etk_guide_rescale(float u, float a, float b) {
 // cdf[COLS b]), then the last column of it whose start is <= the point u.x of the way through
 // the band's mass: never a region of zero probability unless the whole table is -- and, in *t,
 // where u lies inside the region, rescaled to [0,1)^2 for the next level.
-// Its steps, which the batched binned samples also take (cosine_light.h). Both conditions hold for
+// Its steps, which the batches also take (etk_guide_pick_batch, below). Both conditions hold for
 // a prefix of the (non-decreasing) entries, so binary lifting finds the last of them: 4 + 5 steps
 // where a scan of every entry took 15 + 31. ROWS and COLS are powers of two, so the steps sum to
 // ROWS - 1 and COLS - 1: no index passes the table. The band: the last whose start is <= y.
@@ -397,6 +397,17 @@ ETK_FN void etk_guide_table_batch(EtkScene S, EtkParams p, const int* cell, cons
         dz[k] = ls.dir.z;
         pdf[k] = ls.pdf;
     }
+}
+
+// Sample s as entry k of a batch's arrays.
+ETK_FN void etk_batch_put(EtkEnvSample s, int k, float* u, float* v, float* dx, float* dy,
+                          float* dz, float* pdf) {
+    u[k] = s.uv.x;
+    v[k] = s.uv.y;
+    dx[k] = s.dir.x;
+    dy[k] = s.dir.y;
+    dz[k] = s.dir.z;
+    pdf[k] = s.pdf;
 }
 
 // A batch's light samples (map coordinates, direction, density; 0: none) with the map's radiance

@@ -206,9 +206,8 @@ TEST_P(Backends, LightSetAndSisFilmsBitIdentical) {
 // strategies in batches ahead of the shade stage (kernels/integrator.h; the cosine strategy's
 // first vertex from its bins' tables; the visibility strategy's learned ones:
 // VisibilityRender.BatchedLearnedLightSamplesGiveTheSameBits); without it the shade stage draws
-// each itself. The same
-// values: bit-identical films on each back end, at depth 3 (shade queues of many lengths, their
-// last batch partly past the queue's end, vertices of three depths).
+// each itself. The same values: bit-identical films on each back end, at depth 3 (shade queues of
+// many lengths, their last batch partly past the queue's end, vertices of three depths).
 TEST_P(Backends, BatchedLightSamplesGiveTheSameBits) {
     const et::Scene& s = scene_;
     const et::LightBatch modes[] = {et::LightBatch::off, et::LightBatch::on,

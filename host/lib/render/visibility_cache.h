@@ -64,6 +64,7 @@
 #include "prepare/visibility_tables.h"
 #include "util/float_span.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <map>
@@ -123,6 +124,14 @@ class VisibilityCache {
     }
     // The cells of the last tables() that take fewer than one light sample, per count.
     const std::map<float, uint64_t>& fewer_light_samples() const { return fewer_; }
+    // The slots of the last tables() that draw a share of their light samples from the portal
+    // table (none while it holds nothing).
+    uint64_t portal_cells() const {
+        if (std::none_of(portal_.begin(), portal_.end(), [](uint64_t v) { return v > 0; }))
+            return 0;
+        return static_cast<uint64_t>(
+            std::count_if(shares_.begin(), shares_.end(), [](float b) { return b > 0.0f; }));
+    }
     uint64_t records() const { return light_.records; } // shadow-ray records
     // The share of the light sample's light that its shadow rays found unblocked, over every
     // record absorbed (each record's value is an unbiased estimate of its cell's integral of

@@ -121,6 +121,7 @@ void VisibilityLearning::update_tables(int pass, WavefrontDevice& device) {
     device.upload_guide(tables, cache_->changed());
     ready_ = true;
     light_counts_ = cache_->fewer_light_samples();
+    portal_cells_ = cache_->portal_cells();
     learn_until_ = learning_end_at(pass + 1);
     update_seconds_ += t.seconds();
 }
@@ -255,6 +256,7 @@ nlohmann::json VisibilityLearning::stats() const {
             {"host_bytes", host_bytes_},
             {"device_bytes", device_bytes_},
             {"cells_with_fewer_light_samples", counts},
+            {"cells_with_portal_share", portal_cells_},
             {"verdict", !decided_           ? "none"
                         : switches_.empty() ? "tables"
                                             : name_of(switches_.back().technique)},

@@ -100,6 +100,7 @@ class VisibilityLearning : public LearningPolicy {
     uint64_t records_ = 0, continuation_records_ = 0, host_bytes_ = 0, device_bytes_ = 0;
     double verdict_fallback_error_ = 0, verdict_kept_error_ = 0, verdict_log_ratio_se_ = 0;
     std::map<float, uint64_t> light_counts_;
+    uint64_t portal_cells_ = 0; // of the last update's tables (VisibilityCache::portal_cells)
 };
 
 } // namespace et
