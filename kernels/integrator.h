@@ -300,11 +300,9 @@ ETK_FN void etk_sample_lights(ETK_STAGE_PARAMS) {
     int row[ETK_LIGHT_BATCH], col[ETK_LIGHT_BATCH];
     etk_env_light_batch(etk_light_table(S, kind), S.env_texels, p.env, xu, xv, dx, dy, dz, pdf, Lr,
                         Lg, Lb, row, col);
-    for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) {
-        int slot = Q.shade[first + k];
-        P.light_dir[slot] = make_float4(dx[k], dy[k], dz[k], pdf[k]);
-        P.light_L[slot] = make_float4(Lr[k], Lg[k], Lb[k], 0.0f);
-    }
+    for (int k = 0; k < ETK_LIGHT_BATCH && first + k < n; ++k) // the map's tables have no cells
+        etk_put_light_sample(P, Q.shade[first + k], dx[k], dy[k], dz[k], pdf[k], Lr[k], Lg[k],
+                             Lb[k], 0);
 }
 
 // Shade step 1: the vertex in `slot` -- its surface (and, at the camera ray's hit, the AOVs), its
@@ -324,10 +322,8 @@ ETK_STRUCT_INLINE_FN EtkVertex etk_shade_vertex(EtkScene S, EtkPaths P, EtkFilm 
     v.delta = etk_bsdf_is_delta(v.s.m);
     v.bsdf_count = etk_last_bsdf_share(p, v.s.m, v.s.wo, v.last, v.delta);
     int kind = etk_light_kind(p, v.depth);
-    // The binned or learned cell as sample_lights found it, if it drew the light sample.
-    int cell = (kind == ETK_LIGHT_BINNED || kind == ETK_LIGHT_LEARNED) && p.light_batch
-                   ? P.light_cell[slot]
-                   : etk_light_cell(p, kind, v.s, v.s.m);
+    // The cell as sample_lights found it, if it drew the light sample.
+    int cell = p.light_batch ? P.light_cell[slot] : etk_light_cell(p, kind, v.s, v.s.m);
     v.light = etk_light_source(p, v.depth, cell);
     v.light_count = etk_light_count(S, p, v.light);
     // The guided share of the continuation; none at the last bounce, where the continuation

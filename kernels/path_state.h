@@ -164,6 +164,16 @@ typedef struct {
 #undef ETK_MEMBER
 #undef ETK_QUEUE_MEMBER
 
+// The light sample sample_lights drew for the path in `slot` (integrator.h): direction, density
+// (0: none), radiance (0 where there is no sample) and the cell of its table (etk_light_cell's).
+ETK_FN void etk_put_light_sample(EtkPaths P, int slot, float dx, float dy, float dz, float pdf,
+                                 float r, float g, float b, int cell) {
+    int lit = pdf > 0.0f;
+    P.light_dir[slot] = make_float4(dx, dy, dz, pdf);
+    P.light_L[slot] = make_float4(lit ? r : 0.0f, lit ? g : 0.0f, lit ? b : 0.0f, 0.0f);
+    P.light_cell[slot] = cell;
+}
+
 ETK_FN EtkPushes etk_no_pushes(void) {
     EtkPushes out;
     for (int q = 0; q < ETK_PUSH_QUEUES; ++q)

@@ -422,13 +422,9 @@ ETK_FN void etk_guide_store_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOBA
             v[k] = 0.0f;
         }
     etk_env_radiance_batch(S.env_texels, p.env, u, v, Lr, Lg, Lb);
-    for (int k = 0; k < n; ++k) {
-        int lit = pdf[k] > 0.0f;
-        P.light_dir[slots[k]] = make_float4(dx[k], dy[k], dz[k], pdf[k]);
-        P.light_L[slots[k]] =
-            make_float4(lit ? Lr[k] : 0.0f, lit ? Lg[k] : 0.0f, lit ? Lb[k] : 0.0f, 0.0f);
-        P.light_cell[slots[k]] = cell[k];
-    }
+    for (int k = 0; k < n; ++k)
+        etk_put_light_sample(P, slots[k], dx[k], dy[k], dz[k], pdf[k], Lr[k], Lg[k], Lb[k],
+                             cell[k]);
 }
 
 ETK_END
