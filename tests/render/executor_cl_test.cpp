@@ -83,30 +83,43 @@ TEST(ClLanes, SameBitsWithAnyLaneCountAndWaveSize) {
     }
 }
 
-// The default: two lanes on a CPU device (PoCL, where the suite runs), waves of at most 65,536
-// paths, as many per lane.
-TEST(ClLanes, TwoLanesOnACpuDevice) {
+// The default on a CPU device (PoCL, where the suite runs): a lane per compute unit, at least two,
+// each on a sub-device of one compute unit where the device can be partitioned (PoCL can), in
+// waves of at most 32,768 paths, as many per lane.
+TEST(ClLanes, ALaneAComputeUnitOnACpuDevice) {
     et::ClRuntime rt(0);
     et::Scene s = lane_scene(et::Strategy::mis);
     if (!rt.limits().cpu) {
         // A GPU (ENVTRACE_CL_PLATFORM): one lane, which the device's own scheduler fills.
         EXPECT_EQ(et::default_cl_lanes(rt), 1);
+        EXPECT_TRUE(et::one_unit_sub_devices(rt).empty());
         const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
         EXPECT_EQ(et::ClDevice(std::make_unique<et::ClRuntime>(0), ds, 0).lanes(), 1);
         GTEST_SKIP() << "not a CPU device: " << rt.device().device_name;
     }
-    EXPECT_EQ(et::default_cl_lanes(rt), 2);
-    s.width = 400; // 160,000 pixels: 4 waves of 40,000, two per lane
+    const int units = rt.device().compute_units;
+    ASSERT_GE(units, 1);
+    EXPECT_EQ(et::default_cl_lanes(rt), std::max(2, units));
+    const bool pocl =
+        rt.device().platform_name.find("Portable Computing Language") != std::string::npos;
+    if (pocl && units >= 2) {
+        EXPECT_EQ(static_cast<int>(et::one_unit_sub_devices(rt).size()), units);
+    }
+    s.width = 400; // 160,000 pixels: at most 32,768 paths a wave, as many waves per lane
     s.height = 400;
     const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
-    et::ClDevice d(std::make_unique<et::ClRuntime>(0), ds, 0);
+    et::ClDevice d(std::make_unique<et::ClRuntime>(0), ds, 0, nullptr, 2);
     EXPECT_EQ(d.lanes(), 2);
-    EXPECT_EQ(d.wave_size(), 40000);
+    EXPECT_EQ(d.wave_size(), 26667); // 6 waves, 3 per lane
+    if (pocl && units >= 2) {
+        EXPECT_TRUE(d.lanes_on_sub_devices());
+    }
     // Paths in flight for the whole film: one wave, so one lane (a second would hold path state
     // and render nothing).
     et::ClDevice whole(std::make_unique<et::ClRuntime>(0), ds, 160000);
     EXPECT_EQ(whole.lanes(), 1);
     EXPECT_EQ(whole.wave_size(), 160000);
+    EXPECT_FALSE(whole.lanes_on_sub_devices());
     // A film of one pixel: one wave of one path, one lane.
     s.width = s.height = 1;
     const et::DeviceScene tiny = et::prepare_device_scene(s, s.settings);

@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <climits>
+#include <map>
+#include <mutex>
 #include <string>
 #include <utility>
 
@@ -68,15 +70,44 @@ std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt) {
     return out;
 }
 
-// Paths in flight per lane on a CPU device, by default. PoCL, 2 lanes, depth 5 (envtrace bench
-// --paths P, OpenCL / native): bunny_grace 0.96 at 131,072 (its 512 x 512 film over two lanes),
-// 1.00 at 65,536 and 32,768; matpreview 1.00 / 1.02 / 1.01 and textures 0.98 / 0.97 / 0.96 at
-// 65,536 / 32,768 / 16,384 (more launches); docs/history/bench-journal.md.
-constexpr int kCpuWave = 65536;
+// Paths in flight per lane on a CPU device, by default. With each lane on a compute unit of its own
+// (one_unit_sub_devices) a lane that ends its pass early leaves its unit idle: a 512 x 512 film in
+// waves of 65,536 (two a lane) kept ogre depth 5 on PoCL about 1.15x the time of waves of 32,768,
+// which are within a few percent of 16,384 (more launches, more host round trips) on six scenes;
+// docs/history/bench-journal.md, "A lane on a compute unit of its own".
+constexpr int kCpuWave = 32768;
 
 int default_cl_lanes(const ClRuntime& rt) {
     // Oclgrind interprets one kernel at a time (two queues' kernels trip an assertion of its own).
-    return rt.limits().cpu && !rt.is_oclgrind() ? 2 : 1;
+    return rt.limits().cpu && !rt.is_oclgrind() ? std::max(2, rt.device().compute_units) : 1;
+}
+
+std::vector<cl::Device> one_unit_sub_devices(const ClRuntime& rt) {
+    if (!rt.limits().cpu || rt.is_oclgrind() || rt.device().compute_units < 2)
+        return {};
+    // Made once per device and kept for the process: PoCL 3.1's threads release a finished
+    // launch's event after the host has seen it finish, and a sub-device released meanwhile (a
+    // renderer's end) crashed them (a third of the runs of a test making many renderers, on a
+    // loaded host).
+    // Never destroyed: a release at exit would race the driver's own teardown the same way.
+    static std::mutex mutex;
+    static auto* made = new std::map<cl_device_id, std::vector<cl::Device>>;
+    const std::lock_guard<std::mutex> lock(mutex);
+    const cl_device_id id = rt.device().device();
+    auto it = made->find(id);
+    if (it == made->end()) {
+        std::vector<cl::Device> subs;
+        try {
+            const cl_device_partition_property one_unit[] = {CL_DEVICE_PARTITION_EQUALLY, 1, 0};
+            cl::Device(rt.device().device).createSubDevices(one_unit, &subs);
+        } catch (const cl::Error&) {
+            subs.clear(); // not partitionable (CL_DEVICE_PARTITION_PROPERTIES lacks it)
+        }
+        if (subs.size() < 2)
+            subs.clear(); // the whole device
+        it = made->emplace(id, std::move(subs)).first;
+    }
+    return it->second;
 }
 
 bool wants_film_sums_on_device(const RenderSettings& st, const DeviceLimits& lim, uint64_t bytes) {
@@ -109,13 +140,13 @@ bool wants_queue_counts_on_device(const RenderSettings& st, const DeviceLimits& 
     return !lim.cpu;
 }
 
-ClLane::ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
-               size_t zero_local, const std::vector<cl::Buffer>& shared, int paths, bool counted)
+ClLane::ClLane(ClRuntime& rt, const cl::Device& device, const cl::Program& program,
+               const std::vector<size_t>& local, size_t zero_local,
+               const std::vector<cl::Buffer>& shared, int paths, bool counted)
     : local_(local), zero_local_(zero_local), counted_(counted), args_(shared) {
-    const cl::Device& dev = rt.device().device;
     auto& ctx = rt.context();
     const uint64_t n = static_cast<uint64_t>(paths);
-    queue_ = cl::CommandQueue(ctx, dev, CL_QUEUE_PROFILING_ENABLE);
+    queue_ = cl::CommandQueue(ctx, device, CL_QUEUE_PROFILING_ENABLE);
     for (int s = 0; s < etk::ETK_STAGE_COUNT; ++s)
         kernels_.emplace_back(program, stage_name(s));
     zero_ = cl::Kernel(program, "zero_words");
@@ -224,16 +255,20 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
             fold_kernel_.setArg(2, film_fixed_);
             fold_kernel_.setArg(3, static_cast<cl_int>(pixels_));
         }
+        if (lanes_used > 1)
+            lane_devices_ = one_unit_sub_devices(rt);
         for (int l = 0; l < lanes_used; ++l)
-            lanes_.push_back(
-                std::make_unique<ClLane>(rt, program_, local_, zero_local, args_, paths_, counted));
+            lanes_.push_back(std::make_unique<ClLane>(
+                rt, lane_devices_.empty() ? dev : lane_devices_[l % lane_devices_.size()], program_,
+                local_, zero_local, args_, paths_, counted));
         uint64_t widest = etk::ETK_Q_COUNT; // zero_words: the counters, the film's fields
 #define ET_FILM_WORDS(type, name) widest = std::max<uint64_t>(widest, sizeof(type) / 4 * px);
         ETK_FILM_FIELDS(ET_FILM_WORDS)
 #undef ET_FILM_WORDS
         if (fold_)
             widest = std::max<uint64_t>(widest, fixed_bytes / 4);
-        lanes_[0]->prime_kernels(paths_, widest);
+        for (auto& l : lanes_) // each lane's device (a sub-device keeps functions of its own)
+            l->prime_kernels(paths_, widest);
         clear_film(true);
         zero_guide_sums();
         if (fold_) {
@@ -273,8 +308,8 @@ void ClLane::zero_words(const cl::Buffer& buffer, uint64_t words) {
 // completed launch can release the other's and the next release fails an assertion
 // (pocl_release_dlhandle_cache, lib/CL/devices/common.c): measured, 15 of 16 renders with two
 // lanes aborted. One launch of each kernel at its widest range before any other makes that
-// function the only one, found first by every later launch. On other devices: a few empty
-// launches per renderer.
+// function the only one, found first by every later launch; every lane primes its own queue's
+// device. On other devices: a few empty launches per lane.
 void ClLane::prime_kernels(int paths, uint64_t words) {
     bind_queues(false);
     const etk::EtkParams params{};

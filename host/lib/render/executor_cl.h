@@ -59,8 +59,10 @@ class ClLane : public StageExecutor {
     // shared: every kernel argument that is not the lane's own (by ETK_ARG_*; the lane's own
     // entries are ignored); local: the work-group size per stage.
     // counted: whether its waves keep their queue sizes on the device (counts_on_device).
-    ClLane(ClRuntime& rt, const cl::Program& program, const std::vector<size_t>& local,
-           size_t zero_local, const std::vector<cl::Buffer>& shared, int paths, bool counted);
+    // device: where its queue sends the kernels (the runtime's device or one of its sub-devices).
+    ClLane(ClRuntime& rt, const cl::Device& device, const cl::Program& program,
+           const std::vector<size_t>& local, size_t zero_local,
+           const std::vector<cl::Buffer>& shared, int paths, bool counted);
 
     void bind_queues(bool swapped) override;
     void reset_counters() override;
@@ -97,13 +99,22 @@ class ClLane : public StageExecutor {
     std::vector<std::pair<int, cl::Event>> pending_;
 };
 
-// The lanes of a CPU device (PoCL): two, so that while one lane's host thread waits on a counter
-// read or launches its next stage, the other's kernels keep the device's threads busy -- what
-// the native back end's lanes do by never synchronising. One on any other device, and on Oclgrind.
-// The lanes write disjoint pixels of one film buffer from their queues at once: well defined on a
-// device that works in host memory, which OpenCL 1.2 does not promise elsewhere (a GPU with two
-// lanes would want a film per lane, or sub-buffers).
+// The lanes of a CPU device (PoCL): one per compute unit, at least two, as the native back end
+// runs one per thread; with two or more, while one lane's host thread waits on a counter read or
+// launches its next stage, the others' kernels keep the device's threads busy. One on any other
+// device, and on Oclgrind. The lanes write disjoint pixels of one film buffer from their queues at
+// once: well defined on a device that works in host memory, which OpenCL 1.2 does not promise
+// elsewhere (a GPU with two lanes would want a film per lane, or sub-buffers).
 int default_cl_lanes(const ClRuntime& rt);
+
+// Where a CPU device's lanes send their kernels: sub-devices of one compute unit each (on PoCL,
+// one thread apiece), so that a lane's stages run on one thread after another as a native lane's
+// do. On the whole device PoCL shares every launch out among all its threads, and each stage
+// then reads on one core the path state another core wrote: on 2 cores the same kernels took
+// 1.16x the CPU time (docs/history/bench-journal.md, "A lane on a compute unit of its own").
+// Empty (the lanes use the whole device) on any other device, on Oclgrind, on one compute unit,
+// and where the device cannot be partitioned.
+std::vector<cl::Device> one_unit_sub_devices(const ClRuntime& rt);
 
 class ClDevice : public WavefrontDevice {
   public:
@@ -114,6 +125,8 @@ class ClDevice : public WavefrontDevice {
 
     std::string name() const override { return "opencl"; }
     int lanes() const override { return static_cast<int>(lanes_.size()); }
+    // Whether the lanes' queues go to sub-devices (one_unit_sub_devices), not the whole device.
+    bool lanes_on_sub_devices() const { return !lane_devices_.empty(); }
     int wave_size() const override { return paths_; }
     StageExecutor& lane(int k) override { return *lanes_[k]; }
     void run_lanes(const std::function<void(int)>& f) override;
@@ -136,6 +149,7 @@ class ClDevice : public WavefrontDevice {
 
   private:
     std::unique_ptr<ClRuntime> rt_;
+    std::vector<cl::Device> lane_devices_; // one_unit_sub_devices; lane k's is [k % size]
     int pixels_, paths_;
     cl::Program program_;
     std::vector<size_t> local_;    // work-group size per kernel
