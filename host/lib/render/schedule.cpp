@@ -166,28 +166,82 @@ bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     return true;
 }
 
+namespace {
+
+// Hands a pass's paths out to the lanes as waves (any thread may ask). Path k of the pass is
+// pixel k x stride. Where each lane takes several waves, waves of `wave` paths, and towards the
+// pass's end a share of what is left, so that the lanes finish together: a lane that ran out while
+// another still had a whole wave to go would idle meanwhile, and a CPU device's lane is a compute
+// unit of its own (executor_cl.h, one_unit_sub_devices) with large waves. Never below kTailWave
+// paths. A pass of at most one wave a lane (a small film) is dealt pixel by pixel instead, lane k
+// every lanes-th path from path k, so each has an even share of the image's costly and cheap
+// parts without more launches. One lane (a GPU's) takes whole waves.
+class WaveDealer {
+  public:
+    struct Wave {
+        int first_pixel, pixel_stride, n;
+    };
+
+    WaveDealer(int paths, int stride, int wave, int lanes)
+        : paths_(paths), stride_(stride), wave_(wave), lanes_(lanes),
+          interleaved_(lanes > 1 && paths <= lanes * wave) {}
+
+    // The next wave, or false when the pass is handed out.
+    bool next(Wave* w) {
+        if (interleaved_) {
+            const int k = next_.fetch_add(1);
+            if (k >= std::min(lanes_, paths_))
+                return false;
+            *w = {k * stride_, stride_ * lanes_, (paths_ - k + lanes_ - 1) / lanes_};
+            return true;
+        }
+        int first = next_.load(), n = 0;
+        do {
+            if (first >= paths_)
+                return false;
+            n = size_at(paths_ - first);
+        } while (!next_.compare_exchange_weak(first, first + n));
+        *w = {first * stride_, stride_, n};
+        return true;
+    }
+
+  private:
+    static constexpr int kTailWave = 4096;
+
+    int size_at(int left) const {
+        int n = wave_;
+        if (lanes_ > 1)
+            n = std::min(n, std::max(kTailWave, (left + 2 * lanes_ - 1) / (2 * lanes_)));
+        return std::min(n, left);
+    }
+
+    const int paths_, stride_, wave_, lanes_;
+    const bool interleaved_;
+    std::atomic<int> next_{0}; // interleaved: the next lane's share; else the next path
+};
+
+} // namespace
+
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, const StopRequest& stop) {
-    // Paths for pixels 0, stride, 2 stride ...: path k of the pass is pixel k x stride.
     const int stride = std::max(1, params.pixel_stride);
     // Waves no larger than an even share of the pass, so that a pass of few paths (the verdict's
     // every 8th pixel, a small film) still keeps every lane busy.
     const int paths = (params.width * params.height + stride - 1) / stride,
-              wave = std::min(device.wave_size(), std::max(1, (paths + device.lanes() - 1) /
-                                                                  std::max(1, device.lanes())));
-    std::atomic<int> next{0};
+              lanes = std::max(1, device.lanes()),
+              wave = std::min(device.wave_size(), std::max(1, (paths + lanes - 1) / lanes));
+    WaveDealer dealer(paths, stride, wave, lanes);
     std::atomic<bool> abandoned{false};
-    std::vector<RayCounts> counts(device.lanes());
+    std::vector<RayCounts> counts(lanes);
     device.run_lanes([&](int k) {
-        for (;;) {
-            const int first = next.fetch_add(wave);
-            if (first >= paths)
-                break; // (the pass may be whole: no stop asked for once every wave is out)
+        WaveDealer::Wave w;
+        while (dealer.next(&w)) { // (the pass may be whole: no stop asked for once all are out)
             if (abandoned.load() || (stop && stop())) {
                 abandoned = true;
                 break;
             }
-            const int n = std::min(wave, paths - first);
-            if (!run_wave(device.lane(k), params, first * stride, n, counts[k], stop)) {
+            etk::EtkParams p = params;
+            p.pixel_stride = w.pixel_stride;
+            if (!run_wave(device.lane(k), p, w.first_pixel, w.n, counts[k], stop)) {
                 abandoned = true;
                 break;
             }
