@@ -174,7 +174,7 @@ std::vector<CLI::Option*> add_expert_options(CLI::App& cmd, RenderArgs& a) {
             ->default_str("on"),
         cmd.add_option("--paths", a.paths,
                        "Paths in flight per lane (0: the film over the lanes; on a CPU device "
-                       "waves of at most 65536; capped by memory)")
+                       "waves of at most 32768; capped by memory)")
             ->check(CLI::Range(0, 1 << 26))
             ->default_str("0"),
     };

@@ -10,7 +10,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <thread>
+#include <vector>
 
 namespace {
 
@@ -164,3 +167,73 @@ TEST(Schedule, QueueCountsOnTheDeviceKeepALearningRendersBits) {
 }
 
 } // namespace
+
+namespace {
+
+// Deals a pass out on `lanes` threads at once, each taking waves until none is left: every wave
+// dealt, in the order dealt per thread.
+std::vector<et::WaveDealer::Wave> deal(int paths, int stride, int wave, int lanes) {
+    et::WaveDealer dealer(paths, stride, wave, lanes);
+    std::vector<std::vector<et::WaveDealer::Wave>> taken(lanes);
+    std::vector<std::thread> threads;
+    for (int k = 0; k < lanes; ++k)
+        threads.emplace_back([&, k] {
+            et::WaveDealer::Wave w;
+            while (dealer.next(&w))
+                taken[k].push_back(w);
+        });
+    for (auto& t : threads)
+        t.join();
+    std::vector<et::WaveDealer::Wave> all;
+    for (const auto& t : taken)
+        all.insert(all.end(), t.begin(), t.end());
+    return all;
+}
+
+} // namespace
+
+// Every path of a pass (pixel k x stride) is dealt exactly once, in waves no larger than the
+// device's; a pass of several waves a lane ends in waves shrunk to a share of what is left (never
+// below kTailWave), and a pass of one wave a lane is dealt every lanes-th path, one wave a lane.
+TEST(Schedule, TheDealerHandsOutEveryPathOnceAndEndsInShrinkingWaves) {
+    const int kTail = et::WaveDealer::kTailWave;
+    struct Case {
+        int paths, stride, wave, lanes;
+    };
+    const Case cases[] = {{262144, 1, 32768, 2}, {262144, 1, 32768, 4}, {100003, 1, 32768, 2},
+                          {19200, 1, 9600, 2},   {19201, 2, 9601, 2},   {2400, 8, 1024, 2},
+                          {5, 1, 3, 2},          {1, 1, 1, 2},          {7000, 1, 7000, 1},
+                          {20000, 3, 1024, 3},   {3, 1, 1, 4}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(testing::Message() << c.paths << " paths, stride " << c.stride << ", wave "
+                                        << c.wave << ", " << c.lanes << " lanes");
+        const std::vector<et::WaveDealer::Wave> waves = deal(c.paths, c.stride, c.wave, c.lanes);
+        std::vector<int> seen(static_cast<size_t>(c.paths) * c.stride, 0);
+        int smallest = c.wave, below_tail = 0;
+        for (const auto& w : waves) {
+            ASSERT_GE(w.n, 1);
+            ASSERT_LE(w.n, c.wave);
+            ASSERT_EQ(w.pixel_stride % c.stride, 0);
+            for (int i = 0; i < w.n; ++i) {
+                const int64_t pixel = w.first_pixel + int64_t(i) * w.pixel_stride;
+                ASSERT_LT(pixel, int64_t(seen.size()));
+                ASSERT_EQ(pixel % c.stride, 0) << "a pixel the pass does not render";
+                ++seen[static_cast<size_t>(pixel)];
+            }
+            smallest = std::min(smallest, w.n);
+            below_tail += w.n < std::min(kTail, c.wave);
+        }
+        for (size_t p = 0; p < seen.size(); p += c.stride)
+            ASSERT_EQ(seen[p], 1) << "path " << p / c.stride;
+        if (c.lanes > 1 && c.paths > c.lanes * c.wave) { // several waves a lane: the tail shrinks
+            EXPECT_LT(smallest, c.wave);
+            EXPECT_LE(below_tail, 1) << "only the pass's last wave is below kTailWave";
+        } else if (c.lanes > 1) { // one wave a lane, dealt path by path
+            EXPECT_EQ(int(waves.size()), std::min(c.lanes, c.paths));
+            for (const auto& w : waves)
+                EXPECT_EQ(w.pixel_stride, c.stride * c.lanes);
+        } else { // one lane: whole waves
+            EXPECT_EQ(int(waves.size()), (c.paths + c.wave - 1) / c.wave);
+        }
+    }
+}

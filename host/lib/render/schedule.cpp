@@ -166,61 +166,34 @@ bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
     return true;
 }
 
-namespace {
+WaveDealer::WaveDealer(int paths, int stride, int wave, int lanes)
+    : paths_(std::max(0, paths)), stride_(std::max(1, stride)), wave_(std::max(1, wave)),
+      lanes_(std::max(1, lanes)), interleaved_(lanes_ > 1 && paths_ <= lanes_ * wave_) {}
 
-// Hands a pass's paths out to the lanes as waves (any thread may ask). Path k of the pass is
-// pixel k x stride. Where each lane takes several waves, waves of `wave` paths, and towards the
-// pass's end a share of what is left, so that the lanes finish together: a lane that ran out while
-// another still had a whole wave to go would idle meanwhile, and a CPU device's lane is a compute
-// unit of its own (executor_cl.h, one_unit_sub_devices) with large waves. Never below kTailWave
-// paths. A pass of at most one wave a lane (a small film) is dealt pixel by pixel instead, lane k
-// every lanes-th path from path k, so each has an even share of the image's costly and cheap
-// parts without more launches. One lane (a GPU's) takes whole waves.
-class WaveDealer {
-  public:
-    struct Wave {
-        int first_pixel, pixel_stride, n;
-    };
-
-    WaveDealer(int paths, int stride, int wave, int lanes)
-        : paths_(paths), stride_(stride), wave_(wave), lanes_(lanes),
-          interleaved_(lanes > 1 && paths <= lanes * wave) {}
-
-    // The next wave, or false when the pass is handed out.
-    bool next(Wave* w) {
-        if (interleaved_) {
-            const int k = next_.fetch_add(1);
-            if (k >= std::min(lanes_, paths_))
-                return false;
-            *w = {k * stride_, stride_ * lanes_, (paths_ - k + lanes_ - 1) / lanes_};
-            return true;
-        }
-        int first = next_.load(), n = 0;
-        do {
-            if (first >= paths_)
-                return false;
-            n = size_at(paths_ - first);
-        } while (!next_.compare_exchange_weak(first, first + n));
-        *w = {first * stride_, stride_, n};
+bool WaveDealer::next(Wave* w) {
+    if (interleaved_) {
+        const int k = next_.fetch_add(1);
+        if (k >= std::min(lanes_, paths_))
+            return false;
+        *w = {k * stride_, stride_ * lanes_, (paths_ - k + lanes_ - 1) / lanes_};
         return true;
     }
+    int first = next_.load(), n = 0;
+    do {
+        if (first >= paths_)
+            return false;
+        n = size_at(paths_ - first);
+    } while (!next_.compare_exchange_weak(first, first + n));
+    *w = {first * stride_, stride_, n};
+    return true;
+}
 
-  private:
-    static constexpr int kTailWave = 4096;
-
-    int size_at(int left) const {
-        int n = wave_;
-        if (lanes_ > 1)
-            n = std::min(n, std::max(kTailWave, (left + 2 * lanes_ - 1) / (2 * lanes_)));
-        return std::min(n, left);
-    }
-
-    const int paths_, stride_, wave_, lanes_;
-    const bool interleaved_;
-    std::atomic<int> next_{0}; // interleaved: the next lane's share; else the next path
-};
-
-} // namespace
+int WaveDealer::size_at(int left) const {
+    int n = wave_;
+    if (lanes_ > 1) // a 1 / (2 lanes) share of what is left: the lanes' last waves shrink together
+        n = std::min(n, std::max(kTailWave, (left + 2 * lanes_ - 1) / (2 * lanes_)));
+    return std::min(n, left);
+}
 
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params, const StopRequest& stop) {
     const int stride = std::max(1, params.pixel_stride);

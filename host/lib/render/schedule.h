@@ -7,6 +7,7 @@
 #include "kernels/path_state.h"
 #include "util/float_span.h"
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -113,6 +114,33 @@ using StopRequest = std::function<bool()>;
 // `counts`. Returns false where `stop` ended the wave before its film was written.
 bool run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCounts& counts,
               const StopRequest& stop = {});
+
+// Hands a pass's paths out to the lanes as waves (any thread may ask). Path k of the pass is
+// pixel k x stride. Where each lane takes several waves, waves of `wave` paths, and towards the
+// pass's end a share of what is left, so that the lanes finish together: a lane that ran out while
+// another still had a whole wave to go would idle meanwhile, and a CPU device's lane is a compute
+// unit of its own (executor_cl.h, one_unit_sub_devices) with large waves. Never below kTailWave
+// paths. A pass of at most one wave a lane (a small film) is dealt path by path instead, lane k's
+// wave every lanes-th path from path k, so each has an even share of the image's costly and cheap
+// parts without more launches. One lane (a GPU's) takes whole waves. Every path is dealt once.
+class WaveDealer {
+  public:
+    struct Wave {
+        int first_pixel, pixel_stride, n; // run_wave's first pixel, params.pixel_stride and n
+    };
+    static constexpr int kTailWave = 4096;
+
+    WaveDealer(int paths, int stride, int wave, int lanes);
+    // The next wave, or false when the pass is handed out.
+    bool next(Wave* w);
+
+  private:
+    int size_at(int left) const;
+
+    const int paths_, stride_, wave_, lanes_;
+    const bool interleaved_;
+    std::atomic<int> next_{0}; // interleaved: the next lane's share; else the next path
+};
 
 // One pass: sample params.sample_index of every pixel (of every params.pixel_stride-th: a
 // measuring pass's subset, the others left as they are), in waves of the device's size handed
