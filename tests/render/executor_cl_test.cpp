@@ -63,8 +63,8 @@ TEST(ClLanes, SameBitsWithAnyLaneCountAndWaveSize) {
             EXPECT_GT(ett::learning_count(one.stats, "records"), 0u)
                 << "nothing learned: the tables go untested";
         }
-        // Two lanes (the film in halves), three lanes of many small waves each (the last one
-        // short), two lanes of one path each.
+        // Two lanes (one wave each, dealt path by path), three lanes of many small waves each
+        // (the last one short), two lanes of one path each.
         const int configs[][2] = {{2, 0}, {3, 29}, {2, 1}};
         for (const auto& c : configs) {
             SCOPED_TRACE("lanes " + std::to_string(c[0]) + ", paths " + std::to_string(c[1]));
@@ -99,20 +99,28 @@ TEST(ClLanes, ALaneAComputeUnitOnACpuDevice) {
     }
     const int units = rt.device().compute_units;
     ASSERT_GE(units, 1);
-    EXPECT_EQ(et::default_cl_lanes(rt), std::max(2, units));
+    const std::vector<cl::Device> subs = et::one_unit_sub_devices(rt);
+    EXPECT_EQ(et::default_cl_lanes(rt), subs.empty() ? 2 : static_cast<int>(subs.size()));
     const bool pocl =
         rt.device().platform_name.find("Portable Computing Language") != std::string::npos;
     if (pocl && units >= 2) {
-        EXPECT_EQ(static_cast<int>(et::one_unit_sub_devices(rt).size()), units);
+        ASSERT_EQ(static_cast<int>(subs.size()), units);
+        // Made once, kept: the same devices on every call (releasing them crashed PoCL).
+        const std::vector<cl::Device> again = et::one_unit_sub_devices(rt);
+        ASSERT_EQ(again.size(), subs.size());
+        for (size_t k = 0; k < subs.size(); ++k)
+            EXPECT_EQ(again[k](), subs[k]());
     }
     s.width = 400; // 160,000 pixels: at most 32,768 paths a wave, as many waves per lane
     s.height = 400;
     const et::DeviceScene ds = et::prepare_device_scene(s, s.settings);
     et::ClDevice d(std::make_unique<et::ClRuntime>(0), ds, 0, nullptr, 2);
     EXPECT_EQ(d.lanes(), 2);
-    EXPECT_EQ(d.wave_size(), 26667); // 6 waves, 3 per lane
-    if (pocl && units >= 2) {
-        EXPECT_TRUE(d.lanes_on_sub_devices());
+    EXPECT_EQ(d.wave_size(), 26667); // its path state: 6 waves' worth, 3 per lane
+    EXPECT_EQ(d.lanes_on_sub_devices(), !subs.empty());
+    for (int k = 0; k < d.lanes() && !subs.empty(); ++k) { // each lane's queue on its sub-device
+        auto& lane = dynamic_cast<et::ClLane&>(d.lane(k));
+        EXPECT_EQ(lane.queue().getInfo<CL_QUEUE_DEVICE>()(), subs[k % subs.size()]()) << k;
     }
     // Paths in flight for the whole film: one wave, so one lane (a second would hold path state
     // and render nothing).

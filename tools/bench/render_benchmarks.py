@@ -158,9 +158,8 @@ def main():
              "light direction from `etk_sample_uniform_sphere` instead of `etk_env_sample`, no MIS "
              "weight; the rest of the shade stage unchanged). Shade-stage time saved / all stage "
              "time of the real render (native: thread time summed over the lanes; OpenCL: device "
-             "time from profiling events, summed over the lanes -- on PoCL two lanes' kernels run "
-             "at once and share the cores, so each kernel's time, and the OpenCL shares, come out "
-             "higher than with one lane).")
+             "time from profiling events, summed over the lanes -- on PoCL each lane runs on a "
+             "compute unit of its own, and a kernel's time includes waits for its unit).")
     L.append("- the whole shade stage's share (sample, BSDF evaluation and sampling, shading "
              "frame) is an upper bound.\n")
     L.append("Medians over the pairs.\n")

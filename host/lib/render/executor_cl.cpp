@@ -71,25 +71,31 @@ std::vector<StageKernelInfo> stage_kernel_info(ClRuntime& rt) {
 }
 
 // Paths in flight per lane on a CPU device, by default. With each lane on a compute unit of its own
-// (one_unit_sub_devices) a lane that ends its pass early leaves its unit idle: a 512 x 512 film in
-// waves of 65,536 (two a lane) kept ogre depth 5 on PoCL about 1.15x the time of waves of 32,768,
-// which are within a few percent of 16,384 (more launches, more host round trips) on six scenes;
-// docs/history/bench-journal.md, "A lane on a compute unit of its own".
+// (one_unit_sub_devices) a lane that ends its pass early leaves its unit idle: ogre depth 5 on
+// PoCL, 512 x 512 in waves of 65,536 (two a lane), took 1.13x the time the whole device took with
+// them. Waves of 32,768 and 16,384 each gave 1.02x the whole device's speed in geometric mean
+// over six scenes; the larger makes fewer launches and host round trips, and run_pass deals the
+// pass's tail in smaller waves (WaveDealer); docs/history/bench-journal.md, "A lane on a compute
+// unit of its own".
 constexpr int kCpuWave = 32768;
 
 int default_cl_lanes(const ClRuntime& rt) {
     // Oclgrind interprets one kernel at a time (two queues' kernels trip an assertion of its own).
-    return rt.limits().cpu && !rt.is_oclgrind() ? std::max(2, rt.device().compute_units) : 1;
+    if (!rt.limits().cpu || rt.is_oclgrind())
+        return 1;
+    const size_t subs = one_unit_sub_devices(rt).size();
+    return subs > 0 ? static_cast<int>(subs) : 2;
 }
 
 std::vector<cl::Device> one_unit_sub_devices(const ClRuntime& rt) {
-    if (!rt.limits().cpu || rt.is_oclgrind() || rt.device().compute_units < 2)
+    const bool pocl = rt.device().platform_name.find("Portable Computing Language") !=
+                      std::string::npos; // (see the header)
+    if (!pocl || !rt.limits().cpu || rt.device().compute_units < 2)
         return {};
-    // Made once per device and kept for the process: PoCL 3.1's threads release a finished
-    // launch's event after the host has seen it finish, and a sub-device released meanwhile (a
-    // renderer's end) crashed them (a third of the runs of a test making many renderers, on a
-    // loaded host).
-    // Never destroyed: a release at exit would race the driver's own teardown the same way.
+    // Made once per device and kept for the process, never released (not even at exit): PoCL
+    // 3.1's threads release a finished launch's event after the host has seen it finish, and a
+    // sub-device released meanwhile (a renderer's end) crashed them (a third of the runs of a test
+    // making many renderers, on a loaded host).
     static std::mutex mutex;
     static auto* made = new std::map<cl_device_id, std::vector<cl::Device>>;
     const std::lock_guard<std::mutex> lock(mutex);
@@ -267,8 +273,8 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
 #undef ET_FILM_WORDS
         if (fold_)
             widest = std::max<uint64_t>(widest, fixed_bytes / 4);
-        for (auto& l : lanes_) // each lane's device (a sub-device keeps functions of its own)
-            l->prime_kernels(paths_, widest);
+        for (auto& l : lanes_) // through every queue: whether the driver keeps the functions
+            l->prime_kernels(paths_, widest); // per device or for all, each is made widest first
         clear_film(true);
         zero_guide_sums();
         if (fold_) {
@@ -281,9 +287,10 @@ ClDevice::ClDevice(std::unique_ptr<ClRuntime> rt_ptr, const DeviceScene& scene, 
     }
 }
 
-// The lanes take waves on threads of their own (run_pass hands them out); each lane's launches
-// and reads go to its own queue, so the device runs one lane's kernels while the other's host
-// thread waits. Which lane renders a pixel changes nothing in it.
+// The lanes take waves on threads of their own (run_pass deals them out); each lane's launches
+// and reads go to its own queue, on a compute unit of its own where the device has sub-devices
+// (else the device runs one lane's kernels while another's host thread waits). Which lane renders
+// a pixel changes nothing in it.
 void ClDevice::run_lanes(const std::function<void(int)>& f) {
     try {
         run_on_threads(lanes(), f);

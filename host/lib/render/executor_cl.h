@@ -99,21 +99,24 @@ class ClLane : public StageExecutor {
     std::vector<std::pair<int, cl::Event>> pending_;
 };
 
-// The lanes of a CPU device (PoCL): one per compute unit, at least two, as the native back end
-// runs one per thread; with two or more, while one lane's host thread waits on a counter read or
-// launches its next stage, the others' kernels keep the device's threads busy. One on any other
-// device, and on Oclgrind. The lanes write disjoint pixels of one film buffer from their queues at
-// once: well defined on a device that works in host memory, which OpenCL 1.2 does not promise
-// elsewhere (a GPU with two lanes would want a film per lane, or sub-buffers).
+// The lanes of a CPU device: one per sub-device of one_unit_sub_devices (a lane per compute unit,
+// as the native back end runs one per thread); two on the whole device where there are none, so
+// that while one lane's host thread waits on a counter read or launches its next stage, the
+// other's kernels keep the device's threads busy. One on any other device, and on Oclgrind. The
+// lanes write disjoint pixels of one film buffer from their queues at once: well defined on a
+// device that works in host memory, which OpenCL 1.2 does not promise elsewhere (a GPU with two
+// lanes would want a film per lane, or sub-buffers).
 int default_cl_lanes(const ClRuntime& rt);
 
-// Where a CPU device's lanes send their kernels: sub-devices of one compute unit each (on PoCL,
-// one thread apiece), so that a lane's stages run on one thread after another as a native lane's
-// do. On the whole device PoCL shares every launch out among all its threads, and each stage
-// then reads on one core the path state another core wrote: on 2 cores the same kernels took
-// 1.16x the CPU time (docs/history/bench-journal.md, "A lane on a compute unit of its own").
-// Empty (the lanes use the whole device) on any other device, on Oclgrind, on one compute unit,
-// and where the device cannot be partitioned.
+// Where a CPU device's lanes send their kernels: sub-devices of one compute unit each (one PoCL
+// thread apiece), so that a lane's stages run on one thread after another as a native lane's do.
+// On the whole device PoCL shares every launch out among all its threads, and each stage then
+// reads on one core the path state another core wrote: on 2 cores the same kernels took 1.16x the
+// CPU time (docs/history/bench-journal.md, "A lane on a compute unit of its own"). PoCL only:
+// OpenCL 1.2 asks that a queue's device be one the context was made with, and the context and
+// program are the root device's; PoCL takes its sub-devices there, other drivers need not. Empty
+// (the lanes use the whole device) on any other platform or device, on one compute unit, and
+// where the device cannot be partitioned. The same devices on every call (made once, kept).
 std::vector<cl::Device> one_unit_sub_devices(const ClRuntime& rt);
 
 class ClDevice : public WavefrontDevice {

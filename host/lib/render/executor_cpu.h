@@ -1,7 +1,8 @@
 // The native back end: the stages of kernels/integrator.h compiled for the host ISA and run as
 // C++ loops. Each thread is a lane with a small wavefront of its own (path state and queues
-// sized to stay in cache) rendering waves of consecutive pixels, so threads share nothing but
-// the scene and the film, whose waves are disjoint.
+// sized to stay in cache) rendering waves of consecutive pixels (of every lanes-th pixel where the
+// pass is one wave a lane: WaveDealer), so threads share nothing but the scene and the film, whose
+// waves are disjoint.
 #pragma once
 #include "prepare/device_scene.h"
 #include "render/film.h"

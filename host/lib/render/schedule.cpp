@@ -168,7 +168,8 @@ bool run_wave(StageExecutor& ex, etk::EtkParams p, int first, int n, RayCounts& 
 
 WaveDealer::WaveDealer(int paths, int stride, int wave, int lanes)
     : paths_(std::max(0, paths)), stride_(std::max(1, stride)), wave_(std::max(1, wave)),
-      lanes_(std::max(1, lanes)), interleaved_(lanes_ > 1 && paths_ <= lanes_ * wave_) {}
+      lanes_(std::max(1, lanes)), interleaved_(lanes_ > 1 && lanes_ <= kMostInterleaved &&
+                                               int64_t(paths_) <= int64_t(lanes_) * wave_) {}
 
 bool WaveDealer::next(Wave* w) {
     if (interleaved_) {
@@ -182,16 +183,19 @@ bool WaveDealer::next(Wave* w) {
     do {
         if (first >= paths_)
             return false;
-        n = size_at(paths_ - first);
+        n = wave_size_for(paths_ - first);
     } while (!next_.compare_exchange_weak(first, first + n));
     *w = {first * stride_, stride_, n};
     return true;
 }
 
-int WaveDealer::size_at(int left) const {
+int WaveDealer::wave_size_for(int left) const {
     int n = wave_;
-    if (lanes_ > 1) // a 1 / (2 lanes) share of what is left: the lanes' last waves shrink together
-        n = std::min(n, std::max(kTailWave, (left + 2 * lanes_ - 1) / (2 * lanes_)));
+    if (lanes_ >
+        1) { // a 1 / (2 lanes) share of what is left: the lanes' last waves shrink together
+        const int64_t share = (int64_t(left) + 2 * lanes_ - 1) / (2 * lanes_);
+        n = static_cast<int>(std::min<int64_t>(n, std::max<int64_t>(kTailWave, share)));
+    }
     return std::min(n, left);
 }
 

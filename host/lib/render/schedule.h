@@ -77,8 +77,8 @@ class WavefrontDevice {
     // aovs false the AOV fields may be left as they are: nobody reads them.
     virtual void clear_film(bool aovs) = 0;
     virtual void download_film(Film& film, bool aovs) = 0;
-    // Time per stage so far: summed over the lanes, device time for OpenCL (kernels of two lanes
-    // may overlap), thread time natively.
+    // Time per stage so far: summed over the lanes, device time for OpenCL (kernels of several
+    // lanes may overlap), thread time natively.
     virtual std::vector<std::pair<std::string, double>> stage_seconds() = 0;
     // A learning technique's tables (EtkScene.guide_cells) for the passes to come: `cells`, of
     // which only the spans `changed` (floats [first, second)) differ from the tables uploaded
@@ -119,23 +119,26 @@ bool run_wave(StageExecutor& ex, etk::EtkParams params, int first, int n, RayCou
 // pixel k x stride. Where each lane takes several waves, waves of `wave` paths, and towards the
 // pass's end a share of what is left, so that the lanes finish together: a lane that ran out while
 // another still had a whole wave to go would idle meanwhile, and a CPU device's lane is a compute
-// unit of its own (executor_cl.h, one_unit_sub_devices) with large waves. Never below kTailWave
-// paths. A pass of at most one wave a lane (a small film) is dealt path by path instead, lane k's
-// wave every lanes-th path from path k, so each has an even share of the image's costly and cheap
-// parts without more launches. One lane (a GPU's) takes whole waves. Every path is dealt once.
+// unit of its own (executor_cl.h, one_unit_sub_devices) with large waves. Shares are never below
+// kTailWave paths (only the pass's last wave, and a device's smaller waves, may be). A pass of at
+// most one wave a lane (a small film) on at most kMostInterleaved lanes is dealt path by path
+// instead, lane k's wave every lanes-th path from path k, so each has an even share of the image's
+// costly and cheap parts without more launches (on more lanes neighbouring paths would lie far
+// apart: measured on two). One lane (a GPU's) takes whole waves. Every path is dealt once.
 class WaveDealer {
   public:
     struct Wave {
         int first_pixel, pixel_stride, n; // run_wave's first pixel, params.pixel_stride and n
     };
     static constexpr int kTailWave = 4096;
+    static constexpr int kMostInterleaved = 4;
 
     WaveDealer(int paths, int stride, int wave, int lanes);
     // The next wave, or false when the pass is handed out.
     bool next(Wave* w);
 
   private:
-    int size_at(int left) const;
+    int wave_size_for(int left) const;
 
     const int paths_, stride_, wave_, lanes_;
     const bool interleaved_;
@@ -143,9 +146,9 @@ class WaveDealer {
 };
 
 // One pass: sample params.sample_index of every pixel (of every params.pixel_stride-th: a
-// measuring pass's subset, the others left as they are), in waves of the device's size handed
-// to its lanes as they free up. `stop` may abandon it (the result's `abandoned`); the waiting
-// lanes then take no more waves.
+// measuring pass's subset, the others left as they are), in waves of at most the device's size
+// that a WaveDealer hands to its lanes as they free up. `stop` may abandon it (the result's
+// `abandoned`); the waiting lanes then take no more waves.
 RayCounts run_pass(WavefrontDevice& device, const etk::EtkParams& params,
                    const StopRequest& stop = {});
 
