@@ -191,8 +191,8 @@ bool WaveDealer::next(Wave* w) {
 
 int WaveDealer::wave_size_for(int left) const {
     int n = wave_;
-    if (lanes_ >
-        1) { // a 1 / (2 lanes) share of what is left: the lanes' last waves shrink together
+    // A 1 / (2 lanes) share of what is left: the lanes' last waves shrink together.
+    if (lanes_ > 1) {
         const int64_t share = (int64_t(left) + 2 * lanes_ - 1) / (2 * lanes_);
         n = static_cast<int>(std::min<int64_t>(n, std::max<int64_t>(kTailWave, share)));
     }
