@@ -148,10 +148,12 @@ ETK_FN float3 etk_portal_point(ETK_GLOBAL const float* box, float2 u) {
 // The direction from a surface (its ray start r) towards a point drawn from the table: aimed from
 // the surface's origin on the side it leaves by (the origin its shadow ray, or its continuation,
 // starts from).
+ETK_FN float3 etk_portal_dir_to(EtkRayStart r, float3 y) {
+    return normalize(y - etk_start_towards(r, normalize(y - r.origin)));
+}
 ETK_STRUCT_INLINE_FN float3 etk_portal_sample_dir(ETK_GLOBAL const float* box, EtkRayStart r,
                                                   float2 u) {
-    float3 y = etk_portal_point(box, u);
-    return normalize(y - etk_start_towards(r, normalize(y - r.origin)));
+    return etk_portal_dir_to(r, etk_portal_point(box, u));
 }
 
 // The whole mixture's density from its parts' densities pv and pp and the portal share b.
@@ -221,6 +223,34 @@ ETK_FN EtkEnvSample etk_guide_light_sample(EtkScene S, EtkParams p, int cell, Et
     return r;
 }
 
+// The portal part's samples of a batch (etk_portal_light_dir's, in steps over the batch's arrays:
+// the points, the directions towards them, their map coordinates, so that the compilers
+// vectorise the last two): sample portal[j] from (px[j], py[j]), from ray start start[portal[j]],
+// into entry portal[j] of the arrays, its density 0 (the mixture's, later).
+ETK_FN void etk_portal_dir_batch(EtkScene S, EtkParams p, const EtkRayStart* start,
+                                 const int* portal, const float* px, const float* py, int np,
+                                 float* u, float* v, float* dx, float* dy, float* dz, float* pdf) {
+    ETK_GLOBAL const float* box = etk_portal_table(S, p);
+    float yx[ETK_LIGHT_BATCH], yy[ETK_LIGHT_BATCH], yz[ETK_LIGHT_BATCH];
+    for (int j = 0; j < np; ++j) {
+        float3 y = etk_portal_point(box, make_float2(px[j], py[j]));
+        yx[j] = y.x;
+        yy[j] = y.y;
+        yz[j] = y.z;
+    }
+    for (int j = 0; j < np; ++j) {
+        int k = portal[j];
+        float3 d = etk_portal_dir_to(start[k], make_float3(yx[j], yy[j], yz[j]));
+        float2 uv = etk_env_uv(p.env, d);
+        u[k] = uv.x;
+        v[k] = uv.y;
+        dx[k] = d.x;
+        dy[k] = d.y;
+        dz[k] = d.z;
+        pdf[k] = 0.0f;
+    }
+}
+
 // The learned light samples of the paths in slots[0 .. n-1] (n <= ETK_LIGHT_BATCH) from (xu[k],
 // xv[k]), as etk_guide_light_sample draws them, into light_dir, light_L and light_cell, and while
 // learning the record's key and parts into shadow_key and guide_parts (the shade stage pushes them
@@ -236,16 +266,22 @@ ETK_FN void etk_guide_light_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOBA
     float b[ETK_LIGHT_BATCH], u[ETK_LIGHT_BATCH], v[ETK_LIGHT_BATCH], pdf[ETK_LIGHT_BATCH];
     float dx[ETK_LIGHT_BATCH], dy[ETK_LIGHT_BATCH], dz[ETK_LIGHT_BATCH];
     float tx[ETK_LIGHT_BATCH], ty[ETK_LIGHT_BATCH]; // the table samples' values
+    float px[ETK_LIGHT_BATCH], py[ETK_LIGHT_BATCH]; // the portal samples'
     int m = 0, np = 0;                              // table samples, portal samples
-    // Each sample's cell and part of the mixture; the portal's directions at once.
+    // Each sample's cell and part of the mixture, each step a loop of its own (the cells' shares'
+    // cache misses overlap).
     for (int k = 0; k < n; ++k) {
         start[k] = etk_path_start(S, P, p, slots[k]);
         cell[k] = etk_guide_cell(p, start[k].origin, start[k].ng);
+    }
+    for (int k = 0; k < n; ++k)
         b[k] = etk_portal_share(S, p, cell[k]);
+    for (int k = 0; k < n; ++k) {
         float2 t;
         if (etk_guide_light_part(b[k], make_float2(xu[k], xv[k]), &t)) {
-            etk_batch_put(etk_portal_light_dir(S, p, start[k], t), k, u, v, dx, dy, dz, pdf);
-            portal[np++] = k; // its density below
+            px[np] = t.x;
+            py[np] = t.y;
+            portal[np++] = k;
         } else {
             item[m] = k;
             tcell[m] = cell[k];
@@ -254,6 +290,7 @@ ETK_FN void etk_guide_light_batch(EtkScene S, EtkPaths P, EtkParams p, ETK_GLOBA
             ++m;
         }
     }
+    etk_portal_dir_batch(S, p, start, portal, px, py, np, u, v, dx, dy, dz, pdf);
     for (int j = 0; j < np; ++j) // the portal samples' densities, their misses overlapping
         etk_guide_pdf_prefetch(S, p, cell[portal[j]], make_float2(u[portal[j]], v[portal[j]]));
     for (int j = 0; j < np; ++j) {
