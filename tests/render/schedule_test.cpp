@@ -86,17 +86,18 @@ TEST(Schedule, AStridedPassIsTheSameOnOpenCl) {
 }
 
 // Passes of several waves a lane end in waves shrunk to a share of what is left (WaveDealer): the
-// film the same bits as one lane's whole-film wave, on both back ends; and a strided pass of
-// several waves a lane (waves below kTailWave, which do not shrink).
+// film the same bits as one whole-film wave, on both back ends. Two lanes: 40,960 paths in waves
+// of 12,000 are dealt as 10,240, 7,680, 5,760, 4,320, then 4,096 (kTailWave) thrice and 672; the
+// strided pass's 20,480 in waves of 6,000 as 5,120, 4,096 thrice and 3,072.
 TEST(Schedule, ShrinkingTailWavesGiveTheSameFilm) {
-    const et::DeviceScene ds = strided_scene(128, 80); // 10,240 paths: waves 4,500, 4,096, 1,644
+    const et::DeviceScene ds = strided_scene(256, 160);
     for (bool opencl : {false, true}) {
         SCOPED_TRACE(opencl ? "opencl" : "native");
         for (int stride : {1, 2}) {
-            const et::Film whole = strided_pass(ds, stride, 10240, opencl);
+            const et::Film whole = strided_pass(ds, stride, 40960, opencl);
             // Two lanes on every host, as natively: with more, a pass of one wave a lane is
             // dealt path by path and no wave shrinks.
-            const et::Film tail = strided_pass(ds, stride, stride == 1 ? 4500 : 2100, opencl, 2);
+            const et::Film tail = strided_pass(ds, stride, stride == 1 ? 12000 : 6000, opencl, 2);
             size_t differ = 0;
             for (size_t i = 0; i < whole.pixels(); ++i)
                 differ += !same_pixel(whole, tail, i);

@@ -158,8 +158,8 @@ def main():
              "light direction from `etk_sample_uniform_sphere` instead of `etk_env_sample`, no MIS "
              "weight; the rest of the shade stage unchanged). Shade-stage time saved / all stage "
              "time of the real render (native: thread time summed over the lanes; OpenCL: device "
-             "time from profiling events, summed over the lanes -- on PoCL each lane runs on a "
-             "compute unit of its own, and a kernel's time includes waits for its unit).")
+             "time from profiling events, summed over the lanes -- on PoCL each lane's kernels "
+             "run on a compute unit of its own, as a native lane runs on its thread).")
     L.append("- the whole shade stage's share (sample, BSDF evaluation and sampling, shading "
              "frame) is an upper bound.\n")
     L.append("Medians over the pairs.\n")
